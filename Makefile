@@ -1,0 +1,26 @@
+# linemap: the two commands are `make demo` and `make test`; everything else is a helper.
+SHELL := /bin/bash
+export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
+BUILD_DIR ?= .build
+export BUILD_DIR
+
+.PHONY: all setup build test demo format clean
+all: build
+
+setup:
+	@bash scripts/setup.sh
+
+build: setup
+	@bash scripts/build.sh
+
+test: setup
+	@bash scripts/test.sh
+
+demo: setup
+	@bash scripts/demo.sh
+
+format:
+	@git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
+
+clean:
+	rm -rf $(BUILD_DIR) output CMakeLists.txt

@@ -1,0 +1,117 @@
+// Shared 2D geometry of the linemap suite (ROS-free). Every package uses these
+// types so that poses, segments and angle conventions are defined once.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+
+namespace linemap
+{
+using Vec2 = Eigen::Vector2d;
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Wraps an angle to (-pi, pi].
+inline double normalizeAngle(double a)
+{
+  a = std::remainder(a, 2.0 * kPi);  // [-pi, pi]
+  return a <= -kPi ? a + 2.0 * kPi : a;
+}
+
+/// Rigid 2D transform / pose (x, y, theta). `a * b` composes a after b:
+/// if a = T_world_robot and b = T_robot_laser then a * b = T_world_laser.
+struct Pose2
+{
+  double x = 0.0;
+  double y = 0.0;
+  double theta = 0.0;
+
+  Pose2() = default;
+  Pose2(double x_, double y_, double theta_) : x(x_), y(y_), theta(theta_) {}
+
+  Vec2 translation() const { return {x, y}; }
+
+  Vec2 apply(const Vec2& p) const
+  {
+    const double c = std::cos(theta), s = std::sin(theta);
+    return {c * p.x() - s * p.y() + x, s * p.x() + c * p.y() + y};
+  }
+
+  Pose2 operator*(const Pose2& b) const
+  {
+    const Vec2 t = apply(b.translation());
+    return {t.x(), t.y(), normalizeAngle(theta + b.theta)};
+  }
+
+  Pose2 inverse() const
+  {
+    const double c = std::cos(theta), s = std::sin(theta);
+    return {-(c * x + s * y), s * x - c * y, normalizeAngle(-theta)};
+  }
+};
+
+/// Linear interpolation of translation and shortest-arc interpolation of heading, t in [0, 1].
+inline Pose2 interpolate(const Pose2& a, const Pose2& b, double t)
+{
+  return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y),
+          normalizeAngle(a.theta + t * normalizeAngle(b.theta - a.theta))};
+}
+
+/// A directed segment; its heading points from start to end.
+struct Segment2
+{
+  Vec2 start = Vec2::Zero();
+  Vec2 end = Vec2::Zero();
+
+  Segment2() = default;
+  Segment2(const Vec2& s, const Vec2& e) : start(s), end(e) {}
+
+  double length() const { return (end - start).norm(); }
+  Vec2 midpoint() const { return 0.5 * (start + end); }
+  /// Heading in (-pi, pi].
+  double heading() const { return normalizeAngle(std::atan2(end.y() - start.y(), end.x() - start.x())); }
+  Segment2 transformed(const Pose2& p) const { return {p.apply(start), p.apply(end)}; }
+};
+
+/// Distance from p to the infinite line through a and b (|p - a| when a == b).
+inline double distanceToLine(const Vec2& p, const Vec2& a, const Vec2& b)
+{
+  const Vec2 d = b - a;
+  const double n = d.norm();
+  if (n <= 0.0) return (p - a).norm();
+  return std::abs(d.x() * (p.y() - a.y()) - d.y() * (p.x() - a.x())) / n;
+}
+
+/// Distance from p to the closed segment [a, b].
+inline double distanceToSegment(const Vec2& p, const Vec2& a, const Vec2& b)
+{
+  const Vec2 d = b - a;
+  const double len2 = d.squaredNorm();
+  if (len2 <= 0.0) return (p - a).norm();
+  const double t = std::clamp((p - a).dot(d) / len2, 0.0, 1.0);
+  return (p - (a + t * d)).norm();
+}
+
+/// Hessian normal form x*cos(angle) + y*sin(angle) = radius (radius >= 0) of the
+/// line through a and b.
+struct HessianLine
+{
+  double angle = 0.0;
+  double radius = 0.0;
+};
+
+inline HessianLine hessianFromPoints(const Vec2& a, const Vec2& b)
+{
+  const Vec2 d = b - a;
+  double angle = std::atan2(d.x(), -d.y());  // normal = direction rotated by -90 degrees
+  double radius = a.x() * std::cos(angle) + a.y() * std::sin(angle);
+  if (radius < 0.0)
+  {
+    radius = -radius;
+    angle += kPi;
+  }
+  return {normalizeAngle(angle), radius};
+}
+
+}  // namespace linemap

@@ -1,0 +1,84 @@
+// Core data types of the line extraction library (ROS-free).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+
+namespace line_extraction
+{
+using linemap::Vec2;
+
+/// A laser scan as any source gives it (sensor_msgs/LaserScan, CARMEN, simulator).
+/// Beam i has angle angle_min + i * angle_increment. Nothing is owned.
+struct ScanInput
+{
+  const float* ranges = nullptr;
+  std::size_t count = 0;
+  double angle_min = 0.0;
+  double angle_increment = 0.0;
+  double range_min = 0.0;
+  double range_max = 0.0;
+};
+
+/// The valid points of one scan, in beam order, in the laser frame.
+/// Filled by Preprocessor; buffers keep their capacity between scans.
+struct PreparedScan
+{
+  std::vector<Vec2> points;
+  std::vector<double> ranges;    ///< range of each point [m]
+  std::vector<double> angles;    ///< beam angle of each point [rad]
+  std::vector<int> beam_index;   ///< index of each point in ScanInput::ranges
+  double angle_increment = 0.0;  ///< of the source scan (for beam prediction)
+
+  std::size_t size() const { return points.size(); }
+  void clear()
+  {
+    points.clear();
+    ranges.clear();
+    angles.clear();
+    beam_index.clear();
+  }
+};
+
+/// A contiguous range [begin, end) of PreparedScan points (a breakpoint cluster).
+struct PointRange
+{
+  int begin = 0;
+  int end = 0;
+  int size() const { return end - begin; }
+};
+
+/// An extracted segment, in the laser frame.
+struct Segment
+{
+  Vec2 start = Vec2::Zero();  ///< first member point projected onto the line
+  Vec2 end = Vec2::Zero();    ///< last member point projected onto the line
+  double angle = 0.0;         ///< Hessian form: x cos(angle) + y sin(angle) = radius
+  double radius = 0.0;        ///< >= 0
+  Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  ///< of (radius, angle)
+  int num_points = 0;
+  /// Member point indices (into PreparedScan) are
+  /// ExtractionResult::point_indices[index_begin, index_end), in scan order.
+  int index_begin = 0;
+  int index_end = 0;
+
+  double length() const { return (end - start).norm(); }
+};
+
+/// Output of an extractor. Reused between scans so the hot path does not allocate.
+struct ExtractionResult
+{
+  std::vector<Segment> segments;
+  std::vector<int> point_indices;
+
+  void clear()
+  {
+    segments.clear();
+    point_indices.clear();
+  }
+};
+
+}  // namespace line_extraction

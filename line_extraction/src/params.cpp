@@ -1,0 +1,50 @@
+#include "line_extraction/params.hpp"
+
+#include <cerrno>
+#include <cstdlib>
+
+namespace linemap
+{
+double ParamSet::getDouble(const std::string& key, double fallback) const
+{
+  auto it = values_.find(key);
+  if (it == values_.end()) return fallback;
+  const char* begin = it->second.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(begin, &end);
+  if (end == begin || *end != '\0' || errno == ERANGE)
+    throw ParameterError("parameter '" + key + "': '" + it->second + "' is not a number");
+  return v;
+}
+
+int ParamSet::getInt(const std::string& key, int fallback) const
+{
+  auto it = values_.find(key);
+  if (it == values_.end()) return fallback;
+  const char* begin = it->second.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(begin, &end, 10);
+  if (end == begin || *end != '\0' || errno == ERANGE || v < -2147483647L || v > 2147483647L)
+    throw ParameterError("parameter '" + key + "': '" + it->second + "' is not an integer");
+  return static_cast<int>(v);
+}
+
+bool ParamSet::getBool(const std::string& key, bool fallback) const
+{
+  auto it = values_.find(key);
+  if (it == values_.end()) return fallback;
+  const std::string& s = it->second;
+  if (s == "true" || s == "True" || s == "1") return true;
+  if (s == "false" || s == "False" || s == "0") return false;
+  throw ParameterError("parameter '" + key + "': '" + s + "' is not a boolean");
+}
+
+std::string ParamSet::getString(const std::string& key, const std::string& fallback) const
+{
+  auto it = values_.find(key);
+  return it == values_.end() ? fallback : it->second;
+}
+
+}  // namespace linemap

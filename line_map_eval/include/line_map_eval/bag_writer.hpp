@@ -1,0 +1,31 @@
+// Writes a Recording as a rosbag (implemented in src/bag_writer.cpp; links rosbag).
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "line_map_eval/recording.hpp"
+
+namespace line_map_eval
+{
+struct BagWriterOptions
+{
+  std::string scan_topic = "/scan";
+  std::string trajectory_topic = "/optimized_trajectory";
+  std::string map_frame = "map";
+  std::string odom_frame = "odom";
+  std::string base_frame = "base_link";
+  std::string laser_frame = "laser";
+  /// Emit the trajectory (and update map->odom) every this many keyframes and at the end.
+  std::size_t trajectory_every = 50;
+  bool progress = true;  ///< progress bar on stderr
+};
+
+/// Writes sensor_msgs/LaserScan on scan_topic, tf odom->base_link per scan, a
+/// static base->laser on /tf_static and, when the recording has keyframes,
+/// nav_msgs/Path on trajectory_topic plus tf map->odom (identity before the
+/// first emission, corrected * odometry^-1 at the latest keyframe after).
+/// Throws std::runtime_error naming the file on failure.
+void writeBag(const Recording& recording, const std::string& path, const BagWriterOptions& options);
+
+}  // namespace line_map_eval

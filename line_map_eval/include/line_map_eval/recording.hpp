@@ -1,0 +1,50 @@
+// A laser recording as the dataset tools produce it (ROS-free): scans with
+// odometry, the laser mounting, and optionally corrected keyframe poses.
+// carmen_to_bag and simulate_world both fill one and hand it to the bag writer.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+
+namespace line_map_eval
+{
+using linemap::Pose2;
+
+/// Fixed beam geometry of every scan of a recording.
+struct ScanGeometry
+{
+  double angle_min = 0.0;
+  double angle_increment = 0.0;
+  std::size_t beam_count = 0;
+  double range_min = 0.0;
+  double range_max = 0.0;  ///< readings at or beyond this are "no return"
+};
+
+struct RecordedScan
+{
+  double stamp = 0.0;         ///< seconds, strictly increasing over the recording
+  std::vector<float> ranges;  ///< beam_count values [m]
+  Pose2 odom;                 ///< odometry pose of base_link in odom at `stamp`
+};
+
+/// A keyframe with its corrected (optimised / true) pose of base_link in map.
+struct CorrectedKeyframe
+{
+  std::size_t scan_index = 0;  ///< index into Recording::scans
+  Pose2 pose;
+};
+
+struct Recording
+{
+  ScanGeometry geometry;
+  Pose2 base_to_laser;  ///< static mounting of the laser on base_link
+  std::vector<RecordedScan> scans;
+  /// Corrected keyframes in scan order (empty when there is no trajectory).
+  std::vector<CorrectedKeyframe> keyframes;
+  std::string source;  ///< where it came from, for captions and logs
+};
+
+}  // namespace line_map_eval
