@@ -11,7 +11,7 @@ PACKAGES=(
   libgtest-dev librostest-dev python3-rostest rosbash python3-rosnode python3-roslaunch python3-rostopic
   python3-sensor-msgs python3-visualization-msgs python3-nav-msgs python3-geometry-msgs
   libeigen3-dev libboost-dev libboost-iostreams-dev libtbb-dev libyaml-cpp-dev libcairo2-dev
-  libbenchmark-dev libbz2-dev zlib1g-dev
+  libbenchmark-dev libbz2-dev zlib1g-dev tf2-tools
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
