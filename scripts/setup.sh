@@ -12,6 +12,7 @@ PACKAGES=(
   python3-sensor-msgs python3-visualization-msgs python3-nav-msgs python3-geometry-msgs
   libeigen3-dev libboost-dev libboost-iostreams-dev libtbb-dev libyaml-cpp-dev libcairo2-dev
   libbenchmark-dev libbz2-dev zlib1g-dev tf2-tools
+  rviz xvfb xauth imagemagick libgl1-mesa-dri
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
