@@ -1,0 +1,70 @@
+// Matching extracted lines to true lines, and the detection statistics of the
+// extraction benchmark (TruePos, FalsePos, spread of the line errors).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+
+namespace line_extraction
+{
+struct MatchingOptions
+{
+  double sigma_radius = 0.03;  ///< [m]
+  double sigma_angle = 0.03;   ///< [rad]
+  /// Gate on the squared Mahalanobis distance of (radius, angle) with the
+  /// diagonal covariance above: 2.77 is the 75 % quantile of chi-square(2).
+  double gate = 2.77;
+};
+
+struct LineMatch
+{
+  int extracted = 0;          ///< index into the extracted lines
+  int truth = 0;              ///< index into the true lines
+  double radius_error = 0.0;  ///< extracted - true [m]
+  double angle_error = 0.0;   ///< extracted - true, wrapped to (-pi, pi] [rad]
+  double distance2 = 0.0;     ///< squared Mahalanobis distance
+};
+
+/// Squared Mahalanobis distance between two lines in Hessian form, with the
+/// errors of the closer of the two equivalent parametrisations ((r, a) and
+/// (-r, a + pi) matter when both lines pass near the origin).
+LineMatch compareLines(const linemap::HessianLine& extracted, const linemap::HessianLine& truth,
+                       const MatchingOptions& options);
+
+/// One-to-one matches within the gate, chosen greedily by increasing distance
+/// (ties by extracted, then true index); sorted by distance.
+std::vector<LineMatch> matchLines(const std::vector<linemap::HessianLine>& extracted,
+                                  const std::vector<linemap::HessianLine>& truth,
+                                  const MatchingOptions& options = MatchingOptions());
+
+/// Detection statistics accumulated over many scans.
+/// TruePos = matched counted true lines / counted true lines; FalsePos =
+/// (extracted - matched) / extracted. A true line that is not counted (e.g.
+/// seen by too few beams) may absorb an extracted line without being required.
+class MatchStatistics
+{
+ public:
+  /// Adds one scan: `counted[t]` says whether true line t is required (empty = all are).
+  void add(std::size_t extracted_count, std::size_t truth_count, const std::vector<LineMatch>& matches,
+           const std::vector<bool>& counted = {});
+
+  std::size_t extracted() const { return extracted_; }
+  std::size_t counted() const { return counted_; }
+  std::size_t truePositives() const { return true_positives_; }
+  std::size_t matched() const { return matched_; }
+  /// 0 when nothing was counted / extracted.
+  double truePositiveRate() const;
+  double falsePositiveRate() const;
+  /// Sample standard deviations of the radius [m] and angle [rad] errors over all matches (0 below 2
+  /// matches).
+  double radiusErrorStd() const;
+  double angleErrorStd() const;
+
+ private:
+  std::size_t extracted_ = 0, counted_ = 0, true_positives_ = 0, matched_ = 0;
+  double sum_r_ = 0.0, sum_r2_ = 0.0, sum_a_ = 0.0, sum_a2_ = 0.0;
+};
+
+}  // namespace line_extraction
