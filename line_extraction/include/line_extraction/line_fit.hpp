@@ -2,6 +2,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
+#include <vector>
 
 #include "line_extraction/types.hpp"
 
@@ -31,13 +33,43 @@ struct LineSums
     sxy -= p.x() * p.y();
   }
   void clear() { *this = LineSums(); }
+
+  LineSums& operator+=(const LineSums& o)
+  {
+    n += o.n;
+    sx += o.sx;
+    sy += o.sy;
+    sxx += o.sxx;
+    syy += o.syy;
+    sxy += o.sxy;
+    return *this;
+  }
+  LineSums& operator-=(const LineSums& o)
+  {
+    n -= o.n;
+    sx -= o.sx;
+    sy -= o.sy;
+    sxx -= o.sxx;
+    syy -= o.syy;
+    sxy -= o.sxy;
+    return *this;
+  }
 };
+
+inline LineSums operator-(LineSums a, const LineSums& b)
+{
+  return a -= b;
+}
+inline LineSums operator+(LineSums a, const LineSums& b)
+{
+  return a += b;
+}
 
 /// A fitted infinite line in Hessian form with the covariance of (radius, angle).
 struct LineFit
 {
-  double angle = 0.0;   ///< x cos(angle) + y sin(angle) = radius
-  double radius = 0.0;  ///< >= 0
+  double angle = 0.0;                                    ///< x cos(angle) + y sin(angle) = radius
+  double radius = 0.0;                                   ///< >= 0
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  ///< of (radius, angle)
   double sum_squared_residuals = 0.0;
   bool valid = false;  ///< false for fewer than 2 points or all points coincident
@@ -57,5 +89,43 @@ LineFit fitLine(const LineSums& sums, double range_sigma);
 /// and last member projected onto the line; appends `members` to out.point_indices.
 void appendSegment(const PreparedScan& scan, const LineFit& fit, const int* members, int count,
                    ExtractionResult& out);
+
+/// Same for the contiguous members [members.begin, members.end).
+void appendSegment(const PreparedScan& scan, const LineFit& fit, PointRange members, ExtractionResult& out);
+
+/// Sums of the points [begin, end) of scan.
+LineSums sumRange(const PreparedScan& scan, int begin, int end);
+
+/// A fitted line as unit normal and radius, for hot loops that need distances only.
+struct LineNormal
+{
+  double nx = 1.0, ny = 0.0, radius = 0.0;
+  double signedDistance(const Vec2& p) const { return p.x() * nx + p.y() * ny - radius; }
+  double distance(const Vec2& p) const { return std::abs(signedDistance(p)); }
+};
+
+/// The total-least-squares line of `sums` without trigonometric calls or covariance
+/// (same line as fitLine); false for fewer than 2 points or coincident points.
+bool fitNormal(const LineSums& sums, LineNormal& out);
+
+/// Cumulative sums over a scan: the sums of any contiguous range in O(1).
+class PrefixSums
+{
+ public:
+  /// Prepares sums of the points [range.begin, range.end); keeps capacity between calls.
+  void build(const PreparedScan& scan, PointRange range);
+  /// Sums of the points [begin, end), begin/end inside the built range.
+  LineSums sums(int begin, int end) const { return cum_[end - offset_] - cum_[begin - offset_]; }
+
+ private:
+  std::vector<LineSums> cum_;
+  int offset_ = 0;
+};
+
+/// Resolves the shared points of consecutive contiguous segments (in scan order):
+/// when segment k+1 starts before segment k ends, each contested point goes to the
+/// line it is nearer to, splitting where the two distances cross. Segments left with
+/// fewer than 2 points get size 0 (callers skip them).
+void resolveOverlaps(const PreparedScan& scan, std::vector<PointRange>& segments);
 
 }  // namespace line_extraction

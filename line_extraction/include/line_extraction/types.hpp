@@ -21,6 +21,9 @@ struct ScanInput
   double angle_increment = 0.0;
   double range_min = 0.0;
   double range_max = 0.0;
+  /// Optional intensities; when intensity_count > 0 it must equal count.
+  const float* intensities = nullptr;
+  std::size_t intensity_count = 0;
 };
 
 /// The valid points of one scan, in beam order, in the laser frame.
@@ -32,6 +35,8 @@ struct PreparedScan
   std::vector<double> angles;    ///< beam angle of each point [rad]
   std::vector<int> beam_index;   ///< index of each point in ScanInput::ranges
   double angle_increment = 0.0;  ///< of the source scan (for beam prediction)
+  /// True when the beams cover the full circle, so the last point neighbours the first.
+  bool full_circle = false;
 
   std::size_t size() const { return points.size(); }
   void clear()

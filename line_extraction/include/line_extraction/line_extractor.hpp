@@ -1,0 +1,57 @@
+// The per-scan pipeline: preprocess -> (optional) breakpoint clustering ->
+// algorithm on each point range -> collinear merge -> minimum size filters.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "line_extraction/breakpoint_clustering.hpp"
+#include "line_extraction/collinear_merge.hpp"
+#include "line_extraction/extractor.hpp"
+#include "line_extraction/params.hpp"
+#include "line_extraction/preprocess.hpp"
+
+namespace line_extraction
+{
+/// Pipeline parameters (keys without a block, as at the top of config/line_extraction.yaml).
+struct PipelineParams
+{
+  std::string algorithm = "srg";
+  bool clustering = false;    ///< split the scan at breakpoints before the algorithm
+  double range_sigma = 0.01;  ///< point noise for covariances and breakpoints [m]
+  double max_usable_range = 30.0;
+  BreakpointParams breakpoint;
+  bool merge = true;
+  CollinearMergeParams merge_params;
+  int min_points = 5;       ///< per output segment
+  double min_length = 0.0;  ///< per output segment [m]
+
+  /// Reads and checks every pipeline key; throws linemap::ParameterError naming a bad one.
+  static PipelineParams fromParams(const linemap::ParamSet& params);
+};
+
+class LineExtractor
+{
+ public:
+  /// Throws linemap::ParameterError naming a bad parameter or unknown algorithm.
+  explicit LineExtractor(const linemap::ParamSet& params);
+
+  /// Extracts the segments of one scan; throws ScanError naming a field of an
+  /// unusable scan. The result (and preparedScan()) stay valid until the next call.
+  const ExtractionResult& extract(const ScanInput& scan);
+
+  const PreparedScan& preparedScan() const { return prepared_; }
+  const PipelineParams& params() const { return params_; }
+  const Extractor& algorithm() const { return *algorithm_; }
+
+ private:
+  PipelineParams params_;
+  std::unique_ptr<Extractor> algorithm_;
+  Preprocessor preprocessor_;
+  CollinearMerger merger_;
+  PreparedScan prepared_;
+  std::vector<PointRange> clusters_;
+  ExtractionResult raw_, merged_, result_;
+};
+
+}  // namespace line_extraction

@@ -1,0 +1,124 @@
+// Collinear merge: consecutive segments whose lines agree within the chi-square gate
+// (Mahalanobis distance with the summed covariances) become one segment refitted
+// from the union of their points, using the running sums so each point is added once.
+#include "line_extraction/collinear_merge.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+namespace line_extraction
+{
+double lineMahalanobis(const Segment& a, const Segment& b)
+{
+  const Eigen::Matrix2d s = a.covariance + b.covariance;
+  const double det = s.determinant();
+  const Eigen::Vector2d d1(a.radius - b.radius, linemap::normalizeAngle(a.angle - b.angle));
+  const Eigen::Vector2d d2(a.radius + b.radius, linemap::normalizeAngle(a.angle - b.angle - linemap::kPi));
+  if (!(det > 0.0))
+  {
+    // Without uncertainty only identical lines are the same line.
+    return (d1.squaredNorm() == 0.0 || d2.squaredNorm() == 0.0) ? 0.0
+                                                                : std::numeric_limits<double>::infinity();
+  }
+  const Eigen::Matrix2d inv = s.inverse();
+  return std::min(d1.dot(inv * d1), d2.dot(inv * d2));
+}
+
+bool CollinearMerger::mergeable(const Segment& a, const Segment& b) const
+{
+  if ((b.start - a.end).norm() > params_.max_gap) return false;
+  return lineMahalanobis(a, b) < params_.gate;
+}
+
+void CollinearMerger::absorb(const PreparedScan& scan, const ExtractionResult& in, const Segment& seg,
+                             ExtractionResult& out)
+{
+  for (int k = seg.index_begin; k < seg.index_end; ++k)
+  {
+    const int idx = in.point_indices[k];
+    if (member_[idx]) continue;
+    member_[idx] = 1;
+    sums_.add(scan.points[idx]);
+    out.point_indices.push_back(idx);
+  }
+}
+
+void CollinearMerger::refit(const PreparedScan& scan, ExtractionResult& out)
+{
+  Segment& seg = out.segments.back();
+  seg.index_end = static_cast<int>(out.point_indices.size());
+  seg.num_points = seg.index_end - seg.index_begin;
+  const LineFit fit = fitLine(sums_, params_.range_sigma);
+  if (!fit.valid) return;
+  seg.angle = fit.angle;
+  seg.radius = fit.radius;
+  seg.covariance = fit.covariance;
+  const Vec2 n(std::cos(fit.angle), std::sin(fit.angle));
+  const Vec2& first = scan.points[out.point_indices[seg.index_begin]];
+  const Vec2& last = scan.points[out.point_indices[seg.index_end - 1]];
+  seg.start = first - (first.dot(n) - fit.radius) * n;
+  seg.end = last - (last.dot(n) - fit.radius) * n;
+}
+
+void CollinearMerger::merge(const PreparedScan& scan, const ExtractionResult& in, ExtractionResult& out,
+                            bool wrap)
+{
+  if (member_.size() < scan.size()) member_.resize(scan.size(), 0);
+  const std::size_t first_out = out.segments.size();
+  bool growing = false;
+  for (const Segment& seg : in.segments)
+  {
+    if (growing && mergeable(out.segments.back(), seg))
+    {
+      absorb(scan, in, seg, out);
+      refit(scan, out);
+      continue;
+    }
+    // Start a new segment: unmark the previous one's points.
+    if (growing)
+    {
+      const Segment& prev = out.segments.back();
+      for (int k = prev.index_begin; k < prev.index_end; ++k) member_[out.point_indices[k]] = 0;
+    }
+    sums_.clear();
+    Segment copy = seg;
+    copy.index_begin = static_cast<int>(out.point_indices.size());
+    out.segments.push_back(copy);
+    absorb(scan, in, seg, out);
+    out.segments.back().index_end = static_cast<int>(out.point_indices.size());
+    growing = true;
+  }
+
+  // Around a full circle the last segment may continue the first one.
+  if (wrap && out.segments.size() >= first_out + 2 && mergeable(out.segments.back(), out.segments[first_out]))
+  {
+    // The last segment's points are at the tail of out.point_indices and still
+    // marked; appending the first's points there gives the union in scan order.
+    const Segment first = out.segments[first_out];
+    for (int k = first.index_begin; k < first.index_end; ++k)
+    {
+      const int idx = out.point_indices[k];
+      if (member_[idx]) continue;
+      member_[idx] = 1;
+      sums_.add(scan.points[idx]);
+      out.point_indices.push_back(idx);
+    }
+    refit(scan, out);
+    out.segments[first_out] = out.segments.back();
+    out.segments.pop_back();
+  }
+  // Leave the marks clear for the next call.
+  if (growing)
+  {
+    const Segment& last = out.segments.back();
+    for (int k = last.index_begin; k < last.index_end; ++k) member_[out.point_indices[k]] = 0;
+    if (wrap)
+    {
+      const Segment& f = out.segments[first_out];
+      for (int k = f.index_begin; k < f.index_end; ++k) member_[out.point_indices[k]] = 0;
+    }
+  }
+}
+
+}  // namespace line_extraction

@@ -1,0 +1,214 @@
+// Total-least-squares line fitting from running sums, and its covariance.
+//
+// Fit: with the centred second moments Sxx, Syy, Sxy of the points, the sum of
+// squared distances to the line with normal angle a is
+//   J(a) = (Sxx + Syy)/2 + (Sxx - Syy)/2 cos 2a + Sxy sin 2a,
+// which is smallest for (cos 2a, sin 2a) proportional to (Syy - Sxx, -2 Sxy), i.e.
+// a = atan2(-2 Sxy, Syy - Sxx) / 2, with minimum ((Sxx + Syy) - h)/2, h = |(Syy - Sxx, -2 Sxy)|.
+// The line passes through the centroid: radius = mean . n(a), flipped to be >= 0.
+//
+// Covariance: let each point carry isotropic noise of standard deviation s, so its
+// offset across the line is e_i ~ N(0, s^2). With n = (cos a, sin a), u = dn/da =
+// (-sin a, cos a) and t_i = p_i . u (position along the line), a perturbed line
+// (r + dr, a + da) leaves the residual e_i + da t_i - dr for point i. Least squares
+// on these residuals gives
+//   da = -sum (t_i - tm) e_i / St,   dr = mean(e) + tm da,   St = sum (t_i - tm)^2,
+// and since sum (t_i - tm) = 0, mean(e) and da are uncorrelated, hence
+//   var(a) = s^2 / St,  var(r) = s^2 / n + tm^2 var(a),  cov(r, a) = tm var(a).
+// St is the scatter along the line: (Sxx + Syy + h) / 2.
+#include "line_extraction/line_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace line_extraction
+{
+namespace
+{
+struct Moments
+{
+  double mx, my, cxx, cyy, cxy;
+};
+
+Moments centred(const LineSums& s)
+{
+  Moments m;
+  m.mx = s.sx / s.n;
+  m.my = s.sy / s.n;
+  // Clamp tiny negative values produced by cancellation.
+  m.cxx = std::max(0.0, s.sxx - s.sx * m.mx);
+  m.cyy = std::max(0.0, s.syy - s.sy * m.my);
+  m.cxy = s.sxy - s.sx * m.my;
+  return m;
+}
+
+Vec2 project(const Vec2& p, double nx, double ny, double radius)
+{
+  const double d = p.x() * nx + p.y() * ny - radius;
+  return {p.x() - d * nx, p.y() - d * ny};
+}
+}  // namespace
+
+LineFit fitLine(const LineSums& sums, double range_sigma)
+{
+  LineFit fit;
+  if (sums.n < 2.0) return fit;
+  const Moments m = centred(sums);
+  const double a = m.cyy - m.cxx, b = -2.0 * m.cxy;
+  const double h = std::hypot(a, b);
+  const double trace = m.cxx + m.cyy;
+  const double along = 0.5 * (trace + h);  // scatter along the line
+  if (!(along > 0.0)) return fit;          // coincident points: no direction
+
+  double angle = 0.5 * std::atan2(b, a);
+  double c = std::cos(angle), s = std::sin(angle);
+  double radius = m.mx * c + m.my * s;
+  if (radius < 0.0)
+  {
+    radius = -radius;
+    angle += linemap::kPi;
+    c = -c;
+    s = -s;
+  }
+  fit.angle = linemap::normalizeAngle(angle);
+  fit.radius = radius;
+  fit.sum_squared_residuals = std::max(0.0, 0.5 * (trace - h));
+
+  const double var_noise = range_sigma * range_sigma;
+  const double var_angle = var_noise / along;
+  const double t_mean = -m.mx * s + m.my * c;
+  fit.covariance(0, 0) = var_noise / sums.n + t_mean * t_mean * var_angle;
+  fit.covariance(0, 1) = fit.covariance(1, 0) = t_mean * var_angle;
+  fit.covariance(1, 1) = var_angle;
+  fit.valid = true;
+  return fit;
+}
+
+bool fitNormal(const LineSums& sums, LineNormal& out)
+{
+  if (sums.n < 2.0) return false;
+  const Moments m = centred(sums);
+  const double a = m.cyy - m.cxx, b = -2.0 * m.cxy;
+  const double h = std::sqrt(a * a + b * b);
+  if (!(m.cxx + m.cyy + h > 0.0)) return false;
+  // Half-angle formulas for (cos 2t, sin 2t) = (a, b)/h, taking the larger of the
+  // two components from the square root so that it stays accurate.
+  const double c2 = h > 0.0 ? a / h : 1.0, s2 = h > 0.0 ? b / h : 0.0;
+  double c, s;
+  if (c2 >= 0.0)
+  {
+    c = std::sqrt(0.5 * (1.0 + c2));
+    s = s2 / (2.0 * c);
+  }
+  else
+  {
+    s = std::sqrt(0.5 * (1.0 - c2));
+    c = s2 / (2.0 * s);
+  }
+  double r = m.mx * c + m.my * s;
+  if (r < 0.0)
+  {
+    r = -r;
+    c = -c;
+    s = -s;
+  }
+  out.nx = c;
+  out.ny = s;
+  out.radius = r;
+  return true;
+}
+
+LineSums sumRange(const PreparedScan& scan, int begin, int end)
+{
+  LineSums s;
+  for (int i = begin; i < end; ++i) s.add(scan.points[i]);
+  return s;
+}
+
+void appendSegment(const PreparedScan& scan, const LineFit& fit, const int* members, int count,
+                   ExtractionResult& out)
+{
+  if (count <= 0) return;
+  const double c = std::cos(fit.angle), s = std::sin(fit.angle);
+  Segment seg;
+  seg.start = project(scan.points[members[0]], c, s, fit.radius);
+  seg.end = project(scan.points[members[count - 1]], c, s, fit.radius);
+  seg.angle = fit.angle;
+  seg.radius = fit.radius;
+  seg.covariance = fit.covariance;
+  seg.num_points = count;
+  seg.index_begin = static_cast<int>(out.point_indices.size());
+  out.point_indices.insert(out.point_indices.end(), members, members + count);
+  seg.index_end = static_cast<int>(out.point_indices.size());
+  out.segments.push_back(seg);
+}
+
+void appendSegment(const PreparedScan& scan, const LineFit& fit, PointRange members, ExtractionResult& out)
+{
+  if (members.size() <= 0) return;
+  const double c = std::cos(fit.angle), s = std::sin(fit.angle);
+  Segment seg;
+  seg.start = project(scan.points[members.begin], c, s, fit.radius);
+  seg.end = project(scan.points[members.end - 1], c, s, fit.radius);
+  seg.angle = fit.angle;
+  seg.radius = fit.radius;
+  seg.covariance = fit.covariance;
+  seg.num_points = members.size();
+  seg.index_begin = static_cast<int>(out.point_indices.size());
+  for (int i = members.begin; i < members.end; ++i) out.point_indices.push_back(i);
+  seg.index_end = static_cast<int>(out.point_indices.size());
+  out.segments.push_back(seg);
+}
+
+void PrefixSums::build(const PreparedScan& scan, PointRange range)
+{
+  offset_ = range.begin;
+  cum_.resize(static_cast<std::size_t>(range.size()) + 1);
+  LineSums acc;
+  cum_[0] = acc;
+  for (int i = range.begin; i < range.end; ++i)
+  {
+    acc.add(scan.points[i]);
+    cum_[i - range.begin + 1] = acc;
+  }
+}
+
+void resolveOverlaps(const PreparedScan& scan, std::vector<PointRange>& segments)
+{
+  const std::size_t n = segments.size();
+  for (std::size_t k = 0; k + 1 < n; ++k)
+  {
+    PointRange& a = segments[k];
+    PointRange& b = segments[k + 1];
+    if (a.size() <= 0 || b.size() <= 0 || b.begin >= a.end) continue;
+    const int cb = std::max(b.begin, a.begin), ce = std::min(a.end, b.end);
+    // Lines from the uncontested parts (or the whole segment when too little is left).
+    LineNormal left, right;
+    const bool left_ok = cb - a.begin >= 2 ? fitNormal(sumRange(scan, a.begin, cb), left)
+                                           : fitNormal(sumRange(scan, a.begin, a.end), left);
+    const bool right_ok = b.end - ce >= 2 ? fitNormal(sumRange(scan, ce, b.end), right)
+                                          : fitNormal(sumRange(scan, b.begin, b.end), right);
+    int split = ce;
+    if (left_ok && right_ok)
+    {
+      for (int i = cb; i < ce; ++i)
+      {
+        if (right.distance(scan.points[i]) < left.distance(scan.points[i]))
+        {
+          split = i;
+          break;
+        }
+      }
+    }
+    else if (!left_ok)
+    {
+      split = cb;
+    }
+    a.end = split;
+    b.begin = split;
+    if (a.size() < 2) a.end = a.begin;
+    if (b.size() < 2) b.begin = b.end;
+  }
+}
+
+}  // namespace line_extraction

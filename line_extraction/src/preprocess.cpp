@@ -1,0 +1,74 @@
+// Scan validation and conversion to Cartesian points. The trigonometry of the beams
+// is computed once per scan geometry, which never changes for a given laser.
+#include "line_extraction/preprocess.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace line_extraction
+{
+void validateScan(const ScanInput& scan)
+{
+  if (!std::isfinite(scan.angle_increment) || scan.angle_increment <= 0.0)
+    throw ScanError("scan field 'angle_increment' must be finite and > 0, got " +
+                    std::to_string(scan.angle_increment));
+  if (!std::isfinite(scan.angle_min))
+    throw ScanError("scan field 'angle_min' must be finite, got " + std::to_string(scan.angle_min));
+  if (std::isnan(scan.range_min) || std::isnan(scan.range_max) || scan.range_min > scan.range_max)
+    throw ScanError("scan fields 'range_min' (" + std::to_string(scan.range_min) + ") and 'range_max' (" +
+                    std::to_string(scan.range_max) + "): range_min must not exceed range_max");
+  if (scan.count > 0 && scan.ranges == nullptr) throw ScanError("scan field 'ranges' is missing");
+  if (scan.intensity_count > 0 && scan.intensity_count != scan.count)
+    throw ScanError("scan field 'intensities' has " + std::to_string(scan.intensity_count) +
+                    " values but 'ranges' has " + std::to_string(scan.count));
+}
+
+Preprocessor::Preprocessor(double max_usable_range) : max_usable_range_(max_usable_range)
+{
+  if (!(max_usable_range > 0.0))
+    throw std::invalid_argument("max usable range must be > 0, got " + std::to_string(max_usable_range));
+}
+
+void Preprocessor::updateBeams(const ScanInput& scan)
+{
+  if (scan.angle_min == cached_angle_min_ && scan.angle_increment == cached_increment_ &&
+      scan.count == cached_count_)
+    return;
+  cos_.resize(scan.count);
+  sin_.resize(scan.count);
+  for (std::size_t i = 0; i < scan.count; ++i)
+  {
+    const double a = scan.angle_min + static_cast<double>(i) * scan.angle_increment;
+    cos_[i] = std::cos(a);
+    sin_[i] = std::sin(a);
+  }
+  cached_angle_min_ = scan.angle_min;
+  cached_increment_ = scan.angle_increment;
+  cached_count_ = scan.count;
+}
+
+void Preprocessor::prepare(const ScanInput& scan, PreparedScan& out)
+{
+  out.clear();
+  validateScan(scan);
+  out.angle_increment = scan.angle_increment;
+  // A full turn of beams (the last beam one increment or less short of the first).
+  out.full_circle = scan.count > 2 && static_cast<double>(scan.count) * scan.angle_increment >=
+                                          2.0 * linemap::kPi - 0.5 * scan.angle_increment;
+  if (scan.count == 0) return;
+  updateBeams(scan);
+  const double lo = std::max(scan.range_min, 0.0);
+  const double hi = std::min(scan.range_max, max_usable_range_);
+  for (std::size_t i = 0; i < scan.count; ++i)
+  {
+    const double r = scan.ranges[i];
+    // NaN fails every comparison, +inf fails r < hi, -inf fails r >= lo.
+    if (!(r >= lo && r < hi && r > 0.0)) continue;
+    out.points.emplace_back(r * cos_[i], r * sin_[i]);
+    out.ranges.push_back(r);
+    out.angles.push_back(scan.angle_min + static_cast<double>(i) * scan.angle_increment);
+    out.beam_index.push_back(static_cast<int>(i));
+  }
+}
+
+}  // namespace line_extraction
