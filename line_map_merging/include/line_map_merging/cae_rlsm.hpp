@@ -1,0 +1,104 @@
+// CAE-RLSM: online one-to-many incremental line segment merging (OTM-ILSM, otm_ilsm.cpp) over a
+// provenance tree, and multi-processing global map adjustment (MP-GMA, mp_gma.cpp) when an
+// optimised trajectory arrives. Map file I/O in map_file.cpp.
+//
+// Provenance tree: root = the map; children = map segments (stable ids); leaves = the original
+// segments in their keyframe's laser frame. Leaves are never dropped, so the map can always be
+// rebuilt from them under new keyframe poses.
+#pragma once
+
+#include <Eigen/Core>
+#include <boost/geometry.hpp>
+#include <boost/geometry/index/rtree.hpp>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "line_map_merging/fusion.hpp"
+#include "line_map_merging/merger.hpp"
+
+namespace line_map_merging
+{
+struct CaeParams
+{
+  FusionParams fusion;
+  int threads = 0;                    ///< MP-GMA worker threads; 0 = all cores
+  bool consistent_adjustment = true;  ///< split/merge after re-fusing (off = the paper's behaviour)
+  bool spatial_index = true;          ///< R-tree candidate search (off = linear reference search)
+
+  /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index".
+  static CaeParams fromParams(const linemap::ParamSet& params);
+};
+
+class CaeRlsm : public Merger
+{
+ public:
+  explicit CaeRlsm(const CaeParams& params = CaeParams());
+
+  const char* name() const override { return "cae"; }
+  AddResult addKeyframe(const Keyframe& keyframe) override;
+  AdjustResult adjust(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses) override;
+  bool supportsAdjustment() const override { return true; }
+  std::vector<MapSegment> map() const override;
+  std::vector<KeyframeInfo> keyframes() const override;
+  std::vector<Leaf> leaves(std::uint64_t id) const override;
+  bool hasProvenance() const override { return true; }
+  std::size_t keyframeCount() const override { return keyframes_.size(); }
+  std::size_t leafCount() const override { return leaves_.size(); }
+  std::size_t segmentCount() const override { return nodes_.size(); }
+  void reset() override;
+  void save(const std::string& path) const override;
+  void load(const std::string& path) override;
+
+  const CaeParams& params() const { return params_; }
+  std::uint64_t nextId() const { return next_id_; }
+
+ private:
+  using Point = boost::geometry::model::point<double, 2, boost::geometry::cs::cartesian>;
+  using Box = boost::geometry::model::box<Point>;
+  using Entry = std::pair<Box, std::uint64_t>;
+  using RTree = boost::geometry::index::rtree<Entry, boost::geometry::index::quadratic<16>>;
+  using Transform = Eigen::Matrix<double, 2, 3>;  // [R | t] of a keyframe pose
+
+  struct LeafRecord
+  {
+    std::uint32_t slot = 0;  // into keyframes_
+    Segment2 local;
+  };
+
+  struct Node
+  {
+    Segment2 segment;
+    FusionMoments moments;
+    std::vector<std::uint32_t> leaves;  // into leaves_
+    Box box;                            // as stored in the index
+  };
+
+  // OTM-ILSM (otm_ilsm.cpp).
+  void insertSegment(const Segment2& world, std::uint32_t leaf);
+  void findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out) const;
+  Box paddedBox(const Segment2& s) const;
+  void indexInsert(std::uint64_t id, Node& node);
+  void indexRemove(std::uint64_t id, const Node& node);
+
+  // MP-GMA (mp_gma.cpp).
+  Segment2 worldLeaf(std::uint32_t leaf) const;
+  void updateTransforms();
+  void refuse(Node& node) const;
+  std::vector<std::uint32_t> splitInconsistentLeaves(Node& node) const;
+  std::size_t mergeConsistentSegments();
+  void rebuildIndex();
+
+  CaeParams params_;
+  std::vector<KeyframeInfo> keyframes_;  // by slot, in arrival order
+  std::vector<Transform> transforms_;    // by slot
+  std::unordered_map<std::uint64_t, std::uint32_t> slot_of_;
+  std::vector<LeafRecord> leaves_;
+  std::unordered_map<std::uint64_t, Node> nodes_;
+  RTree index_;
+  std::uint64_t next_id_ = 0;
+  mutable std::vector<std::uint64_t> candidates_;  // scratch
+  mutable std::vector<Entry> hits_;                // scratch
+};
+
+}  // namespace line_map_merging

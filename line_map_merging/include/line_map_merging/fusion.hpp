@@ -1,0 +1,94 @@
+// Fusion conditions and segment fusion of CAE-RLSM (Wen et al., IEEE TIM 2019), shared by
+// every merger of this package. All segments are in world (map) coordinates.
+#pragma once
+
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+#include "line_extraction/params.hpp"
+
+namespace line_map_merging
+{
+using linemap::Pose2;
+using linemap::Segment2;
+using linemap::Vec2;
+
+/// Thresholds of the three fusion conditions.
+struct FusionParams
+{
+  double max_angle = 4.0 * linemap::kPi / 180.0;  ///< theta_max [rad]
+  double max_distance = 0.10;                     ///< d_max [m]
+  double min_overlap = -0.10;                     ///< p_min [m]; negative: a gap up to |p_min| still fuses
+
+  /// Reads "fusion/max_angle", "fusion/max_distance", "fusion/min_overlap"; throws
+  /// linemap::ParameterError naming the key when a value is malformed or out of range.
+  static FusionParams fromParams(const linemap::ParamSet& params);
+  void validate() const;
+  /// Padding of a map segment's bounding box such that every scan segment meeting the
+  /// conditions with it intersects the padded box: d_max + max(0, -p_min).
+  double searchPadding() const;
+};
+
+/// |normalizeAngle(theta_M - theta_S)|: opposite headings give pi, not 0.
+double headingDeviation(const Segment2& map, const Segment2& scan);
+/// The larger distance of the scan segment's endpoints to the infinite line of the map segment.
+double verticalDistance(const Segment2& map, const Segment2& scan);
+/// Length of the overlap between the map segment and the projection of the scan segment onto its
+/// line; negative when they are apart (minus the gap).
+double horizontalOverlap(const Segment2& map, const Segment2& scan);
+/// All three conditions: heading deviation <= max_angle, vertical distance <= max_distance,
+/// horizontal overlap >= min_overlap.
+bool meetsFusionConditions(const Segment2& map, const Segment2& scan, const FusionParams& params);
+
+struct WeightedSegment
+{
+  Segment2 segment;
+  double weight = 1.0;  ///< how many times the segment was updated (original segments: 1)
+};
+
+/// Sufficient statistics of a weighted fusion: weight, sum of weighted barycentres and sum of
+/// weighted unit heading vectors. Adding the moments of a fused group equals adding its members,
+/// so a map segment that keeps the moments of its leaves fuses exactly like its leaves would.
+struct FusionMoments
+{
+  double weight = 0.0;
+  Vec2 centroid_sum = Vec2::Zero();
+  Vec2 direction_sum = Vec2::Zero();
+
+  void add(const Segment2& s, double w = 1.0);
+  void add(const FusionMoments& m);
+  Vec2 centroid() const { return centroid_sum / weight; }
+  /// Unit vector of the weighted mean heading.
+  Vec2 direction() const;
+};
+
+/// The fused line of `moments` (through the barycentre, along the mean heading) clipped to the
+/// farthest projections of the points given to include().
+class FusedLine
+{
+ public:
+  explicit FusedLine(const FusionMoments& moments);
+  void include(const Vec2& p);
+  void include(const Segment2& s)
+  {
+    include(s.start);
+    include(s.end);
+  }
+  Segment2 segment() const;
+
+ private:
+  Vec2 origin_;
+  Vec2 direction_;
+  double t_min_;
+  double t_max_;
+};
+
+/// Fusion of weighted segments: barycentre = weighted mean of barycentres, heading = weighted
+/// mean of the unit heading vectors, endpoints = extreme projections of all endpoints onto the
+/// fused line. Throws std::invalid_argument for an empty set or a non-positive total weight.
+Segment2 fuse(const std::vector<WeightedSegment>& segments);
+
+/// True when both endpoints are finite and distinct.
+bool isValidSegment(const Segment2& s);
+
+}  // namespace line_map_merging

@@ -1,0 +1,125 @@
+// The ROS-free interface of every online line map merger (CAE-RLSM and the competing methods)
+// and the factory that creates them by name.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+#include "line_extraction/params.hpp"
+
+namespace line_map_merging
+{
+/// One keyframe fed to a merger.
+struct Keyframe
+{
+  std::uint64_t index = 0;  ///< unique, chosen by the caller (e.g. a running counter)
+  double stamp = 0.0;       ///< [s]
+  linemap::Pose2 pose;      ///< the laser in the map frame
+  linemap::Pose2 mount;     ///< base -> laser; kept (and saved) for the caller, not used by merging
+  std::vector<linemap::Segment2> segments;  ///< in the laser frame, as extracted
+};
+
+/// A keyframe as the merger holds it (without its segments).
+struct KeyframeInfo
+{
+  std::uint64_t index = 0;
+  double stamp = 0.0;
+  linemap::Pose2 pose;
+  linemap::Pose2 mount;
+};
+
+/// One segment of the merged map.
+struct MapSegment
+{
+  std::uint64_t id = 0;            ///< stable; a merged group keeps the smallest id
+  linemap::Segment2 segment;       ///< map frame
+  std::uint32_t merged_count = 0;  ///< original segments fused into it
+};
+
+/// Provenance: an original segment as extracted, in its keyframe's laser frame.
+struct Leaf
+{
+  std::uint64_t keyframe = 0;
+  linemap::Segment2 segment;
+};
+
+struct AddResult
+{
+  std::size_t merged = 0;    ///< segments that entered the map
+  std::size_t rejected = 0;  ///< non-finite or zero-length segments, skipped
+};
+
+struct AdjustResult
+{
+  std::size_t moved = 0;    ///< keyframes whose pose was replaced
+  std::size_t unknown = 0;  ///< poses naming no keyframe of the merger (ignored)
+  std::size_t split = 0;    ///< leaves split off their map segment (consistent adjustment)
+  std::size_t merged = 0;   ///< map segments merged into others after the adjustment
+};
+
+/// Load/save failure; what() names the file and, where known, the line and field.
+struct MapFileError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
+class Merger
+{
+ public:
+  virtual ~Merger() = default;
+  /// The factory name ("cae", ...).
+  virtual const char* name() const = 0;
+
+  /// Merges the keyframe's segments into the map. Throws std::invalid_argument naming the field for
+  /// a duplicate index or a non-finite pose (the map is then unchanged); bad segments are skipped
+  /// and counted in the result.
+  virtual AddResult addKeyframe(const Keyframe& keyframe) = 0;
+
+  /// Replaces the poses (laser in map) of the named keyframes and rebuilds the map from the
+  /// provenance; keyframes not named keep their pose. Methods without provenance return
+  /// moved == 0 and leave the map as it is (see supportsAdjustment()).
+  virtual AdjustResult adjust(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses) = 0;
+  virtual bool supportsAdjustment() const { return false; }
+
+  /// The map, sorted by id.
+  virtual std::vector<MapSegment> map() const = 0;
+  /// The keyframes, sorted by index.
+  virtual std::vector<KeyframeInfo> keyframes() const = 0;
+  /// The original segments under map segment `id` (empty when unknown or without provenance).
+  virtual std::vector<Leaf> leaves(std::uint64_t /*id*/) const { return {}; }
+  virtual bool hasProvenance() const { return false; }
+
+  virtual std::size_t keyframeCount() const = 0;
+  virtual std::size_t leafCount() const = 0;  ///< original segments merged so far
+  virtual std::size_t segmentCount() const = 0;
+
+  /// Empties the map, its provenance and its keyframes (ids restart at 0).
+  virtual void reset() = 0;
+
+  /// Writes the whole state to `path` atomically (temporary file, fsync, rename). Throws MapFileError.
+  virtual void save(const std::string& /*path*/) const
+  {
+    throw MapFileError(std::string(name()) + ": saving is not supported");
+  }
+  /// Replaces the state by the file's; on any error throws MapFileError and keeps the current state.
+  virtual void load(const std::string& /*path*/)
+  {
+    throw MapFileError(std::string(name()) + ": loading is not supported");
+  }
+};
+
+/// Creates merger `name` from parameters (shared: "fusion/max_angle", "fusion/max_distance",
+/// "fusion/min_overlap"; CAE-RLSM: "threads", "consistent_adjustment", "spatial_index").
+/// Throws linemap::ParameterError naming an unknown method or a bad parameter.
+std::unique_ptr<Merger> makeMerger(const std::string& name, const linemap::ParamSet& params);
+
+/// Names accepted by makeMerger.
+const std::vector<std::string>& mergerNames();
+
+}  // namespace line_map_merging

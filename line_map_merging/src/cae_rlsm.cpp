@@ -1,0 +1,103 @@
+// CAE-RLSM state: parameters, keyframe bookkeeping and read access to the provenance tree.
+#include "line_map_merging/cae_rlsm.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace line_map_merging
+{
+CaeParams CaeParams::fromParams(const linemap::ParamSet& params)
+{
+  CaeParams p;
+  p.fusion = FusionParams::fromParams(params);
+  p.threads = params.getInt("threads", p.threads);
+  if (p.threads < 0)
+    throw linemap::ParameterError("parameter 'threads': " + std::to_string(p.threads) +
+                                  " must be >= 0 (0 = all cores)");
+  p.consistent_adjustment = params.getBool("consistent_adjustment", p.consistent_adjustment);
+  p.spatial_index = params.getBool("spatial_index", p.spatial_index);
+  return p;
+}
+
+CaeRlsm::CaeRlsm(const CaeParams& params) : params_(params)
+{
+  params_.fusion.validate();
+}
+
+AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
+{
+  const linemap::Pose2& p = keyframe.pose;
+  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta)))
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) + ": pose is not finite");
+  const linemap::Pose2& m = keyframe.mount;
+  if (!(std::isfinite(m.x) && std::isfinite(m.y) && std::isfinite(m.theta)))
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) + ": mount is not finite");
+  if (!std::isfinite(keyframe.stamp))
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) + ": stamp is not finite");
+  if (slot_of_.count(keyframe.index))
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) + ": index already merged");
+
+  const auto slot = static_cast<std::uint32_t>(keyframes_.size());
+  slot_of_.emplace(keyframe.index, slot);
+  keyframes_.push_back({keyframe.index, keyframe.stamp, p, m});
+  transforms_.emplace_back();
+  const double c = std::cos(p.theta), s = std::sin(p.theta);
+  transforms_.back() << c, -s, p.x, s, c, p.y;
+
+  AddResult result;
+  for (const Segment2& local : keyframe.segments)
+  {
+    if (!isValidSegment(local))
+    {
+      ++result.rejected;
+      continue;
+    }
+    const auto leaf = static_cast<std::uint32_t>(leaves_.size());
+    leaves_.push_back({slot, local});
+    insertSegment(local.transformed(p), leaf);
+    ++result.merged;
+  }
+  return result;
+}
+
+std::vector<MapSegment> CaeRlsm::map() const
+{
+  std::vector<MapSegment> out;
+  out.reserve(nodes_.size());
+  for (const auto& [id, node] : nodes_)
+    out.push_back({id, node.segment, static_cast<std::uint32_t>(node.leaves.size())});
+  std::sort(out.begin(), out.end(), [](const MapSegment& a, const MapSegment& b) { return a.id < b.id; });
+  return out;
+}
+
+std::vector<KeyframeInfo> CaeRlsm::keyframes() const
+{
+  std::vector<KeyframeInfo> out = keyframes_;
+  std::sort(out.begin(), out.end(),
+            [](const KeyframeInfo& a, const KeyframeInfo& b) { return a.index < b.index; });
+  return out;
+}
+
+std::vector<Leaf> CaeRlsm::leaves(std::uint64_t id) const
+{
+  std::vector<Leaf> out;
+  auto it = nodes_.find(id);
+  if (it == nodes_.end()) return out;
+  for (std::uint32_t l : it->second.leaves)
+    out.push_back({keyframes_[leaves_[l].slot].index, leaves_[l].local});
+  return out;
+}
+
+void CaeRlsm::reset()
+{
+  keyframes_.clear();
+  transforms_.clear();
+  slot_of_.clear();
+  leaves_.clear();
+  nodes_.clear();
+  index_.clear();
+  next_id_ = 0;
+}
+
+}  // namespace line_map_merging

@@ -1,0 +1,188 @@
+// MP-GMA (Algorithm 2 of CAE-RLSM): with new keyframe poses, every leaf is re-transformed and every
+// map segment re-fused from its own leaves, in parallel (TBB). Optionally followed by a consistency
+// pass that the paper does not have: leaves that no longer meet the fusion conditions with their
+// re-fused segment are split off (and re-merged through OTM-ILSM), and map segments that now meet
+// the conditions are merged.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include "line_map_merging/cae_rlsm.hpp"
+
+namespace line_map_merging
+{
+namespace bgi = boost::geometry::index;
+
+Segment2 CaeRlsm::worldLeaf(std::uint32_t leaf) const
+{
+  const LeafRecord& l = leaves_[leaf];
+  const Transform& t = transforms_[l.slot];
+  return {t.leftCols<2>() * l.local.start + t.col(2), t.leftCols<2>() * l.local.end + t.col(2)};
+}
+
+void CaeRlsm::updateTransforms()
+{
+  transforms_.resize(keyframes_.size());
+  for (std::size_t i = 0; i < keyframes_.size(); ++i)
+  {
+    const linemap::Pose2& p = keyframes_[i].pose;
+    const double c = std::cos(p.theta), s = std::sin(p.theta);
+    transforms_[i] << c, -s, p.x, s, c, p.y;
+  }
+}
+
+void CaeRlsm::refuse(Node& node) const
+{
+  // Two passes over the leaves: the moments fix the line, then the endpoints fix its extent.
+  FusionMoments moments;
+  for (std::uint32_t l : node.leaves) moments.add(worldLeaf(l));
+  FusedLine line(moments);
+  for (std::uint32_t l : node.leaves) line.include(worldLeaf(l));
+  node.moments = moments;
+  node.segment = line.segment();
+}
+
+std::vector<std::uint32_t> CaeRlsm::splitInconsistentLeaves(Node& node) const
+{
+  std::vector<std::uint32_t> split;
+  // Removing leaves moves the fused segment, which can expose more outliers: repeat until stable.
+  for (;;)
+  {
+    std::vector<std::uint32_t> keep;
+    std::size_t first_split = split.size();
+    for (std::uint32_t l : node.leaves)
+    {
+      if (meetsFusionConditions(node.segment, worldLeaf(l), params_.fusion))
+        keep.push_back(l);
+      else
+        split.push_back(l);
+    }
+    if (split.size() == first_split) return split;
+    if (keep.empty())
+    {
+      // No leaf agrees with the group any more: the oldest one keeps the id.
+      auto oldest = std::min_element(split.begin() + first_split, split.end());
+      keep.push_back(*oldest);
+      split.erase(oldest);
+    }
+    node.leaves = std::move(keep);
+    refuse(node);
+  }
+}
+
+void CaeRlsm::rebuildIndex()
+{
+  if (!params_.spatial_index) return;
+  std::vector<Entry> entries;
+  entries.reserve(nodes_.size());
+  for (auto& [id, node] : nodes_)
+  {
+    node.box = paddedBox(node.segment);
+    entries.emplace_back(node.box, id);
+  }
+  index_ = RTree(entries);  // bulk loading (packing) is much faster than inserting one by one
+}
+
+std::size_t CaeRlsm::mergeConsistentSegments()
+{
+  std::size_t merged = 0;
+  std::set<std::uint64_t> pending;
+  for (const auto& entry : nodes_) pending.insert(entry.first);
+  std::vector<std::uint64_t> candidates;
+  while (!pending.empty())
+  {
+    const std::uint64_t id = *pending.begin();
+    pending.erase(pending.begin());
+    auto it = nodes_.find(id);
+    if (it == nodes_.end()) continue;
+    findCandidates(it->second.segment, id, candidates);
+    if (candidates.empty()) continue;
+    candidates.push_back(id);
+    std::sort(candidates.begin(), candidates.end());
+    Node& target = nodes_.at(candidates.front());
+    indexRemove(candidates.front(), target);
+    for (std::size_t i = 1; i < candidates.size(); ++i)
+    {
+      auto other = nodes_.find(candidates[i]);
+      indexRemove(candidates[i], other->second);
+      target.leaves.insert(target.leaves.end(), other->second.leaves.begin(), other->second.leaves.end());
+      nodes_.erase(other);
+      ++merged;
+    }
+    refuse(target);
+    indexInsert(candidates.front(), target);
+    // The merged segment and its neighbours may now meet the conditions with more segments.
+    pending.insert(candidates.front());
+    if (params_.spatial_index)
+    {
+      std::vector<Entry> near;
+      index_.query(bgi::intersects(target.box), std::back_inserter(near));
+      for (const Entry& e : near) pending.insert(e.second);
+    }
+    else
+    {
+      for (const auto& entry : nodes_) pending.insert(entry.first);
+    }
+  }
+  return merged;
+}
+
+AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses)
+{
+  AdjustResult result;
+  for (const auto& [index, pose] : poses)
+    if (!(std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.theta)))
+      throw std::invalid_argument("adjust: pose of keyframe " + std::to_string(index) + " is not finite");
+  for (const auto& [index, pose] : poses)
+  {
+    auto it = slot_of_.find(index);
+    if (it == slot_of_.end())
+    {
+      ++result.unknown;
+      continue;
+    }
+    keyframes_[it->second].pose = {pose.x, pose.y, linemap::normalizeAngle(pose.theta)};
+    ++result.moved;
+  }
+  if (result.moved == 0) return result;
+  updateTransforms();
+
+  std::vector<Node*> nodes;
+  nodes.reserve(nodes_.size());
+  for (auto& entry : nodes_) nodes.push_back(&entry.second);
+  std::vector<std::vector<std::uint32_t>> split(params_.consistent_adjustment ? nodes.size() : 0);
+
+  tbb::task_arena arena(params_.threads > 0 ? params_.threads : tbb::task_arena::automatic);
+  arena.execute(
+      [&]
+      {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nodes.size(), 64),
+                          [&](const tbb::blocked_range<std::size_t>& r)
+                          {
+                            for (std::size_t i = r.begin(); i != r.end(); ++i)
+                            {
+                              refuse(*nodes[i]);
+                              if (params_.consistent_adjustment)
+                                split[i] = splitInconsistentLeaves(*nodes[i]);
+                            }
+                          });
+      });
+  rebuildIndex();
+  if (!params_.consistent_adjustment) return result;
+
+  // Split leaves re-enter in their original (chronological) order, through OTM-ILSM.
+  std::vector<std::uint32_t> orphans;
+  for (const auto& s : split) orphans.insert(orphans.end(), s.begin(), s.end());
+  std::sort(orphans.begin(), orphans.end());
+  result.split = orphans.size();
+  for (std::uint32_t l : orphans) insertSegment(worldLeaf(l), l);
+  result.merged = mergeConsistentSegments();
+  return result;
+}
+
+}  // namespace line_map_merging

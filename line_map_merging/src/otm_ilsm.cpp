@@ -1,0 +1,95 @@
+// OTM-ILSM (Algorithm 1 of CAE-RLSM): a new segment is fused with EVERY map segment that meets the
+// fusion conditions with it, so one segment can bridge several map segments (e.g. the two ends
+// of a wall seen at the start and the end of a loop). The group keeps the smallest id.
+#include <algorithm>
+
+#include "line_map_merging/cae_rlsm.hpp"
+
+namespace line_map_merging
+{
+namespace bgi = boost::geometry::index;
+
+CaeRlsm::Box CaeRlsm::paddedBox(const Segment2& s) const
+{
+  const double pad = params_.fusion.searchPadding();
+  return Box(Point(std::min(s.start.x(), s.end.x()) - pad, std::min(s.start.y(), s.end.y()) - pad),
+             Point(std::max(s.start.x(), s.end.x()) + pad, std::max(s.start.y(), s.end.y()) + pad));
+}
+
+void CaeRlsm::indexInsert(std::uint64_t id, Node& node)
+{
+  if (!params_.spatial_index) return;
+  node.box = paddedBox(node.segment);
+  index_.insert(Entry(node.box, id));
+}
+
+void CaeRlsm::indexRemove(std::uint64_t id, const Node& node)
+{
+  if (!params_.spatial_index) return;
+  index_.remove(Entry(node.box, id));
+}
+
+void CaeRlsm::findCandidates(const Segment2& scan, std::uint64_t exclude,
+                             std::vector<std::uint64_t>& out) const
+{
+  out.clear();
+  if (params_.spatial_index)
+  {
+    // Every map segment meeting the conditions has a point of `scan` inside its padded box.
+    const Box query(Point(std::min(scan.start.x(), scan.end.x()), std::min(scan.start.y(), scan.end.y())),
+                    Point(std::max(scan.start.x(), scan.end.x()), std::max(scan.start.y(), scan.end.y())));
+    hits_.clear();
+    index_.query(bgi::intersects(query), std::back_inserter(hits_));
+    for (const Entry& e : hits_)
+      if (e.second != exclude && meetsFusionConditions(nodes_.at(e.second).segment, scan, params_.fusion))
+        out.push_back(e.second);
+  }
+  else
+  {
+    for (const auto& [id, node] : nodes_)
+      if (id != exclude && meetsFusionConditions(node.segment, scan, params_.fusion)) out.push_back(id);
+  }
+  // Fusing in id order makes the result independent of the search structure.
+  std::sort(out.begin(), out.end());
+}
+
+void CaeRlsm::insertSegment(const Segment2& world, std::uint32_t leaf)
+{
+  std::vector<std::uint64_t>& candidates = candidates_;
+  findCandidates(world, UINT64_MAX, candidates);
+  if (candidates.empty())
+  {
+    const std::uint64_t id = next_id_++;
+    Node& node = nodes_[id];
+    node.segment = world;
+    node.moments.add(world);
+    node.leaves.push_back(leaf);
+    indexInsert(id, node);
+    return;
+  }
+
+  Node& target = nodes_.at(candidates.front());
+  indexRemove(candidates.front(), target);
+  FusionMoments moments = target.moments;
+  for (std::size_t i = 1; i < candidates.size(); ++i) moments.add(nodes_.at(candidates[i]).moments);
+  moments.add(world);
+
+  FusedLine line(moments);
+  line.include(target.segment);
+  line.include(world);
+  for (std::size_t i = 1; i < candidates.size(); ++i)
+  {
+    auto it = nodes_.find(candidates[i]);
+    Node& other = it->second;
+    line.include(other.segment);
+    indexRemove(candidates[i], other);
+    target.leaves.insert(target.leaves.end(), other.leaves.begin(), other.leaves.end());
+    nodes_.erase(it);
+  }
+  target.leaves.push_back(leaf);
+  target.moments = moments;
+  target.segment = line.segment();
+  indexInsert(candidates.front(), target);
+}
+
+}  // namespace line_map_merging
