@@ -1,0 +1,58 @@
+// Hough transform line extraction over a (radius, angle) accumulator.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "line_extraction/extractor.hpp"
+#include "line_extraction/ransac.hpp"
+
+namespace line_extraction
+{
+/// Votes every point into a radius_resolution x angle_resolution accumulator
+/// over (signed radius, angle in [0, pi)); repeatedly takes the strongest cell,
+/// its inliers within inlier_distance, TLS-refits them, splits them into
+/// segments and removes their votes, while the strongest cell has at least
+/// min_votes votes.
+class HoughExtractor : public Extractor
+{
+ public:
+  /// The strongest cell of one round, before the refit, in Hessian form (radius >= 0).
+  struct Peak
+  {
+    double angle = 0.0;
+    double radius = 0.0;
+    int votes = 0;
+  };
+
+  explicit HoughExtractor(const linemap::ParamSet& params);
+  const char* name() const override { return "hough"; }
+  void extractRange(const PreparedScan& scan, PointRange range, ExtractionResult& out) override;
+
+  /// Peaks of the last extractRange call, strongest first.
+  const std::vector<Peak>& peaks() const { return peaks_; }
+  double radiusResolution() const { return radius_resolution_; }
+  double angleResolution() const { return angle_resolution_; }
+
+ private:
+  void vote(const Vec2& p, int delta);
+
+  RunSettings runs_;
+  double radius_resolution_;
+  double angle_resolution_;
+  double inlier_distance_;
+  int min_votes_;
+  int angle_bins_ = 0;
+  std::vector<double> cos_, sin_;
+  std::vector<int> bins_;
+  // Accumulator [angle][radius] over the signed radius [-max_radius_, max_radius_];
+  // all zero between calls (every vote is withdrawn before returning).
+  std::vector<std::uint16_t> acc_;
+  int radius_bins_ = 0;
+  double max_radius_ = 0.0;
+  std::vector<int> remaining_, inliers_, candidates_;
+  std::vector<char> taken_;
+  std::vector<Peak> peaks_;
+};
+
+}  // namespace line_extraction
