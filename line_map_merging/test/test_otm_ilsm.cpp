@@ -1,0 +1,180 @@
+// OTM-ILSM: incremental one-to-many merging, and the spatial index against the linear reference.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "line_map_merging/cae_rlsm.hpp"
+#include "synthetic_world.hpp"
+
+using line_map_merging::CaeParams;
+using line_map_merging::CaeRlsm;
+using line_map_merging::Keyframe;
+using linemap::Pose2;
+using linemap::Segment2;
+using linemap::Vec2;
+
+namespace
+{
+Keyframe keyframeOf(std::uint64_t index, const Pose2& pose, const std::vector<Segment2>& world)
+{
+  Keyframe k;
+  k.index = index;
+  k.stamp = static_cast<double>(index);
+  k.pose = pose;
+  for (const Segment2& s : world) k.segments.push_back(s.transformed(pose.inverse()));
+  return k;
+}
+
+/// Keyframes driving along x under walls `walls`, heading wobbling, noisy segments.
+std::vector<Keyframe> drive(const std::vector<Segment2>& walls, int scans, std::uint32_t seed)
+{
+  std::mt19937 rng(seed);
+  std::vector<Keyframe> out;
+  for (int k = 0; k < scans; ++k)
+  {
+    const Pose2 pose(0.2 * k, 0.0, 0.3 * std::sin(0.7 * k));
+    Keyframe kf;
+    kf.index = static_cast<std::uint64_t>(k);
+    kf.stamp = k;
+    kf.pose = pose;
+    for (const Segment2& w : walls)
+      if (auto v = synthetic::visiblePart(w, pose.translation(), 4.0, 0.3))
+        kf.segments.push_back(synthetic::addNoise(v->transformed(pose.inverse()), rng, 0.005, 0.005, 0.01));
+    out.push_back(std::move(kf));
+  }
+  return out;
+}
+}  // namespace
+
+TEST(OtmIlsm, WallSeenInFiftyNoisyScansIsOneSegment)
+{
+  CaeRlsm merger;
+  std::size_t segments = 0;
+  for (const Keyframe& k : drive({Segment2(Vec2(0, 2), Vec2(10, 2))}, 50, 1))
+  {
+    ASSERT_EQ(k.segments.size(), 1u);
+    segments += merger.addKeyframe(k).merged;
+  }
+  ASSERT_EQ(segments, 50u);
+  const auto map = merger.map();
+  ASSERT_EQ(map.size(), 1u);
+  EXPECT_EQ(map[0].id, 0u);
+  EXPECT_EQ(map[0].merged_count, 50u);
+  EXPECT_NEAR(map[0].segment.start.y(), 2.0, 0.01);
+  EXPECT_NEAR(map[0].segment.end.y(), 2.0, 0.01);
+  EXPECT_NEAR(map[0].segment.start.x(), 0.0, 0.05);
+  EXPECT_NEAR(map[0].segment.end.x(), 10.0, 0.05);
+  EXPECT_EQ(merger.leafCount(), 50u);
+  EXPECT_EQ(merger.leaves(0).size(), 50u);
+}
+
+TEST(OtmIlsm, ParallelWallsThirtyCentimetresApartStayTwo)
+{
+  CaeRlsm merger;
+  for (const Keyframe& k :
+       drive({Segment2(Vec2(0, 2), Vec2(10, 2)), Segment2(Vec2(0, 2.3), Vec2(10, 2.3))}, 50, 2))
+    merger.addKeyframe(k);
+  const auto map = merger.map();
+  ASSERT_EQ(map.size(), 2u);
+  const double y0 = map[0].segment.midpoint().y(), y1 = map[1].segment.midpoint().y();
+  EXPECT_NEAR(std::min(y0, y1), 2.0, 0.01);
+  EXPECT_NEAR(std::max(y0, y1), 2.3, 0.01);
+  EXPECT_EQ(map[0].merged_count + map[1].merged_count, 100u);
+}
+
+TEST(OtmIlsm, OneSegmentBridgingTheTwoEndsOfALoopMergesAllThree)
+{
+  CaeRlsm merger;
+  merger.addKeyframe(
+      keyframeOf(0, Pose2(0, -1, 0.3), {Segment2(Vec2(0, 0), Vec2(4, 0))}));  // start of the loop
+  merger.addKeyframe(keyframeOf(1, Pose2(8, -1, -0.2), {Segment2(Vec2(5, 0), Vec2(9, 0))}));  // end: 1 m gap
+  ASSERT_EQ(merger.segmentCount(), 2u);
+  merger.addKeyframe(
+      keyframeOf(2, Pose2(4.5, 1, 0.1), {Segment2(Vec2(3, 0.02), Vec2(6, 0.02))}));  // bridges both
+  const auto map = merger.map();
+  ASSERT_EQ(map.size(), 1u);  // a one-to-one merge would leave two
+  EXPECT_EQ(map[0].id, 0u);   // the smallest id survives
+  EXPECT_EQ(map[0].merged_count, 3u);
+  // Barycentre (2 + 7 + 4.5, 0 + 0 + 0.02) / 3, heading 0: the line y = 0.02/3 over x in [0, 9].
+  EXPECT_NEAR(map[0].segment.start.x(), 0.0, 1e-9);
+  EXPECT_NEAR(map[0].segment.end.x(), 9.0, 1e-9);
+  EXPECT_NEAR(map[0].segment.start.y(), 0.02 / 3.0, 1e-9);
+  EXPECT_NEAR(map[0].segment.end.y(), 0.02 / 3.0, 1e-9);
+  EXPECT_EQ(merger.leaves(0).size(), 3u);
+  // The merged id 1 is gone for good: the next new segment gets a fresh id.
+  merger.addKeyframe(keyframeOf(3, Pose2(), {Segment2(Vec2(0, 5), Vec2(1, 5))}));
+  EXPECT_EQ(merger.map().back().id, 2u);
+}
+
+TEST(OtmIlsm, BadInputIsCountedOrRejectedWithoutChangingTheMap)
+{
+  CaeRlsm merger;
+  Keyframe k = keyframeOf(7, Pose2(), {Segment2(Vec2(0, 0), Vec2(1, 0))});
+  k.segments.push_back(Segment2(Vec2(1, 1), Vec2(1, 1)));  // zero length
+  k.segments.push_back(Segment2(Vec2(std::numeric_limits<double>::quiet_NaN(), 0), Vec2(1, 0)));
+  const auto r = merger.addKeyframe(k);
+  EXPECT_EQ(r.merged, 1u);
+  EXPECT_EQ(r.rejected, 2u);
+  EXPECT_THROW(merger.addKeyframe(k), std::invalid_argument);  // duplicate index
+  Keyframe nan_pose = keyframeOf(8, Pose2(), {Segment2(Vec2(0, 3), Vec2(1, 3))});
+  nan_pose.pose.theta = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(merger.addKeyframe(nan_pose), std::invalid_argument);
+  EXPECT_EQ(merger.segmentCount(), 1u);
+  EXPECT_EQ(merger.keyframeCount(), 1u);
+  EXPECT_EQ(merger.leafCount(), 1u);
+}
+
+TEST(OtmIlsm, SpatialIndexAndLinearSearchGiveIdenticalMaps)
+{
+  // 10,000 noisy views of 300 random walls, 10 per keyframe, from random poses.
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> pos(0.0, 60.0), ang(-linemap::kPi, linemap::kPi), len(1.0, 6.0),
+      frac(0.0, 1.0);
+  std::vector<Segment2> walls;
+  for (int i = 0; i < 300; ++i)
+  {
+    const Vec2 a(pos(rng), pos(rng));
+    const double h = ang(rng);
+    walls.emplace_back(a, a + len(rng) * Vec2(std::cos(h), std::sin(h)));
+  }
+  std::vector<Keyframe> keyframes;
+  for (int k = 0; k < 1000; ++k)
+  {
+    std::vector<Segment2> world;
+    for (int j = 0; j < 10; ++j)
+    {
+      const Segment2& w = walls[rng() % walls.size()];
+      double t0 = frac(rng), t1 = frac(rng);
+      if (t1 < t0) std::swap(t0, t1);
+      t1 = std::max(t1, t0 + 0.1);
+      const Segment2 part(w.start + t0 * (w.end - w.start), w.start + t1 * (w.end - w.start));
+      world.push_back(synthetic::addNoise(part, rng, 0.02, 0.015, 0.02));
+    }
+    keyframes.push_back(
+        keyframeOf(static_cast<std::uint64_t>(k), Pose2(pos(rng), pos(rng), ang(rng)), world));
+  }
+  CaeParams indexed, linear;
+  linear.spatial_index = false;
+  CaeRlsm a(indexed), b(linear);
+  for (const Keyframe& k : keyframes)
+  {
+    a.addKeyframe(k);
+    b.addKeyframe(k);
+  }
+  const auto ma = a.map(), mb = b.map();
+  ASSERT_EQ(a.leafCount(), 10000u);
+  ASSERT_EQ(ma.size(), mb.size());
+  EXPECT_LT(ma.size(), 3000u) << "too few merges for the comparison to mean anything";
+  std::size_t multi = 0;
+  for (std::size_t i = 0; i < ma.size(); ++i)
+  {
+    ASSERT_EQ(ma[i].id, mb[i].id);
+    ASSERT_EQ(ma[i].merged_count, mb[i].merged_count);
+    EXPECT_EQ(ma[i].segment.start, mb[i].segment.start) << "id " << ma[i].id;
+    EXPECT_EQ(ma[i].segment.end, mb[i].segment.end) << "id " << ma[i].id;
+    multi += ma[i].merged_count > 1;
+  }
+  EXPECT_GT(multi, 100u);
+}
