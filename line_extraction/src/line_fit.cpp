@@ -180,8 +180,16 @@ void resolveOverlaps(const PreparedScan& scan, std::vector<PointRange>& segments
   {
     PointRange& a = segments[k];
     PointRange& b = segments[k + 1];
-    if (a.size() <= 0 || b.size() <= 0 || b.begin >= a.end) continue;
-    const int cb = std::max(b.begin, a.begin), ce = std::min(a.end, b.end);
+    if (a.size() <= 0 || b.size() <= 0 || b.begin > a.end) continue;
+    int cb = std::max(b.begin, a.begin), ce = std::min(a.end, b.end);
+    if (cb == ce)
+    {
+      // Touching segments: the last point of one and the first of the other are
+      // contested, when both keep enough points to define their lines.
+      if (a.size() < 4 || b.size() < 4) continue;
+      --cb;
+      ++ce;
+    }
     // Lines from the uncontested parts (or the whole segment when too little is left).
     LineNormal left, right;
     const bool left_ok = cb - a.begin >= 2 ? fitNormal(sumRange(scan, a.begin, cb), left)

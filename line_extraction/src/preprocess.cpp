@@ -2,6 +2,7 @@
 // is computed once per scan geometry, which never changes for a given laser.
 #include "line_extraction/preprocess.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -69,6 +70,31 @@ void Preprocessor::prepare(const ScanInput& scan, PreparedScan& out)
     out.angles.push_back(scan.angle_min + static_cast<double>(i) * scan.angle_increment);
     out.beam_index.push_back(static_cast<int>(i));
   }
+  if (out.full_circle) startAtWidestGap(out);
+}
+
+void startAtWidestGap(PreparedScan& scan)
+{
+  const std::size_t n = scan.size();
+  if (n < 3) return;
+  std::size_t start = 0;
+  double widest = (scan.points[0] - scan.points[n - 1]).squaredNorm();
+  for (std::size_t i = 1; i < n; ++i)
+  {
+    const double d = (scan.points[i] - scan.points[i - 1]).squaredNorm();
+    if (d > widest)
+    {
+      widest = d;
+      start = i;
+    }
+  }
+  if (start == 0) return;
+  // Points moved behind the old last point continue its angles past +2 pi.
+  for (std::size_t i = 0; i < start; ++i) scan.angles[i] += 2.0 * linemap::kPi;
+  std::rotate(scan.points.begin(), scan.points.begin() + start, scan.points.end());
+  std::rotate(scan.ranges.begin(), scan.ranges.begin() + start, scan.ranges.end());
+  std::rotate(scan.angles.begin(), scan.angles.begin() + start, scan.angles.end());
+  std::rotate(scan.beam_index.begin(), scan.beam_index.begin() + start, scan.beam_index.end());
 }
 
 }  // namespace line_extraction

@@ -41,7 +41,8 @@ TEST(Geometry, DistancesAndHessianForm)
   EXPECT_NEAR(distanceToLine(Vec2(5, 3), Vec2(0, 0), Vec2(1, 0)), 3.0, 1e-12);
   EXPECT_NEAR(distanceToSegment(Vec2(5, 3), Vec2(0, 0), Vec2(1, 0)), std::hypot(4.0, 3.0), 1e-12);
   // The line y = -2 has normal angle -pi/2 and radius 2, whichever way it is traversed.
-  for (const auto& h : {hessianFromPoints(Vec2(0, -2), Vec2(1, -2)), hessianFromPoints(Vec2(1, -2), Vec2(0, -2))})
+  for (const auto& h :
+       {hessianFromPoints(Vec2(0, -2), Vec2(1, -2)), hessianFromPoints(Vec2(1, -2), Vec2(0, -2))})
   {
     EXPECT_NEAR(h.radius, 2.0, 1e-12);
     EXPECT_NEAR(h.angle, -kPi / 2.0, 1e-12);

@@ -117,3 +117,21 @@ TEST(Preprocess, EmptyScanGivesNoPoints)
   pre.prepare(scanOf(r, 0.0, 0.1), out);
   EXPECT_EQ(out.size(), 0u);
 }
+
+TEST(Preprocess, FullCircleStartsAtTheWidestGap)
+{
+  // A circle of radius 2 with beams 100..139 farther out; beam 100 at 3.5 m makes
+  // the jump from beam 99 (1.5 m) wider than the jump back at beam 140 (1 m).
+  std::vector<float> r(360, 2.0f);
+  for (int i = 100; i < 140; ++i) r[i] = 3.0f;
+  r[100] = 3.5f;
+  Preprocessor pre;
+  PreparedScan out;
+  pre.prepare(scanOf(r, -kPi, 2 * kPi / 360), out);
+  ASSERT_EQ(out.size(), 360u);
+  EXPECT_EQ(out.beam_index[0], 100);
+  EXPECT_EQ(out.beam_index[359], 99);
+  for (std::size_t i = 1; i < out.size(); ++i) EXPECT_GT(out.angles[i], out.angles[i - 1]);
+  EXPECT_NEAR(out.angles[359], -kPi + 99 * 2 * kPi / 360 + 2 * kPi, 1e-12);
+  EXPECT_NEAR(out.points[0].x(), 3.5 * std::cos(-kPi + 100 * 2 * kPi / 360), 1e-6);
+}

@@ -16,7 +16,7 @@ namespace line_extraction
 /// from their `seed` parameter at every call so results are deterministic.
 class Extractor
 {
-public:
+ public:
   virtual ~Extractor() = default;
   virtual const char* name() const = 0;
   /// Appends to `out` the segments found among scan points [range.begin, range.end).

@@ -124,7 +124,8 @@ class PrefixSums
 
 /// Resolves the shared points of consecutive contiguous segments (in scan order):
 /// when segment k+1 starts before segment k ends, each contested point goes to the
-/// line it is nearer to, splitting where the two distances cross. Segments left with
+/// line it is nearer to, splitting where the two distances cross. Touching segments
+/// (k+1 starts where k ends) contest the two points at the junction. Segments left with
 /// fewer than 2 points get size 0 (callers skip them).
 void resolveOverlaps(const PreparedScan& scan, std::vector<PointRange>& segments);
 

@@ -16,7 +16,7 @@ struct ParameterError : std::invalid_argument
 
 class ParamSet
 {
-public:
+ public:
   void set(const std::string& key, const std::string& value) { values_[key] = value; }
   bool has(const std::string& key) const { return values_.count(key) != 0; }
   const std::map<std::string, std::string>& values() const { return values_; }
@@ -27,7 +27,7 @@ public:
   bool getBool(const std::string& key, bool fallback) const;
   std::string getString(const std::string& key, const std::string& fallback) const;
 
-private:
+ private:
   std::map<std::string, std::string> values_;
 };
 

@@ -20,6 +20,13 @@ struct ScanError : std::invalid_argument
 /// ranges, range_min > range_max, intensities of another length than ranges).
 void validateScan(const ScanInput& scan);
 
+/// For a full-circle scan: rotates the points so that the first one follows the
+/// widest gap between neighbours (the wrap-around pair included). No wall then
+/// straddles the ends of the point list unless the scan has no gap wider than its
+/// walls' point spacing. Angles of the points moved to the back get +2 pi, so they
+/// keep increasing.
+void startAtWidestGap(PreparedScan& scan);
+
 class Preprocessor
 {
  public:
@@ -27,7 +34,8 @@ class Preprocessor
   explicit Preprocessor(double max_usable_range = std::numeric_limits<double>::infinity());
 
   /// Validates the scan and fills `out` with its usable points (finite, inside
-  /// [range_min, range_max), below the usable range, > 0), in beam order.
+  /// [range_min, range_max), below the usable range, > 0), in beam order; a
+  /// full-circle scan starts at its widest gap (startAtWidestGap).
   void prepare(const ScanInput& scan, PreparedScan& out);
 
   double maxUsableRange() const { return max_usable_range_; }
