@@ -1,0 +1,78 @@
+// Ground truth of a simulated recording (ROS-free): the true walls and, per scan,
+// the true laser pose and the wall pieces the scan sees. Stored next to the bag as
+// OUT.truth.yaml (format linemap_truth/1) for the map metrics.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+
+namespace line_map_eval
+{
+inline constexpr const char* kTruthFormat = "linemap_truth/1";
+
+/// The part of wall `wall` between the extreme beam hits of one scan, map frame,
+/// directed like the wall.
+struct VisibleWall
+{
+  std::size_t wall = 0;
+  linemap::Segment2 segment;
+  std::size_t beams = 0;  ///< beams whose true ray ends on this wall
+
+  bool operator==(const VisibleWall& o) const
+  {
+    return wall == o.wall && segment.start == o.segment.start && segment.end == o.segment.end &&
+           beams == o.beams;
+  }
+};
+
+struct TruthScan
+{
+  double stamp = 0.0;
+  linemap::Pose2 pose;  ///< TRUE pose of the laser in the map frame
+  std::vector<VisibleWall> visible;
+};
+
+struct TruthLaser
+{
+  std::size_t beams = 0;
+  double angle_min = 0.0;
+  double angle_increment = 0.0;
+  double range_min = 0.0;
+  double range_max = 0.0;
+  double sigma = 0.0;
+  double spurious = 0.0;
+};
+
+struct GroundTruth
+{
+  std::string world;
+  TruthLaser laser;
+  linemap::Pose2 base_to_laser;
+  std::size_t min_beams = 1;  ///< hits a wall needs to be listed as visible
+  std::vector<linemap::Segment2> walls;
+  std::vector<TruthScan> scans;
+};
+
+/// The wall pieces one scan sees: `hit_wall[i]` is the wall beam i's noiseless ray ends on
+/// (-1: none or beyond range) and `hit_range[i]` its true range; beam i points at
+/// laser_pose.theta + angle_min + i * angle_increment. A wall hit by >= min_beams beams is
+/// listed with the span between its extreme hit points, sorted by wall index.
+std::vector<VisibleWall> visibleWallPieces(const std::vector<linemap::Segment2>& walls,
+                                           const linemap::Pose2& laser_pose, double angle_min,
+                                           double angle_increment, const std::vector<int>& hit_wall,
+                                           const std::vector<double>& hit_range, std::size_t min_beams);
+
+/// OUT.bag -> OUT.truth.yaml (any other name gets ".truth.yaml" appended).
+std::string truthPathForBag(const std::string& bag_path);
+
+/// Writes the file with every double in its shortest exact form (a read gives the same values).
+/// Throws std::runtime_error naming the file on failure.
+void writeGroundTruth(const GroundTruth& truth, const std::string& path);
+
+/// Reads a linemap_truth/1 file; throws std::runtime_error naming the file and key on bad input.
+GroundTruth readGroundTruth(const std::string& path);
+
+}  // namespace line_map_eval

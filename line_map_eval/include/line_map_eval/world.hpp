@@ -1,0 +1,82 @@
+// A simulated world (ROS-free): true walls, the closed path the robot drives,
+// its laser and its odometry error model, read from config/worlds/*.yaml.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+
+namespace line_map_eval
+{
+/// The laser: `beams` beams spread evenly over `fov` (centred on the laser's x axis).
+struct LaserModel
+{
+  std::size_t beams = 361;
+  double fov = linemap::kPi;               ///< [rad]; YAML key fov_deg in degrees
+  double range_min = 0.02;                 ///< [m]
+  double range_max = 30.0;                 ///< [m]
+  double sigma = 0.01;                     ///< Gaussian range noise [m]
+  double spurious = 0.0;                   ///< fraction of readings replaced by uniform [0, range_max]
+  linemap::Pose2 mounting{0.1, 0.0, 0.0};  ///< base_link -> laser
+
+  double angleMin() const { return -0.5 * fov; }
+  double angleIncrement() const { return beams > 1 ? fov / static_cast<double>(beams - 1) : 0.0; }
+};
+
+/// Odometry error accumulated per scan step (random walks plus a systematic curve).
+struct OdometryModel
+{
+  double translation_noise = 0.0;  ///< [m / sqrt(m)] std of x and y error after 1 m
+  double rotation_noise = 0.0;     ///< [rad / sqrt(rad)] std of heading error after turning 1 rad
+  double heading_noise = 0.0;      ///< [rad / sqrt(m)] std of heading error after driving 1 m
+  double heading_bias = 0.0;       ///< [rad / m] systematic heading error (unequal wheels)
+
+  bool isZero() const
+  {
+    return translation_noise == 0.0 && rotation_noise == 0.0 && heading_noise == 0.0 && heading_bias == 0.0;
+  }
+};
+
+/// The closed path: the robot starts at waypoints[0] facing waypoints[1], drives each leg
+/// straight at `speed`, turns in place at `turn_rate` at each waypoint, and after the last
+/// waypoint drives back to the first. A scan is taken every `scan_period` over one lap.
+struct PathModel
+{
+  std::vector<linemap::Vec2> waypoints;
+  double speed = 0.5;        ///< [m/s]
+  double turn_rate = 0.8;    ///< [rad/s]
+  double scan_period = 0.2;  ///< [s]
+  std::size_t scans = 0;     ///< 0: one lap at scan_period; N: N scans spread evenly over one lap
+  double clearance = 0.2;    ///< [m] minimum distance of the path from every wall (checked on load)
+};
+
+struct World
+{
+  std::string name;    ///< YAML `name`, else the file's base name
+  std::string source;  ///< the file it came from (for messages)
+  std::vector<linemap::Segment2> walls;
+  PathModel path;
+  LaserModel laser;
+  OdometryModel odometry;
+  std::size_t min_visible_beams = 5;  ///< a wall counts as seen by a scan when hit by this many beams
+  std::uint32_t seed = 1;
+};
+
+/// Reads a world file. Throws std::runtime_error naming the file, the key and the line
+/// for a missing key, a malformed value or a path that runs into a wall.
+World loadWorld(const std::string& path);
+
+/// Same from YAML text; `source` names it in error messages.
+World parseWorld(const std::string& yaml_text, const std::string& source);
+
+/// Checks the values and that every leg of the path keeps `clearance` from every wall;
+/// throws std::runtime_error naming `world.source` and the offending key.
+void validateWorld(const World& world);
+
+/// Length of the closed path [m] (including the leg back to the start).
+double pathLength(const PathModel& path);
+
+}  // namespace line_map_eval

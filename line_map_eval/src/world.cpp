@@ -1,0 +1,299 @@
+// World files: parsing with errors that name the file, the key and the line.
+#include "line_map_eval/world.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace line_map_eval
+{
+namespace
+{
+using linemap::Vec2;
+
+class WorldParser
+{
+ public:
+  explicit WorldParser(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const std::string& key, const std::string& problem, const YAML::Node& at) const
+  {
+    std::ostringstream msg;
+    msg << source_ << ": " << key << ": " << problem;
+    if (at.IsDefined() && at.Mark().line >= 0) msg << " (line " << at.Mark().line + 1 << ")";
+    throw std::runtime_error(msg.str());
+  }
+
+  void checkKeys(const YAML::Node& map, const std::string& key, const std::set<std::string>& known) const
+  {
+    if (!map.IsMap()) fail(key.empty() ? "(top level)" : key, "expected a mapping", map);
+    for (const auto& kv : map)
+    {
+      const std::string name = kv.first.as<std::string>();
+      if (!known.count(name))
+      {
+        std::string list;
+        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+        fail(key.empty() ? name : key + "/" + name, "unknown key (expected one of: " + list + ")", kv.first);
+      }
+    }
+  }
+
+  double number(const YAML::Node& n, const std::string& key) const
+  {
+    if (!n.IsScalar()) fail(key, "expected a number", n);
+    double v = 0.0;
+    try
+    {
+      v = n.as<double>();
+    }
+    catch (const YAML::Exception&)
+    {
+      fail(key, "expected a number, got '" + n.Scalar() + "'", n);
+    }
+    if (!std::isfinite(v)) fail(key, "expected a finite number, got '" + n.Scalar() + "'", n);
+    return v;
+  }
+
+  /// Optional number with a lower bound (inclusive unless `strict`).
+  void optionalNumber(const YAML::Node& map, const std::string& block, const char* name, double& out,
+                      double lo, bool strict, double hi = HUGE_VAL) const
+  {
+    const YAML::Node n = map[name];
+    if (!n) return;
+    const std::string key = block + "/" + name;
+    const double v = number(n, key);
+    if (strict ? !(v > lo) : !(v >= lo))
+      fail(key, "must be " + std::string(strict ? "> " : ">= ") + toString(lo) + ", got " + toString(v), n);
+    if (v > hi) fail(key, "must be <= " + toString(hi) + ", got " + toString(v), n);
+    out = v;
+  }
+
+  std::vector<double> numbers(const YAML::Node& n, const std::string& key, std::size_t count,
+                              const char* shape) const
+  {
+    if (!n.IsSequence() || n.size() != count)
+    {
+      const std::string got = n.IsSequence() ? std::to_string(n.size()) + " numbers" : "no list";
+      fail(key, "expected " + std::to_string(count) + " numbers " + shape + ", got " + got, n);
+    }
+    std::vector<double> v;
+    for (std::size_t i = 0; i < count; ++i) v.push_back(number(n[i], key + "[" + std::to_string(i) + "]"));
+    return v;
+  }
+
+  static std::string toString(double v)
+  {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  }
+
+  World parse(const YAML::Node& root) const
+  {
+    World w;
+    w.source = source_;
+    if (!root.IsDefined() || root.IsNull()) fail("(top level)", "the file is empty", root);
+    checkKeys(root, "", {"name", "seed", "walls", "path", "laser", "odometry", "min_visible_beams"});
+
+    if (root["name"]) w.name = root["name"].as<std::string>();
+    if (w.name.empty())
+    {
+      const auto slash = source_.find_last_of('/');
+      std::string base = slash == std::string::npos ? source_ : source_.substr(slash + 1);
+      const auto dot = base.rfind('.');
+      w.name = dot == std::string::npos ? base : base.substr(0, dot);
+    }
+    if (root["seed"])
+    {
+      const double s = number(root["seed"], "seed");
+      if (s < 0 || s > 4294967295.0 || s != std::floor(s))
+        fail("seed", "must be an integer in [0, 2^32), got " + toString(s), root["seed"]);
+      w.seed = static_cast<std::uint32_t>(s);
+    }
+    if (root["min_visible_beams"])
+    {
+      const double m = number(root["min_visible_beams"], "min_visible_beams");
+      if (m < 1 || m != std::floor(m))
+        fail("min_visible_beams", "must be an integer >= 1, got " + toString(m), root["min_visible_beams"]);
+      w.min_visible_beams = static_cast<std::size_t>(m);
+    }
+
+    const YAML::Node walls = root["walls"];
+    if (!walls) fail("walls", "missing key (a list of [x1, y1, x2, y2] segments)", root);
+    if (!walls.IsSequence() || walls.size() == 0)
+      fail("walls", "expected a non-empty list of [x1, y1, x2, y2]", walls);
+    for (std::size_t i = 0; i < walls.size(); ++i)
+    {
+      const std::string key = "walls[" + std::to_string(i) + "]";
+      const auto v = numbers(walls[i], key, 4, "[x1, y1, x2, y2]");
+      linemap::Segment2 s(Vec2(v[0], v[1]), Vec2(v[2], v[3]));
+      if (s.length() <= 1e-9) fail(key, "the wall has zero length", walls[i]);
+      w.walls.push_back(s);
+    }
+
+    const YAML::Node path = root["path"];
+    if (!path) fail("path", "missing key (waypoints, speed, turn_rate, scan_period)", root);
+    checkKeys(path, "path", {"waypoints", "speed", "turn_rate", "scan_period", "scans", "clearance"});
+    const YAML::Node wps = path["waypoints"];
+    if (!wps) fail("path/waypoints", "missing key (a list of [x, y])", path);
+    if (!wps.IsSequence() || wps.size() < 2)
+      fail("path/waypoints", "expected a list of at least 2 [x, y]", wps);
+    for (std::size_t i = 0; i < wps.size(); ++i)
+    {
+      const std::string key = "path/waypoints[" + std::to_string(i) + "]";
+      const auto v = numbers(wps[i], key, 2, "[x, y]");
+      const Vec2 p(v[0], v[1]);
+      if (!w.path.waypoints.empty() && (p - w.path.waypoints.back()).norm() < 1e-6)
+        fail(key, "repeats the previous waypoint", wps[i]);
+      w.path.waypoints.push_back(p);
+    }
+    if ((w.path.waypoints.back() - w.path.waypoints.front()).norm() < 1e-6)
+      fail("path/waypoints", "the last waypoint repeats the first (the loop closes by itself)", wps);
+    optionalNumber(path, "path", "speed", w.path.speed, 0.0, true);
+    optionalNumber(path, "path", "turn_rate", w.path.turn_rate, 0.0, true);
+    optionalNumber(path, "path", "scan_period", w.path.scan_period, 0.0, true);
+    optionalNumber(path, "path", "clearance", w.path.clearance, 0.0, false);
+    if (path["scans"])
+    {
+      const double n = number(path["scans"], "path/scans");
+      if (n < 0 || n != std::floor(n))
+        fail("path/scans", "must be an integer >= 0, got " + toString(n), path["scans"]);
+      w.path.scans = static_cast<std::size_t>(n);
+    }
+
+    if (const YAML::Node laser = root["laser"])
+    {
+      checkKeys(laser, "laser",
+                {"beams", "fov_deg", "range_min", "range_max", "sigma", "spurious", "mounting"});
+      if (laser["beams"])
+      {
+        const double b = number(laser["beams"], "laser/beams");
+        if (b < 2 || b != std::floor(b))
+          fail("laser/beams", "must be an integer >= 2, got " + toString(b), laser["beams"]);
+        w.laser.beams = static_cast<std::size_t>(b);
+      }
+      double fov_deg = w.laser.fov * 180.0 / linemap::kPi;
+      optionalNumber(laser, "laser", "fov_deg", fov_deg, 0.0, true, 360.0);
+      w.laser.fov = fov_deg * linemap::kPi / 180.0;
+      optionalNumber(laser, "laser", "range_min", w.laser.range_min, 0.0, false);
+      optionalNumber(laser, "laser", "range_max", w.laser.range_max, 0.0, true);
+      if (w.laser.range_max <= w.laser.range_min)
+        fail("laser/range_max", "must exceed laser/range_min (" + toString(w.laser.range_min) + ")", laser);
+      optionalNumber(laser, "laser", "sigma", w.laser.sigma, 0.0, false);
+      optionalNumber(laser, "laser", "spurious", w.laser.spurious, 0.0, false, 1.0);
+      if (laser["mounting"])
+      {
+        const auto v = numbers(laser["mounting"], "laser/mounting", 3, "[x, y, theta]");
+        w.laser.mounting = linemap::Pose2(v[0], v[1], linemap::normalizeAngle(v[2]));
+      }
+    }
+
+    if (const YAML::Node odo = root["odometry"])
+    {
+      checkKeys(odo, "odometry", {"translation_noise", "rotation_noise", "heading_noise", "heading_bias"});
+      optionalNumber(odo, "odometry", "translation_noise", w.odometry.translation_noise, 0.0, false);
+      optionalNumber(odo, "odometry", "rotation_noise", w.odometry.rotation_noise, 0.0, false);
+      optionalNumber(odo, "odometry", "heading_noise", w.odometry.heading_noise, 0.0, false);
+      optionalNumber(odo, "odometry", "heading_bias", w.odometry.heading_bias, -HUGE_VAL, false);
+    }
+    return w;
+  }
+
+ private:
+  std::string source_;
+};
+
+double cross(const Vec2& a, const Vec2& b)
+{
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+/// Shortest distance between the closed segments [p1, p2] and [q1, q2] (0 when they cross).
+double segmentDistance(const Vec2& p1, const Vec2& p2, const Vec2& q1, const Vec2& q2)
+{
+  const Vec2 r = p2 - p1, s = q2 - q1;
+  const double denom = cross(r, s);
+  if (std::abs(denom) > 1e-15)
+  {
+    const double t = cross(q1 - p1, s) / denom;
+    const double u = cross(q1 - p1, r) / denom;
+    if (t >= 0.0 && t <= 1.0 && u >= 0.0 && u <= 1.0) return 0.0;
+  }
+  return std::min({linemap::distanceToSegment(p1, q1, q2), linemap::distanceToSegment(p2, q1, q2),
+                   linemap::distanceToSegment(q1, p1, p2), linemap::distanceToSegment(q2, p1, p2)});
+}
+
+}  // namespace
+
+World parseWorld(const std::string& yaml_text, const std::string& source)
+{
+  YAML::Node root;
+  try
+  {
+    root = YAML::Load(yaml_text);
+  }
+  catch (const YAML::ParserException& e)
+  {
+    throw std::runtime_error(source + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
+                             ": " + e.msg);
+  }
+  World w = WorldParser(source).parse(root);
+  validateWorld(w);
+  return w;
+}
+
+World loadWorld(const std::string& path)
+{
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the world file");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parseWorld(text.str(), path);
+}
+
+void validateWorld(const World& w)
+{
+  const auto fail = [&](const std::string& key, const std::string& problem)
+  { throw std::runtime_error(w.source + ": " + key + ": " + problem); };
+  if (w.walls.empty()) fail("walls", "no walls");
+  if (w.path.waypoints.size() < 2) fail("path/waypoints", "at least 2 waypoints are needed");
+  if (!(w.path.speed > 0.0) || !(w.path.turn_rate > 0.0) || !(w.path.scan_period > 0.0))
+    fail("path", "speed, turn_rate and scan_period must be > 0");
+  if (w.laser.beams < 2) fail("laser/beams", "at least 2 beams are needed");
+  if (!(w.laser.range_max > w.laser.range_min) || w.laser.range_min < 0.0)
+    fail("laser/range_max", "0 <= range_min < range_max is required");
+  if (!(w.laser.sigma >= 0.0)) fail("laser/sigma", "must be >= 0");
+  if (!(w.laser.spurious >= 0.0 && w.laser.spurious <= 1.0)) fail("laser/spurious", "must be in [0, 1]");
+
+  const auto& wp = w.path.waypoints;
+  for (std::size_t i = 0; i < wp.size(); ++i)
+  {
+    const std::size_t j = (i + 1) % wp.size();
+    for (std::size_t k = 0; k < w.walls.size(); ++k)
+    {
+      const double d = segmentDistance(wp[i], wp[j], w.walls[k].start, w.walls[k].end);
+      if (d < w.path.clearance)
+      {
+        std::ostringstream msg;
+        msg << "the leg from waypoint " << i << " to waypoint " << j << " passes " << d << " m from walls["
+            << k << "] (path/clearance is " << w.path.clearance << " m)";
+        fail("path/waypoints[" + std::to_string(i) + "]", msg.str());
+      }
+    }
+  }
+}
+
+double pathLength(const PathModel& path)
+{
+  double length = 0.0;
+  for (std::size_t i = 0; i < path.waypoints.size(); ++i)
+    length += (path.waypoints[(i + 1) % path.waypoints.size()] - path.waypoints[i]).norm();
+  return length;
+}
+
+}  // namespace line_map_eval

@@ -1,0 +1,514 @@
+// Scan simulator: ray casting against hand-computed ranges, noise statistics,
+// determinism, odometry drift, the ground truth file and world file errors.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <string>
+
+#include "line_map_eval/ground_truth.hpp"
+#include "line_map_eval/simulator.hpp"
+#include "line_map_eval/world.hpp"
+
+namespace
+{
+using linemap::kPi;
+using linemap::Pose2;
+using linemap::Segment2;
+using linemap::Vec2;
+using namespace line_map_eval;
+
+const std::string kWorlds = std::string(LINEMAP_SOURCE_DIR) + "/config/worlds/";
+
+/// The 4 x 4 m room [0, 4] x [0, 4], walls counter-clockwise from the origin.
+std::vector<Segment2> squareRoom()
+{
+  return {
+      {Vec2(0, 0), Vec2(4, 0)}, {Vec2(4, 0), Vec2(4, 4)}, {Vec2(4, 4), Vec2(0, 4)}, {Vec2(0, 4), Vec2(0, 0)}};
+}
+
+/// A temporary file removed at the end of the test.
+struct TempFile
+{
+  std::string path;
+  explicit TempFile(const std::string& name, const std::string& text = "")
+  {
+    path = ::testing::TempDir() + "/" + std::to_string(::getpid()) + "_" + name;
+    std::ofstream(path) << text;
+  }
+  ~TempFile() { std::remove(path.c_str()); }
+};
+
+/// Whether the closed segments [p1, p2] and [q1, q2] properly cross (orientation test).
+bool crosses(const Vec2& p1, const Vec2& p2, const Vec2& q1, const Vec2& q2)
+{
+  const auto orient = [](const Vec2& a, const Vec2& b, const Vec2& c)
+  { return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x()); };
+  const double d1 = orient(q1, q2, p1), d2 = orient(q1, q2, p2);
+  const double d3 = orient(p1, p2, q1), d4 = orient(p1, p2, q2);
+  return ((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0)) && d1 != 0 && d2 != 0 && d3 != 0 && d4 != 0;
+}
+
+World office()
+{
+  return loadWorld(kWorlds + "office.yaml");
+}
+World squareRoomWorld()
+{
+  return loadWorld(kWorlds + "square_room.yaml");
+}
+
+TEST(RayCasting, SquareRoomHandComputedRanges)
+{
+  const auto walls = squareRoom();
+  const Vec2 o(1.0, 0.5);
+  // 0 deg: the wall x = 4 at (4, 0.5): 4 - 1 = 3.
+  EXPECT_NEAR(castRay(walls, o, 0.0).range, 3.0, 1e-12);
+  EXPECT_EQ(castRay(walls, o, 0.0).wall, 1);
+  // 90 deg: the wall y = 4 at (1, 4): 4 - 0.5 = 3.5.
+  EXPECT_NEAR(castRay(walls, o, kPi / 2).range, 3.5, 1e-12);
+  EXPECT_EQ(castRay(walls, o, kPi / 2).wall, 2);
+  // 180 deg: the wall x = 0 at (0, 0.5): 1.
+  EXPECT_NEAR(castRay(walls, o, kPi).range, 1.0, 1e-12);
+  EXPECT_EQ(castRay(walls, o, kPi).wall, 3);
+  // -90 deg: the wall y = 0 at (1, 0): 0.5.
+  EXPECT_NEAR(castRay(walls, o, -kPi / 2).range, 0.5, 1e-12);
+  EXPECT_EQ(castRay(walls, o, -kPi / 2).wall, 0);
+  // 45 deg: x = 4 is reached at t = 3 sqrt 2 (y = 3.5 < 4), before y = 4 at t = 3.5 sqrt 2.
+  EXPECT_NEAR(castRay(walls, o, kPi / 4).range, 3.0 * std::sqrt(2.0), 1e-12);
+  EXPECT_EQ(castRay(walls, o, kPi / 4).wall, 1);
+  // 135 deg: x = 0 at t = sqrt 2 (y = 1.5).
+  EXPECT_NEAR(castRay(walls, o, 3 * kPi / 4).range, std::sqrt(2.0), 1e-12);
+  // -45 deg: y = 0 at t = 0.5 sqrt 2 (x = 1.5).
+  EXPECT_NEAR(castRay(walls, o, -kPi / 4).range, 0.5 * std::sqrt(2.0), 1e-12);
+  // atan2(1, 2): y = 4 is 3.5 up, x = 4 is 3 across; x = 4 first at t = 3 / cos = 3 sqrt(5) / 2.
+  EXPECT_NEAR(castRay(walls, o, std::atan2(1.0, 2.0)).range, 1.5 * std::sqrt(5.0), 1e-12);
+
+  // From outside, looking away: no wall.
+  const RayHit miss = castRay(walls, Vec2(5, 5), kPi / 4);
+  EXPECT_TRUE(std::isinf(miss.range));
+  EXPECT_EQ(miss.wall, -1);
+}
+
+TEST(RayCasting, ScanAnglesFollowTheLaserHeading)
+{
+  // 5 beams over 180 deg with the laser facing +y: beams at 0, 45, 90, 135, 180 deg in the map.
+  LaserModel laser;
+  laser.beams = 5;
+  laser.fov = kPi;
+  const auto hits = castScan(squareRoom(), Pose2(1.0, 0.5, kPi / 2), laser);
+  ASSERT_EQ(hits.size(), 5u);
+  const double expected[5] = {3.0, 3.0 * std::sqrt(2.0), 3.5, std::sqrt(2.0), 1.0};
+  for (int i = 0; i < 5; ++i) EXPECT_NEAR(hits[i].range, expected[i], 1e-12) << "beam " << i;
+}
+
+TEST(RayCasting, NoReturnIsInfiniteAndBeyondRangeMax)
+{
+  LaserModel laser;
+  laser.beams = 3;
+  laser.range_max = 2.0;
+  laser.sigma = 0.0;
+  Random rng(1, 1);
+  // From (1, 0.5) facing +x: beams at -90 (0.5 m), 0 (3 m > range_max) and +90 deg (3.5 m).
+  const auto ranges = measureScan(castScan(squareRoom(), Pose2(1.0, 0.5, 0.0), laser), laser, rng);
+  EXPECT_NEAR(ranges[0], 0.5, 1e-12);
+  EXPECT_TRUE(std::isinf(ranges[1]) && ranges[1] > 0);
+  EXPECT_TRUE(std::isinf(ranges[2]) && ranges[2] > 0);
+}
+
+TEST(Simulator, NoiselessEndpointsLieOnTheNearestWall)
+{
+  SimulationOptions opt;
+  opt.sigma = 0.0;
+  opt.spurious = 0.0;
+  opt.scans = 40;
+  const SimulationResult sim = simulate(office(), opt);
+  const World& w = sim.world;
+  ASSERT_EQ(sim.truth.scans.size(), 40u);
+  Random unused(1, 1);
+  std::size_t valid = 0;
+  for (std::size_t k = 0; k < sim.truth.scans.size(); ++k)
+  {
+    const Pose2& pose = sim.truth.scans[k].pose;
+    // The truth pose is the true base pose composed with the mounting.
+    const Pose2 expected = sim.recording.keyframes[k].pose * w.laser.mounting;
+    EXPECT_NEAR(pose.x, expected.x, 1e-12);
+    EXPECT_NEAR(pose.y, expected.y, 1e-12);
+    const std::vector<double> ranges = measureScan(castScan(w.walls, pose, w.laser), w.laser, unused);
+    for (std::size_t i = 0; i < ranges.size(); ++i)
+    {
+      const float recorded = sim.recording.scans[k].ranges[i];
+      if (!std::isfinite(ranges[i]))
+      {
+        EXPECT_TRUE(std::isinf(recorded));
+        continue;
+      }
+      EXPECT_NEAR(recorded, ranges[i], 1e-6 * ranges[i]);  // float storage
+      const double a = pose.theta + w.laser.angleMin() + i * w.laser.angleIncrement();
+      const Vec2 end = pose.translation() + ranges[i] * Vec2(std::cos(a), std::sin(a));
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const auto& s : w.walls)
+        nearest = std::min(nearest, linemap::distanceToSegment(end, s.start, s.end));
+      ASSERT_LT(nearest, 1e-9) << "scan " << k << " beam " << i;
+      // Nothing in between: the beam stopped at the first wall.
+      const Vec2 before = pose.translation() + (ranges[i] - 1e-6) * Vec2(std::cos(a), std::sin(a));
+      for (std::size_t j = 0; j < w.walls.size(); ++j)
+        ASSERT_FALSE(crosses(pose.translation(), before, w.walls[j].start, w.walls[j].end))
+            << "scan " << k << " beam " << i << " passes through wall " << j;
+      ++valid;
+    }
+  }
+  EXPECT_GT(valid, 40u * 300u);  // indoors nearly every beam returns
+}
+
+TEST(Simulator, SameSeedSameScansOtherSeedOtherNoise)
+{
+  SimulationOptions opt;
+  opt.scans = 20;
+  opt.sigma = 0.03;
+  opt.spurious = 0.2;
+  opt.seed = 7;
+  const World w = office();
+  const SimulationResult a = simulate(w, opt), b = simulate(w, opt);
+  opt.seed = 8;
+  const SimulationResult c = simulate(w, opt);
+  std::size_t differing = 0, total = 0;
+  for (std::size_t k = 0; k < a.recording.scans.size(); ++k)
+  {
+    EXPECT_EQ(a.recording.scans[k].ranges, b.recording.scans[k].ranges);
+    EXPECT_EQ(a.recording.scans[k].odom.x, b.recording.scans[k].odom.x);
+    EXPECT_EQ(a.recording.scans[k].odom.theta, b.recording.scans[k].odom.theta);
+    for (std::size_t i = 0; i < a.recording.scans[k].ranges.size(); ++i, ++total)
+      differing += a.recording.scans[k].ranges[i] != c.recording.scans[k].ranges[i];
+  }
+  EXPECT_GT(differing, total * 9 / 10);
+  // The true trajectory does not depend on the seed.
+  EXPECT_EQ(a.recording.keyframes.back().pose.x, c.recording.keyframes.back().pose.x);
+}
+
+TEST(Simulator, RandomDrawsHaveTheRightMoments)
+{
+  Random rng(3, 1);
+  const int n = 200000;
+  double su = 0, sn = 0, sn2 = 0;
+  for (int i = 0; i < n; ++i)
+  {
+    const double u = rng.uniform();
+    ASSERT_TRUE(u >= 0.0 && u < 1.0);
+    su += u;
+    const double z = rng.normal();
+    sn += z;
+    sn2 += z * z;
+  }
+  EXPECT_NEAR(su / n, 0.5, 0.005);  // std of the mean: 0.29 / sqrt(n) = 0.0006
+  EXPECT_NEAR(sn / n, 0.0, 0.01);
+  EXPECT_NEAR(sn2 / n, 1.0, 0.02);
+}
+
+/// Per beam: measured minus true range, over a square room run.
+std::vector<double> rangeErrors(double sigma, double spurious)
+{
+  SimulationOptions opt;
+  opt.scans = 200;
+  opt.sigma = sigma;
+  opt.spurious = spurious;
+  const SimulationResult sim = simulate(squareRoomWorld(), opt);
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < sim.truth.scans.size(); ++k)
+  {
+    const auto hits = castScan(sim.world.walls, sim.truth.scans[k].pose, sim.world.laser);
+    for (std::size_t i = 0; i < hits.size(); ++i)
+      errors.push_back(double(sim.recording.scans[k].ranges[i]) - hits[i].range);
+  }
+  return errors;
+}
+
+TEST(Simulator, SpuriousFractionAndNoiseStd)
+{
+  const double sigma = 0.03, spurious = 0.2;
+  const std::vector<double> errors = rangeErrors(sigma, spurious);
+  ASSERT_GT(errors.size(), 50000u);
+  std::size_t outliers = 0;
+  double sum2 = 0.0;
+  std::size_t inliers = 0;
+  for (const double e : errors)
+  {
+    if (!(std::abs(e) <= 6 * sigma))
+      ++outliers;
+    else
+    {
+      sum2 += e * e;
+      ++inliers;
+    }
+  }
+  // A spurious reading is uniform in [0, 30): it lands within 6 sigma of the truth with
+  // probability 12 sigma / 30 = 1.2 %, so about 0.2 * 0.988 of the beams look spurious.
+  EXPECT_NEAR(double(outliers) / errors.size(), spurious, 0.02);
+  EXPECT_NEAR(std::sqrt(sum2 / inliers), sigma, 0.1 * sigma);
+
+  // Without spurious readings no error exceeds 6 sigma (probability 2e-9 per beam).
+  const std::vector<double> clean = rangeErrors(sigma, 0.0);
+  double clean2 = 0.0;
+  for (const double e : clean)
+  {
+    ASSERT_LE(std::abs(e), 6 * sigma);
+    clean2 += e * e;
+  }
+  EXPECT_NEAR(std::sqrt(clean2 / clean.size()), sigma, 0.1 * sigma);
+}
+
+TEST(Simulator, OdometryDriftsUnlessDisabled)
+{
+  const World w = office();
+  ASSERT_FALSE(w.odometry.isZero());
+  SimulationOptions opt;
+  opt.scans = 300;
+  const SimulationResult drift = simulate(w, opt);
+  const auto& rec = drift.recording;
+  ASSERT_EQ(rec.keyframes.size(), rec.scans.size());
+  // Odometry starts at the true pose and ends away from it.
+  EXPECT_NEAR(rec.scans.front().odom.x, rec.keyframes.front().pose.x, 1e-12);
+  const Pose2 end_err = rec.keyframes.back().pose.inverse() * rec.scans.back().odom;
+  EXPECT_GT(std::hypot(end_err.x, end_err.y), 0.05);
+
+  opt.drift = false;
+  const SimulationResult exact = simulate(w, opt);
+  for (std::size_t k = 0; k < exact.recording.scans.size(); ++k)
+  {
+    const Pose2& o = exact.recording.scans[k].odom;
+    const Pose2& t = exact.recording.keyframes[k].pose;
+    ASSERT_NEAR(o.x, t.x, 1e-9) << k;
+    ASSERT_NEAR(o.y, t.y, 1e-9) << k;
+    ASSERT_NEAR(linemap::normalizeAngle(o.theta - t.theta), 0.0, 1e-9) << k;
+  }
+}
+
+TEST(Simulator, HeadingBiasAccumulatesPerMetre)
+{
+  // Bias only: the odometry heading error is bias * distance driven, turns add nothing.
+  World w = squareRoomWorld();
+  w.odometry = OdometryModel{};
+  w.odometry.heading_bias = 0.01;
+  SimulationOptions opt;
+  opt.scans = 100;
+  const SimulationResult sim = simulate(w, opt);
+  double driven = 0.0;
+  const auto& kf = sim.recording.keyframes;
+  for (std::size_t k = 1; k < kf.size(); ++k)
+    driven += std::hypot(kf[k].pose.x - kf[k - 1].pose.x, kf[k].pose.y - kf[k - 1].pose.y);
+  ASSERT_GT(driven, 7.0);  // most of the 7.81 m lap
+  const double err = linemap::normalizeAngle(sim.recording.scans.back().odom.theta - kf.back().pose.theta);
+  EXPECT_NEAR(err, 0.01 * driven, 1e-9);
+}
+
+TEST(PathFollower, LapTimeAndPosesInClosedForm)
+{
+  const World w = squareRoomWorld();
+  const PathFollower f(w.path);
+  // A convex counter-clockwise loop turns 2 pi in total; legs 2 + 2 + 1.8 + |(-0.2, -2)|.
+  const double length = 2 + 2 + 1.8 + std::hypot(0.2, 2.0);
+  EXPECT_NEAR(pathLength(w.path), length, 1e-12);
+  EXPECT_NEAR(f.lapTime(), length / w.path.speed + 2 * kPi / w.path.turn_rate, 1e-9);
+  const Pose2 start = f.poseAt(0.0);
+  EXPECT_NEAR(start.x, -1, 1e-12);
+  EXPECT_NEAR(start.y, -1, 1e-12);
+  EXPECT_NEAR(start.theta, 0, 1e-12);
+  // Half way along the first leg (1 m at 0.4 m/s).
+  EXPECT_NEAR(f.poseAt(2.5).x, 0.0, 1e-12);
+  // At (1, -1), a quarter of the pi/2 turn done: pi/8 at 1 rad/s.
+  const Pose2 turning = f.poseAt(5.0 + kPi / 8);
+  EXPECT_NEAR(turning.x, 1, 1e-12);
+  EXPECT_NEAR(turning.y, -1, 1e-12);
+  EXPECT_NEAR(turning.theta, kPi / 8, 1e-12);
+  // One lap later it is back at the start.
+  EXPECT_NEAR(f.poseAt(f.lapTime()).x, -1, 1e-9);
+  // Default scan count: one scan every scan_period over the lap.
+  const SimulationResult sim = simulate(w);
+  EXPECT_EQ(sim.recording.scans.size(), std::size_t(std::floor(f.lapTime() / w.path.scan_period)));
+  EXPECT_NEAR(sim.recording.scans[1].stamp - sim.recording.scans[0].stamp, w.path.scan_period, 1e-12);
+}
+
+TEST(GroundTruth, HandComputedVisiblePieces)
+{
+  // Laser at (1, 2) facing +x, 181 beams at 1 deg from -90 to 90 deg in the 4 x 4 room.
+  // Wall x = 4 is hit for |a| <= atan(2/3) = 33.7 deg: beams -33..33 (67), y = 2 -+ 3 tan 33.
+  // Wall y = 0 is hit for a in [-90, -34] (57 beams), x from 1 to 1 + 2 / tan 34; y = 4 likewise.
+  LaserModel laser;
+  laser.beams = 181;
+  const Pose2 pose(1.0, 2.0, 0.0);
+  const auto walls = squareRoom();
+  const auto hits = castScan(walls, pose, laser);
+  std::vector<int> wall;
+  std::vector<double> range;
+  for (const auto& h : hits)
+  {
+    wall.push_back(h.wall);
+    range.push_back(h.range);
+  }
+  const auto vis = visibleWallPieces(walls, pose, laser.angleMin(), laser.angleIncrement(), wall, range, 5);
+  ASSERT_EQ(vis.size(), 3u);
+  const double d33 = 3.0 * std::tan(33.0 * kPi / 180), x34 = 1.0 + 2.0 / std::tan(34.0 * kPi / 180);
+  EXPECT_EQ(vis[0].wall, 0u);
+  EXPECT_EQ(vis[0].beams, 57u);
+  EXPECT_NEAR((vis[0].segment.start - Vec2(1, 0)).norm(), 0, 1e-9);
+  EXPECT_NEAR((vis[0].segment.end - Vec2(x34, 0)).norm(), 0, 1e-9);
+  EXPECT_EQ(vis[1].wall, 1u);
+  EXPECT_EQ(vis[1].beams, 67u);
+  EXPECT_NEAR((vis[1].segment.start - Vec2(4, 2 - d33)).norm(), 0, 1e-9);
+  EXPECT_NEAR((vis[1].segment.end - Vec2(4, 2 + d33)).norm(), 0, 1e-9);
+  EXPECT_EQ(vis[2].wall, 2u);  // directed like the wall: from x = 4 towards x = 0
+  EXPECT_EQ(vis[2].beams, 57u);
+  EXPECT_NEAR((vis[2].segment.start - Vec2(x34, 4)).norm(), 0, 1e-9);
+  EXPECT_NEAR((vis[2].segment.end - Vec2(1, 4)).norm(), 0, 1e-9);
+
+  // A higher threshold drops nothing here, one above the largest count drops all.
+  EXPECT_EQ(visibleWallPieces(walls, pose, laser.angleMin(), laser.angleIncrement(), wall, range, 68).size(),
+            0u);
+}
+
+TEST(GroundTruth, FileRoundTripAndPiecesOnTheirWalls)
+{
+  SimulationOptions opt;
+  opt.scans = 30;
+  const SimulationResult sim = simulate(office(), opt);
+  const GroundTruth& t = sim.truth;
+  std::size_t pieces = 0;
+  for (const auto& s : t.scans)
+    for (const auto& v : s.visible)
+    {
+      ASSERT_LT(v.wall, t.walls.size());
+      const Segment2& w = t.walls[v.wall];
+      EXPECT_LT(linemap::distanceToSegment(v.segment.start, w.start, w.end), 1e-9);
+      EXPECT_LT(linemap::distanceToSegment(v.segment.end, w.start, w.end), 1e-9);
+      EXPECT_GE(v.beams, t.min_beams);
+      EXPECT_GE((v.segment.end - v.segment.start).dot(w.end - w.start), 0.0);  // same direction
+      ++pieces;
+    }
+  EXPECT_GT(pieces, 30u * 3u);
+
+  TempFile file("truth.yaml");
+  writeGroundTruth(t, file.path);
+  const GroundTruth r = readGroundTruth(file.path);
+  EXPECT_EQ(r.world, "office");
+  EXPECT_EQ(r.laser.beams, t.laser.beams);
+  EXPECT_EQ(r.laser.angle_min, t.laser.angle_min);
+  EXPECT_EQ(r.laser.angle_increment, t.laser.angle_increment);
+  EXPECT_EQ(r.laser.range_min, t.laser.range_min);
+  EXPECT_EQ(r.laser.range_max, t.laser.range_max);
+  EXPECT_EQ(r.laser.sigma, t.laser.sigma);
+  EXPECT_EQ(r.laser.spurious, t.laser.spurious);
+  EXPECT_EQ(r.base_to_laser.x, t.base_to_laser.x);
+  EXPECT_EQ(r.base_to_laser.theta, t.base_to_laser.theta);
+  EXPECT_EQ(r.min_beams, t.min_beams);
+  ASSERT_EQ(r.walls.size(), t.walls.size());
+  for (std::size_t i = 0; i < t.walls.size(); ++i)
+  {
+    EXPECT_EQ(r.walls[i].start, t.walls[i].start);
+    EXPECT_EQ(r.walls[i].end, t.walls[i].end);
+  }
+  ASSERT_EQ(r.scans.size(), t.scans.size());
+  for (std::size_t k = 0; k < t.scans.size(); ++k)
+  {
+    EXPECT_EQ(r.scans[k].stamp, t.scans[k].stamp);
+    EXPECT_EQ(r.scans[k].pose.x, t.scans[k].pose.x);
+    EXPECT_EQ(r.scans[k].pose.y, t.scans[k].pose.y);
+    EXPECT_EQ(r.scans[k].pose.theta, t.scans[k].pose.theta);
+    EXPECT_EQ(r.scans[k].visible, t.scans[k].visible);
+  }
+  EXPECT_EQ(truthPathForBag("/tmp/out.bag"), "/tmp/out.truth.yaml");
+}
+
+TEST(GroundTruth, ReaderNamesFileAndKey)
+{
+  TempFile file("bad_truth.yaml",
+                "format: linemap_truth/1\nworld: x\nlaser: {beams: 3, angle_min: 0, angle_increment: 0.1, "
+                "range_max: 30, sigma: 0, spurious: 0}\nbase_to_laser: [0, 0]\nwalls: []\nscans: []\n");
+  try
+  {
+    readGroundTruth(file.path);
+    FAIL() << "accepted a 2-number base_to_laser";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find(file.path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("base_to_laser"), std::string::npos) << e.what();
+  }
+}
+
+/// The message of the error loading `text` as a world file (empty when it loads).
+std::string worldError(const std::string& text, const std::string& name = "bad_world.yaml")
+{
+  TempFile file(name, text);
+  try
+  {
+    loadWorld(file.path);
+  }
+  catch (const std::runtime_error& e)
+  {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(file.path), std::string::npos) << "the file is not named: " << msg;
+    return msg;
+  }
+  return "";
+}
+
+const char* kPath = "path:\n  waypoints: [[1, 1], [3, 1], [3, 3]]\n";
+
+TEST(World, ErrorsNameFileKeyAndLine)
+{
+  const std::string missing = worldError(std::string("name: x\n") + kPath);
+  EXPECT_NE(missing.find("walls"), std::string::npos) << missing;
+
+  const std::string three = worldError(std::string("walls:\n  - [0, 0, 4, 0]\n  - [4, 0, 4]\n") + kPath);
+  EXPECT_NE(three.find("walls[1]"), std::string::npos) << three;
+  EXPECT_NE(three.find("got 3"), std::string::npos) << three;
+  EXPECT_NE(three.find("line 3"), std::string::npos) << three;
+
+  const std::string word = worldError(std::string("walls:\n  - [0, 0, 4, zero]\n") + kPath);
+  EXPECT_NE(word.find("walls[0][3]"), std::string::npos) << word;
+
+  const std::string typo = worldError(std::string("walls: [[0, 0, 4, 0]]\nlazer: {beams: 3}\n") + kPath);
+  EXPECT_NE(typo.find("lazer"), std::string::npos) << typo;
+
+  const std::string spurious =
+      worldError(std::string("walls: [[0, 0, 4, 0]]\nlaser: {spurious: 1.5}\n") + kPath);
+  EXPECT_NE(spurious.find("laser/spurious"), std::string::npos) << spurious;
+
+  // The leg from (3, 1) to (3, 3) crosses the wall y = 2.
+  const std::string blocked = worldError(std::string("walls: [[0, 2, 4, 2]]\n") + kPath);
+  EXPECT_NE(blocked.find("path/waypoints[1]"), std::string::npos) << blocked;
+  EXPECT_NE(blocked.find("walls[0]"), std::string::npos) << blocked;
+
+  const std::string syntax = worldError("walls: [[0, 0, 4, 0]\n");
+  EXPECT_NE(syntax.find("line"), std::string::npos) << syntax;
+
+  EXPECT_NE(worldError("").find("empty"), std::string::npos);
+  EXPECT_EQ(worldError(std::string("walls: [[0, 0, 4, 0]]\n") + kPath), "");
+  EXPECT_NE(worldError("walls: [[0, 0, 4, 0]]\n", "no_path.yaml").find("path"), std::string::npos);
+}
+
+TEST(World, ShippedWorldsLoad)
+{
+  const World o = office();
+  EXPECT_EQ(o.name, "office");
+  EXPECT_GE(o.walls.size(), 40u);
+  EXPECT_LE(o.walls.size(), 80u);
+  const World l = loadWorld(kWorlds + "loop.yaml");
+  EXPECT_GT(pathLength(l.path), 150.0);
+  EXPECT_NO_THROW(squareRoomWorld());
+}
+
+TEST(World, LoopFailsToCloseOnOdometry)
+{
+  // Odometry of the big loop ends metres away from the truth: the case the loop closure fixes.
+  SimulationOptions opt;
+  opt.scans = 200;
+  const SimulationResult sim = simulate(loadWorld(kWorlds + "loop.yaml"), opt);
+  const Pose2 err = sim.recording.keyframes.back().pose.inverse() * sim.recording.scans.back().odom;
+  EXPECT_GT(std::hypot(err.x, err.y), 1.0);
+}
+
+}  // namespace
