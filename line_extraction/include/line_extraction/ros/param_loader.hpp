@@ -1,0 +1,60 @@
+// ROS side (not part of the ROS-free core): reads every parameter under a node handle's
+// namespace into a linemap::ParamSet, nested maps flattened to "block/name" keys, so the
+// nodelets hand the core exactly what config/*.yaml and `linemap_batch --param` use.
+#pragma once
+
+#include <ros/node_handle.h>
+#include <xmlrpcpp/XmlRpcValue.h>
+
+#include <sstream>
+#include <string>
+
+#include "line_extraction/params.hpp"
+
+namespace linemap_ros
+{
+inline void flattenParam(const std::string& key, XmlRpc::XmlRpcValue& value, linemap::ParamSet& out)
+{
+  switch (value.getType())
+  {
+    case XmlRpc::XmlRpcValue::TypeStruct:
+      for (auto& entry : value) flattenParam(key.empty() ? entry.first : key + "/" + entry.first, entry.second, out);
+      break;
+    case XmlRpc::XmlRpcValue::TypeBoolean:
+      out.set(key, static_cast<bool>(value) ? "true" : "false");
+      break;
+    case XmlRpc::XmlRpcValue::TypeInt:
+      out.set(key, std::to_string(static_cast<int>(value)));
+      break;
+    case XmlRpc::XmlRpcValue::TypeDouble:
+    {
+      std::ostringstream s;
+      s.precision(17);
+      s << static_cast<double>(value);
+      out.set(key, s.str());
+      break;
+    }
+    case XmlRpc::XmlRpcValue::TypeString:
+      out.set(key, static_cast<std::string>(value));
+      break;
+    default:
+      break;  // arrays, dates and binary blobs are no parameters of ours
+  }
+}
+
+/// All parameters below `nh`'s namespace (typically the private node handle).
+inline linemap::ParamSet loadParamSet(const ros::NodeHandle& nh)
+{
+  linemap::ParamSet params;
+  XmlRpc::XmlRpcValue tree;
+  if (nh.getParam(nh.getNamespace(), tree)) flattenParam("", tree, params);
+  return params;
+}
+
+/// tf2 rejects frame ids with a leading slash (ROS 1 tf accepted them): strip it.
+inline std::string stripLeadingSlash(const std::string& frame)
+{
+  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+}
+
+}  // namespace linemap_ros
