@@ -1,0 +1,43 @@
+#include "line_map_merging/keyframe_gate.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace line_map_merging
+{
+namespace
+{
+double nonNegative(const linemap::ParamSet& params, const std::string& key, double fallback)
+{
+  const double value = params.getDouble(key, fallback);
+  if (!std::isfinite(value) || value < 0.0)
+    throw linemap::ParameterError("parameter '" + key + "' must be finite and >= 0, got " +
+                                  std::to_string(value));
+  return value;
+}
+}  // namespace
+
+KeyframeGateParams KeyframeGateParams::fromParams(const linemap::ParamSet& params)
+{
+  KeyframeGateParams p;
+  p.distance = nonNegative(params, "keyframe_distance", p.distance);
+  p.angle = nonNegative(params, "keyframe_angle", p.angle);
+  return p;
+}
+
+bool KeyframeGate::wouldAccept(const linemap::Pose2& pose) const
+{
+  if (!last_) return true;
+  const double dx = pose.x - last_->x, dy = pose.y - last_->y;
+  const double turn = std::abs(linemap::normalizeAngle(pose.theta - last_->theta));
+  return std::hypot(dx, dy) >= params_.distance || turn >= params_.angle;
+}
+
+bool KeyframeGate::accept(const linemap::Pose2& pose)
+{
+  if (!wouldAccept(pose)) return false;
+  last_ = pose;
+  return true;
+}
+
+}  // namespace line_map_merging
