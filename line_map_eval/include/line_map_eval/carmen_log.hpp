@@ -1,0 +1,106 @@
+// ROS-free reader for CARMEN log files (plain, gzip or bzip2, detected by their
+// magic bytes). Understands FLASER, ROBOTLASER1, ODOM and PARAM lines; comment
+// lines (#), NEFF and every other message type are skipped.
+//
+//   FLASER n r_1..r_n x y theta odom_x odom_y odom_theta timestamp hostname logger_timestamp
+//   ROBOTLASER1 laser_type start_angle fov angular_resolution max_range accuracy remission_mode
+//               n r_1..r_n m rem_1..rem_m laser_x laser_y laser_theta robot_x robot_y robot_theta
+//               tv rv forward_safety_dist side_safety_dist turn_axis timestamp hostname logger_timestamp
+//   ODOM x y theta tv rv accel timestamp hostname logger_timestamp
+//   PARAM name value [timestamp hostname logger_timestamp]
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "line_map_eval/recording.hpp"
+
+namespace line_map_eval
+{
+enum class CarmenScanType
+{
+  FLaser,
+  RobotLaser1
+};
+
+struct CarmenScan
+{
+  CarmenScanType type = CarmenScanType::FLaser;
+  std::vector<float> ranges;  ///< [m], as written (no-return readings carry the sensor maximum)
+  Pose2 laser_pose;           ///< FLASER x y theta; ROBOTLASER1 laser pose
+  Pose2 robot_pose;           ///< FLASER odom_x odom_y odom_theta; ROBOTLASER1 robot pose
+  double timestamp = 0.0;
+  double logger_timestamp = 0.0;
+  std::size_t line = 0;  ///< 1-based line number in the file
+
+  // ROBOTLASER1 only (left at their defaults for FLASER).
+  int laser_type = -1;
+  double start_angle = 0.0;
+  double field_of_view = 0.0;
+  double angular_resolution = 0.0;
+  double max_range = 0.0;
+  double accuracy = 0.0;
+  int remission_mode = 0;
+  std::vector<float> remissions;
+  double tv = 0.0, rv = 0.0;
+  double forward_safety_dist = 0.0, side_safety_dist = 0.0, turn_axis = 0.0;
+};
+
+struct CarmenOdom
+{
+  Pose2 pose;
+  double tv = 0.0, rv = 0.0, accel = 0.0;
+  double timestamp = 0.0;
+  double logger_timestamp = 0.0;
+  std::size_t line = 0;
+};
+
+struct CarmenLog
+{
+  std::string path;  ///< as given to the reader, used in messages
+  std::vector<CarmenScan> scans;
+  std::vector<CarmenOdom> odometry;
+  std::map<std::string, std::string> params;  ///< PARAM name -> first value token (last one wins)
+  std::size_t lines = 0;                      ///< lines read
+  std::size_t skipped_unknown = 0;            ///< comments, NEFF and other message types
+  std::size_t skipped_bad = 0;                ///< lenient mode: malformed lines dropped
+  std::vector<std::string> problems;          ///< lenient mode: the first messages about dropped lines
+};
+
+struct CarmenReadOptions
+{
+  /// false: the first malformed line throws std::runtime_error("<file>:<line>: ...").
+  /// true: malformed lines are dropped and counted in CarmenLog::skipped_bad.
+  bool lenient = false;
+  /// Lines longer than this are malformed (a 361-beam FLASER line is about 3 kB).
+  std::size_t max_line_length = 1 << 16;
+  /// Stop after this many scans (0 = read everything).
+  std::size_t max_scans = 0;
+};
+
+/// Reads a CARMEN log file; throws std::runtime_error naming the file (and line) on failure.
+CarmenLog readCarmenLog(const std::string& path, const CarmenReadOptions& options = {});
+
+/// Parses an already decompressed log held in memory; `name` is used in messages.
+CarmenLog parseCarmenLog(const std::string& text, const std::string& name,
+                         const CarmenReadOptions& options = {});
+
+/// The whole content of a plain, gzip or bzip2 file (by magic bytes), decompressed.
+std::string readMaybeCompressedFile(const std::string& path);
+
+/// For each scan of `corrected` (keyframes of a corrected log), the index of the raw
+/// scan with identical range values. Pairs are strictly increasing: the keyframes
+/// appear in the same order in both logs. Throws std::runtime_error naming the
+/// corrected file and line when a keyframe has no match after the previous one.
+std::vector<std::size_t> pairKeyframes(const CarmenLog& raw, const CarmenLog& corrected);
+
+/// Beam geometry of an n-beam CARMEN scan spanning 180 degrees centred on the heading:
+/// increment pi/n for even n, pi/(n-1) for odd n, angle_min = -(n-1)*increment/2.
+/// `no_return` is the value written for beams without a return; range_max is set
+/// half a centimetre (half the logs' print resolution) below it, so that a reading
+/// r is valid iff range_min <= r <= range_max (sensor_msgs/LaserScan semantics).
+ScanGeometry carmenBeamGeometry(std::size_t beam_count, double no_return, double range_min = 0.0);
+
+}  // namespace line_map_eval

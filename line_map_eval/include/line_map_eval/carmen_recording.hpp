@@ -1,0 +1,48 @@
+// Turns a raw CARMEN log (and optionally its corrected keyframe log) into a
+// Recording: monotonic stamps, odometry of base_link, the laser mounting and
+// corrected keyframe poses of base_link.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "line_map_eval/carmen_log.hpp"
+#include "line_map_eval/recording.hpp"
+
+namespace line_map_eval
+{
+struct CarmenRecordingOptions
+{
+  /// Stamps are made strictly increasing: t_i = max(t_i, t_{i-1} + min_stamp_step) [s].
+  double min_stamp_step = 1e-3;
+  /// Value the sensor writes for "no return" [m]; 0 = the largest reading of the log.
+  /// range_max is set 5 mm below it (see carmenBeamGeometry).
+  double no_return_range = 0.0;
+  /// Readings below this are invalid [m].
+  double range_min = 0.0;
+  /// Keep only the first this many scans (0 = all); keyframes beyond are dropped.
+  std::size_t max_scans = 0;
+};
+
+/// What the conversion decided, for the tools' summaries.
+struct CarmenRecordingReport
+{
+  std::size_t stamps_adjusted = 0;  ///< scans whose stamp was moved to keep time increasing
+  double max_stamp_shift = 0.0;     ///< largest such move [s]
+  std::string odometry_source;      ///< "scan odometry fields", "ODOM lines" or "scan laser poses"
+  std::string mounting_source;      ///< where base_link->laser came from
+  double no_return_range = 0.0;     ///< value taken as "no return"
+};
+
+/// Every raw scan becomes a RecordedScan (stamp, ranges, odometry of base_link).
+///  - odometry: the FLASER odom fields / ROBOTLASER1 robot pose; when those are constant over
+///    the log but ODOM lines move, ODOM interpolated at the scan stamps; with neither, the
+///    laser pose fields composed with the inverse mounting.
+///  - base_link->laser: PARAM robot_frontlaser_offset (forward offset in metres) of the raw log,
+///    else of the corrected log, else laser pose relative to robot pose of the first scan.
+///  - keyframes (when `corrected` is given): paired to raw scans by their ranges
+///    (pairKeyframes); pose = corrected laser pose * (base_link->laser)^-1.
+Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected,
+                     const CarmenRecordingOptions& options = {}, CarmenRecordingReport* report = nullptr);
+
+}  // namespace line_map_eval

@@ -1,0 +1,177 @@
+#include "line_map_eval/bag_reader.hpp"
+
+#include <nav_msgs/Path.h>
+#include <rosbag/bag.h>
+#include <rosbag/exceptions.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/LaserScan.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+namespace line_map_eval
+{
+namespace
+{
+double yawOf(const geometry_msgs::Quaternion& q)
+{
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+Pose2 fromTransform(const geometry_msgs::Transform& t)
+{
+  return {t.translation.x, t.translation.y, yawOf(t.rotation)};
+}
+
+Pose2 fromPose(const geometry_msgs::Pose& p)
+{
+  return {p.position.x, p.position.y, yawOf(p.orientation)};
+}
+
+std::string stripSlash(const std::string& frame)
+{
+  return !frame.empty() && frame.front() == '/' ? frame.substr(1) : frame;
+}
+
+/// Pose at time t from samples sorted by time; exact stamps return the sample itself.
+bool sampleAt(const std::vector<std::pair<double, Pose2>>& samples, double t, Pose2& out)
+{
+  const auto it =
+      std::lower_bound(samples.begin(), samples.end(), t,
+                       [](const std::pair<double, Pose2>& s, double time) { return s.first < time; });
+  if (it != samples.end() && it->first == t)
+  {
+    out = it->second;
+    return true;
+  }
+  if (it == samples.begin() || it == samples.end()) return false;
+  const auto& a = *(it - 1);
+  const auto& b = *it;
+  out = linemap::interpolate(a.second, b.second, (t - a.first) / (b.first - a.first));
+  return true;
+}
+}  // namespace
+
+BagContents readBag(const std::string& path, const BagWriterOptions& options)
+{
+  BagContents out;
+  Recording& rec = out.recording;
+  rec.source = path;
+  const std::string odom = stripSlash(options.odom_frame), base = stripSlash(options.base_frame),
+                    map = stripSlash(options.map_frame);
+  std::map<std::string, Pose2> base_to;  // base->child static transforms
+  try
+  {
+    rosbag::Bag bag;
+    bag.open(path, rosbag::bagmode::Read);
+    rosbag::View view(
+        bag, rosbag::TopicQuery({options.scan_topic, "/tf", "/tf_static", options.trajectory_topic}));
+    bool have_geometry = false;
+    for (const rosbag::MessageInstance& m : view)
+    {
+      const std::string& topic = m.getTopic();
+      if (topic == options.scan_topic)
+      {
+        const auto scan = m.instantiate<sensor_msgs::LaserScan>();
+        if (!scan) throw std::runtime_error(path + ": " + topic + " does not hold sensor_msgs/LaserScan");
+        if (!have_geometry)
+        {
+          rec.geometry.angle_min = scan->angle_min;
+          rec.geometry.angle_increment = scan->angle_increment;
+          rec.geometry.beam_count = scan->ranges.size();
+          rec.geometry.range_min = scan->range_min;
+          rec.geometry.range_max = scan->range_max;
+          out.scan_frame = stripSlash(scan->header.frame_id);
+          have_geometry = true;
+        }
+        else if (scan->ranges.size() != rec.geometry.beam_count)
+        {
+          throw std::runtime_error(path + ": scan " + std::to_string(rec.scans.size()) + " has " +
+                                   std::to_string(scan->ranges.size()) + " ranges, the first one " +
+                                   std::to_string(rec.geometry.beam_count));
+        }
+        RecordedScan s;
+        s.stamp = scan->header.stamp.toSec();
+        s.ranges = scan->ranges;
+        rec.scans.push_back(std::move(s));
+      }
+      else if (topic == "/tf" || topic == "/tf_static")
+      {
+        const auto tf = m.instantiate<tf2_msgs::TFMessage>();
+        if (!tf) throw std::runtime_error(path + ": " + topic + " does not hold tf2_msgs/TFMessage");
+        for (const auto& t : tf->transforms)
+        {
+          const std::string parent = stripSlash(t.header.frame_id), child = stripSlash(t.child_frame_id);
+          const double stamp = t.header.stamp.toSec();
+          if (topic == "/tf_static") ++out.static_transforms;
+          if (parent == odom && child == base)
+            out.odom_to_base.emplace_back(stamp, fromTransform(t.transform));
+          else if (parent == map && child == odom)
+            out.map_to_odom.emplace_back(stamp, fromTransform(t.transform));
+          else if (parent == base)
+            base_to[child] = fromTransform(t.transform);
+        }
+      }
+      else if (topic == options.trajectory_topic)
+      {
+        const auto p = m.instantiate<nav_msgs::Path>();
+        if (!p) throw std::runtime_error(path + ": " + topic + " does not hold nav_msgs/Path");
+        TrajectoryEmission e;
+        e.stamp = p->header.stamp.toSec();
+        for (const auto& pose : p->poses)
+          e.poses.emplace_back(pose.header.stamp.toSec(), fromPose(pose.pose));
+        out.trajectory.push_back(std::move(e));
+      }
+    }
+    bag.close();
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+
+  if (rec.scans.empty())
+    throw std::runtime_error(path + ": no sensor_msgs/LaserScan on " + options.scan_topic);
+  const auto by_time = [](const std::pair<double, Pose2>& a, const std::pair<double, Pose2>& b)
+  { return a.first < b.first; };
+  std::stable_sort(out.odom_to_base.begin(), out.odom_to_base.end(), by_time);
+  std::stable_sort(out.map_to_odom.begin(), out.map_to_odom.end(), by_time);
+
+  const auto mount = base_to.find(out.scan_frame);
+  if (out.scan_frame == base)
+    rec.base_to_laser = Pose2();
+  else if (mount != base_to.end())
+    rec.base_to_laser = mount->second;
+  else
+    throw std::runtime_error(path + ": no transform " + base + " -> " + out.scan_frame +
+                             " on /tf_static or /tf");
+
+  for (std::size_t i = 0; i < rec.scans.size(); ++i)
+  {
+    if (!sampleAt(out.odom_to_base, rec.scans[i].stamp, rec.scans[i].odom))
+      throw std::runtime_error(path + ": no " + odom + " -> " + base + " transform around scan " +
+                               std::to_string(i) + " (stamp " + std::to_string(rec.scans[i].stamp) + ")");
+  }
+
+  if (!out.trajectory.empty())
+  {
+    // Keyframes: the poses of the last emission, each matched to the scan with the same stamp.
+    std::size_t next = 0;
+    for (const auto& [stamp, pose] : out.trajectory.back().poses)
+    {
+      while (next < rec.scans.size() && rec.scans[next].stamp < stamp) ++next;
+      if (next == rec.scans.size() || rec.scans[next].stamp != stamp)
+        throw std::runtime_error(
+            path + ": trajectory pose stamped " + std::to_string(stamp) +
+            " matches no scan stamp (poses must be stamped with their scans' stamps, in order)");
+      rec.keyframes.push_back({next, pose});
+      ++next;
+    }
+  }
+  return out;
+}
+
+}  // namespace line_map_eval

@@ -1,0 +1,422 @@
+// CARMEN reader, keyframe pairing, beam geometry and the Recording built from the logs.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <boost/iostreams/copy.hpp>
+#include <boost/iostreams/filter/bzip2.hpp>
+#include <boost/iostreams/filter/gzip.hpp>
+#include <boost/iostreams/filtering_stream.hpp>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "line_map_eval/carmen_log.hpp"
+#include "line_map_eval/carmen_recording.hpp"
+
+using namespace line_map_eval;
+
+namespace
+{
+const std::string kDatasets = LINEMAP_SOURCE_DIR "/../shared/datasets/";
+constexpr double kPi = linemap::kPi;
+
+/// Path of a dataset file; records a failure naming it when it is missing.
+bool dataset(const std::string& name, std::string& path)
+{
+  path = kDatasets + name;
+  if (access(path.c_str(), R_OK) == 0) return true;
+  ADD_FAILURE() << "dataset file missing: " << path << " (see ../shared/datasets/README.md)";
+  return false;
+}
+
+class TempDir
+{
+ public:
+  TempDir()
+  {
+    char tmpl[] = "/tmp/test_carmen_log_XXXXXX";
+    const char* d = mkdtemp(tmpl);
+    if (!d) throw std::runtime_error("mkdtemp failed");
+    path_ = d;
+  }
+  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
+  std::string file(const std::string& name, const std::string& content) const
+  {
+    const std::string p = path_ + "/" + name;
+    std::ofstream(p, std::ios::binary) << content;
+    return p;
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+/// A valid 3-beam FLASER line.
+std::string flaser(double t, double x = 0.0)
+{
+  std::ostringstream s;
+  s << "FLASER 3 1.5 2.25 3 " << x << " 0 0 " << x << " 0 0 " << t << " host " << t;
+  return s.str();
+}
+
+/// Error message of reading `content` (line `bad_line` is the bad one), or "" when it parsed.
+std::string errorOf(const TempDir& dir, const std::string& content)
+{
+  const std::string p = dir.file("bad.clf", content);
+  try
+  {
+    readCarmenLog(p);
+  }
+  catch (const std::runtime_error& e)
+  {
+    return e.what();
+  }
+  return "";
+}
+
+std::string compress(const std::string& text, bool gzip)
+{
+  namespace io = boost::iostreams;
+  std::string out;
+  io::filtering_ostream stream;
+  if (gzip)
+    stream.push(io::gzip_compressor());
+  else
+    stream.push(io::bzip2_compressor());
+  stream.push(io::back_inserter(out));
+  stream << text;
+  stream.reset();
+  return out;
+}
+}  // namespace
+
+TEST(CarmenLog, DatasetsParseWithTheDocumentedCounts)
+{
+  struct Expect
+  {
+    const char* file;
+    std::size_t scans;
+    std::size_t beams;
+  };
+  for (const Expect e : {Expect{"intel.clf.bz2", 13631, 180}, Expect{"intel-corrected.log.gz", 910, 180},
+                         Expect{"aces.clf.bz2", 7374, 180}, Expect{"aces-corrected.log.gz", 440, 180},
+                         Expect{"mit-csail.clf.bz2", 1988, 361}, Expect{"csail-corrected.log.gz", 406, 361}})
+  {
+    std::string path;
+    if (!dataset(e.file, path)) continue;
+    const CarmenLog log = readCarmenLog(path);
+    EXPECT_EQ(log.scans.size(), e.scans) << e.file;
+    EXPECT_EQ(log.skipped_bad, 0u) << e.file;
+    for (const CarmenScan& s : log.scans) ASSERT_EQ(s.ranges.size(), e.beams) << e.file << " line " << s.line;
+  }
+}
+
+TEST(CarmenLog, IntelRawLogContent)
+{
+  std::string path;
+  if (!dataset("intel.clf.bz2", path)) return;
+  const CarmenLog log = readCarmenLog(path);
+  // README: FLASER + ODOM, robot_frontlaser_offset 0.0; header values checked by hand with bzcat | head.
+  EXPECT_EQ(log.odometry.size(), 26915u);
+  ASSERT_EQ(log.params.count("robot_frontlaser_offset"), 1u);
+  EXPECT_EQ(log.params.at("robot_frontlaser_offset"), "0.0");
+  const CarmenScan& first = log.scans.front();
+  EXPECT_EQ(first.type, CarmenScanType::FLaser);
+  EXPECT_NEAR(first.timestamp, 976052857.337530, 1e-6);
+  EXPECT_NEAR(first.logger_timestamp, 0.000246, 1e-9);
+  EXPECT_NEAR(first.robot_pose.theta, -0.002458, 1e-12);
+  EXPECT_NEAR(log.odometry.front().timestamp, 976052857.337284, 1e-6);
+}
+
+TEST(CarmenLog, CorruptLinesNameFileAndLine)
+{
+  TempDir dir;
+  const std::string head = "# comment\nPARAM robot_frontlaser_offset 0.0 nohost 0\n" + flaser(1.0) + "\n";
+  // The bad line is line 4 in every case.
+  struct Case
+  {
+    std::string line;
+    std::string expect;
+  };
+  const std::string long_line = "FLASER 3 1 2 3 0 0 0 0 0 0 1 host 1 " + std::string(70000, ' ');
+  for (const Case& c : {Case{"FLASER 180 1.0 2.0 3.0", "FLASER: expected 180 ranges"},
+                        Case{"FLASER 3 1.0 abc 2.0 0 0 0 0 0 0 2.0 host 2.0", "'abc'"},
+                        Case{"FLASER 4 1 2 3 0 0 0 0 0 0 2.0 host 2.0", "expected 4 ranges, got 3"},
+                        Case{"FLASER 2 1 2 3 0 0 0 0 0 0 2.0 host 2.0", "expected 2 ranges, got 3"},
+                        Case{"FLASER x 1 2 0 0 0 0 0 0 2.0 host 2.0", "num_readings"},
+                        Case{"ODOM 0 0 0 0 0 2.0 host", "ODOM"}, Case{long_line, "longer than"},
+                        Case{"ROBOTLASER1 0 -1.57 3.14 0.0175 81.9 0.01 0 3 1 2 3 0 0 0 0", "ROBOTLASER1"}})
+  {
+    const std::string msg = errorOf(dir, head + c.line + "\n" + flaser(3.0) + "\n");
+    EXPECT_NE(msg.find("bad.clf:4: "), std::string::npos) << "got: " << msg;
+    EXPECT_NE(msg.find(c.expect), std::string::npos) << "got: " << msg;
+  }
+  // 1-based numbering: a bad first line is line 1.
+  EXPECT_NE(errorOf(dir, "FLASER 3 1 2\n").find("bad.clf:1: "), std::string::npos);
+
+  // Lenient mode drops the bad line, counts it and keeps the rest.
+  const std::string p = dir.file("lenient.clf", head + "FLASER 3 1 2\n" + flaser(3.0) + "\n");
+  CarmenReadOptions lenient;
+  lenient.lenient = true;
+  const CarmenLog log = readCarmenLog(p, lenient);
+  EXPECT_EQ(log.scans.size(), 2u);
+  EXPECT_EQ(log.skipped_bad, 1u);
+  ASSERT_EQ(log.problems.size(), 1u);
+  EXPECT_NE(log.problems[0].find("lenient.clf:4: "), std::string::npos);
+  EXPECT_EQ(log.scans[1].line, 5u);
+
+  EXPECT_THROW(readCarmenLog(dir.path() + "/does_not_exist.clf"), std::runtime_error);
+  // A file that claims to be bzip2 but is not.
+  const std::string fake = dir.file("fake.clf.bz2", "BZh9 this is not bzip2 data at all");
+  try
+  {
+    readCarmenLog(fake);
+    ADD_FAILURE() << "corrupt bzip2 accepted";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("fake.clf.bz2"), std::string::npos) << e.what();
+  }
+}
+
+TEST(CarmenLog, ParsesEveryField)
+{
+  TempDir dir;
+  const std::string text =
+      "ODOM 1 2 0.5 0.3 0.1 0.05 100.25 host 0.5\n"
+      "NEFF 27.6 0 pippo 0\nRLASER 1 2 0 0 0 0 0 0 0 host 0\n"
+      "FLASER 3 1.5 2.25 81.83 0.1 0.2 0.3 1.1 1.2 1.3 100.5 host 0.75\n"
+      "ROBOTLASER1 0 -1.5 3.0 0.02 81.9 0.01 0 3 4.5 5.5 6.5 2 0.25 0.75 "
+      "1.2 2.0 0.0 1.0 2.0 0.0 0.4 0.1 0.5 0.6 0.7 101.0 b21 1.25\n";
+  const CarmenLog log = readCarmenLog(dir.file("fields.clf", text));
+  EXPECT_EQ(log.skipped_unknown, 2u);  // NEFF, RLASER
+  ASSERT_EQ(log.odometry.size(), 1u);
+  EXPECT_DOUBLE_EQ(log.odometry[0].pose.y, 2.0);
+  EXPECT_DOUBLE_EQ(log.odometry[0].accel, 0.05);
+  EXPECT_DOUBLE_EQ(log.odometry[0].timestamp, 100.25);
+  ASSERT_EQ(log.scans.size(), 2u);
+  const CarmenScan& f = log.scans[0];
+  EXPECT_EQ(f.ranges, (std::vector<float>{1.5f, 2.25f, 81.83f}));
+  EXPECT_DOUBLE_EQ(f.laser_pose.theta, 0.3);
+  EXPECT_DOUBLE_EQ(f.robot_pose.x, 1.1);
+  EXPECT_DOUBLE_EQ(f.logger_timestamp, 0.75);
+  EXPECT_EQ(f.line, 4u);
+  const CarmenScan& r = log.scans[1];
+  EXPECT_EQ(r.type, CarmenScanType::RobotLaser1);
+  EXPECT_DOUBLE_EQ(r.start_angle, -1.5);
+  EXPECT_DOUBLE_EQ(r.angular_resolution, 0.02);
+  EXPECT_DOUBLE_EQ(r.max_range, 81.9);
+  EXPECT_EQ(r.ranges, (std::vector<float>{4.5f, 5.5f, 6.5f}));
+  EXPECT_EQ(r.remissions, (std::vector<float>{0.25f, 0.75f}));
+  EXPECT_DOUBLE_EQ(r.laser_pose.x, 1.2);
+  EXPECT_DOUBLE_EQ(r.robot_pose.x, 1.0);
+  EXPECT_DOUBLE_EQ(r.tv, 0.4);
+  EXPECT_DOUBLE_EQ(r.turn_axis, 0.7);
+  EXPECT_DOUBLE_EQ(r.timestamp, 101.0);
+  EXPECT_DOUBLE_EQ(r.logger_timestamp, 1.25);
+
+  // ROBOTLASER1 geometry comes from its own fields; the mounting from laser vs robot pose.
+  CarmenLog only_robot = log;
+  only_robot.scans.erase(only_robot.scans.begin());
+  const Recording rec = fromCarmen(only_robot, nullptr);
+  EXPECT_DOUBLE_EQ(rec.geometry.angle_min, -1.5);
+  EXPECT_DOUBLE_EQ(rec.geometry.angle_increment, 0.02);
+  EXPECT_NEAR(rec.geometry.range_max, 81.895, 1e-12);
+  EXPECT_NEAR(rec.base_to_laser.x, 0.2, 1e-12);
+  EXPECT_NEAR(rec.base_to_laser.y, 0.0, 1e-12);
+}
+
+TEST(CarmenLog, PlainGzipAndBzip2GiveIdenticalRecords)
+{
+  std::string path;
+  if (!dataset("intel.clf.bz2", path)) return;
+  // The first 3000 lines of the real log, stored three ways under misleading names:
+  // the reader must go by the magic bytes.
+  std::istringstream all(readMaybeCompressedFile(path));
+  std::string text, line;
+  for (int i = 0; i < 3000 && std::getline(all, line); ++i) text += line + "\n";
+  TempDir dir;
+  const CarmenLog plain = readCarmenLog(dir.file("a.gz", text));
+  const CarmenLog gz = readCarmenLog(dir.file("b.clf", compress(text, true)));
+  const CarmenLog bz = readCarmenLog(dir.file("c.log", compress(text, false)));
+  ASSERT_GT(plain.scans.size(), 500u);
+  for (const CarmenLog* other : {&gz, &bz})
+  {
+    ASSERT_EQ(other->scans.size(), plain.scans.size());
+    ASSERT_EQ(other->odometry.size(), plain.odometry.size());
+    EXPECT_EQ(other->params, plain.params);
+    for (std::size_t i = 0; i < plain.scans.size(); ++i)
+    {
+      const CarmenScan &a = plain.scans[i], &b = other->scans[i];
+      ASSERT_EQ(a.ranges, b.ranges);
+      ASSERT_EQ(a.timestamp, b.timestamp);
+      ASSERT_EQ(a.robot_pose.x, b.robot_pose.x);
+      ASSERT_EQ(a.robot_pose.theta, b.robot_pose.theta);
+      ASSERT_EQ(a.line, b.line);
+    }
+  }
+}
+
+TEST(CarmenLog, KeyframesPairWithRawScansByRanges)
+{
+  struct Expect
+  {
+    const char *raw, *corrected;
+    std::size_t count, first, last;
+  };
+  // Intel: dataset README. ACES and CSAIL: found by an independent script over the text files.
+  for (const Expect e : {Expect{"intel.clf.bz2", "intel-corrected.log.gz", 910, 169, 13583},
+                         Expect{"aces.clf.bz2", "aces-corrected.log.gz", 440, 136, 7185},
+                         Expect{"mit-csail.clf.bz2", "csail-corrected.log.gz", 406, 61, 1916}})
+  {
+    std::string raw_path, corrected_path;
+    if (!dataset(e.raw, raw_path) || !dataset(e.corrected, corrected_path)) continue;
+    const CarmenLog raw = readCarmenLog(raw_path);
+    const CarmenLog corrected = readCarmenLog(corrected_path);
+    const std::vector<std::size_t> pairs = pairKeyframes(raw, corrected);
+    ASSERT_EQ(pairs.size(), e.count) << e.raw;
+    EXPECT_EQ(pairs.front(), e.first) << e.raw;
+    EXPECT_EQ(pairs.back(), e.last) << e.raw;
+    for (std::size_t k = 0; k < pairs.size(); ++k)
+    {
+      if (k > 0) ASSERT_GT(pairs[k], pairs[k - 1]) << e.raw;
+      ASSERT_EQ(raw.scans[pairs[k]].ranges, corrected.scans[k].ranges) << e.raw << " keyframe " << k;
+    }
+  }
+}
+
+TEST(CarmenLog, UnpairableKeyframeIsAnError)
+{
+  TempDir dir;
+  const CarmenLog raw = readCarmenLog(dir.file("raw.clf", flaser(1.0) + "\n" + flaser(2.0, 1.0) + "\n"));
+  // Keyframe 1 has ranges that no raw scan has.
+  const CarmenLog corrected =
+      readCarmenLog(dir.file("corr.log", "# x\n" + flaser(2.0) + "\nFLASER 3 9 9 9 0 0 0 0 0 0 3 h 3\n"));
+  try
+  {
+    pairKeyframes(raw, corrected);
+    ADD_FAILURE() << "no error";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("corr.log:3: keyframe 1"), std::string::npos) << e.what();
+  }
+  // Identical ranges in both raw scans: keyframes pair in order, never twice with the same scan.
+  const CarmenLog twice = readCarmenLog(dir.file("twice.log", flaser(5.0) + "\n" + flaser(6.0) + "\n"));
+  EXPECT_EQ(pairKeyframes(raw, twice), (std::vector<std::size_t>{0, 1}));
+}
+
+TEST(CarmenLog, BeamGeometry)
+{
+  const ScanGeometry g180 = carmenBeamGeometry(180, 81.83);
+  EXPECT_NEAR(g180.angle_increment, kPi / 180.0, 1e-15);
+  EXPECT_NEAR(g180.angle_min, -89.5 * kPi / 180.0, 1e-12);
+  EXPECT_NEAR(g180.angle_min + 179 * g180.angle_increment, 89.5 * kPi / 180.0, 1e-12);
+  EXPECT_NEAR(g180.range_max, 81.825, 1e-12);
+  // The no-return code is rejected, the largest real reading (1 cm below) is kept.
+  EXPECT_GT(81.83f, g180.range_max);
+  EXPECT_LE(81.82f, g180.range_max);
+
+  const ScanGeometry g361 = carmenBeamGeometry(361, 81.91);
+  EXPECT_NEAR(g361.angle_increment, kPi / 360.0, 1e-15);
+  EXPECT_NEAR(g361.angle_min, -kPi / 2.0, 1e-12);
+  EXPECT_NEAR(g361.angle_min + 360 * g361.angle_increment, kPi / 2.0, 1e-12);
+  EXPECT_EQ(g361.beam_count, 361u);
+
+  const ScanGeometry aces = carmenBeamGeometry(180, 50.0);
+  EXPECT_GT(50.0f, aces.range_max);
+  EXPECT_LE(49.91f, aces.range_max);  // ACES holds real readings up to 49.91 m
+  EXPECT_THROW(carmenBeamGeometry(1, 10.0), std::invalid_argument);
+}
+
+TEST(CarmenRecording, StampsBecomeStrictlyIncreasing)
+{
+  TempDir dir;
+  const CarmenLog raw =
+      readCarmenLog(dir.file("t.clf", flaser(10.0) + "\n" + flaser(10.1) + "\n" + flaser(10.05) + "\n" +
+                                          flaser(10.1005) + "\n" + flaser(10.2) + "\n"));
+  CarmenRecordingReport report;
+  const Recording rec = fromCarmen(raw, nullptr, {}, &report);
+  const double expected[] = {10.0, 10.1, 10.101, 10.102, 10.2};
+  ASSERT_EQ(rec.scans.size(), 5u);
+  for (int i = 0; i < 5; ++i) EXPECT_NEAR(rec.scans[i].stamp, expected[i], 1e-9) << i;
+  EXPECT_EQ(report.stamps_adjusted, 2u);
+  EXPECT_NEAR(report.max_stamp_shift, 0.051, 1e-9);
+}
+
+TEST(CarmenRecording, OdometryFromOdomLinesAndMountingFromParam)
+{
+  TempDir dir;
+  // Scans without odometry (all zero), ODOM lines moving along x, a 0.1 m laser offset.
+  const std::string text =
+      "PARAM robot_frontlaser_offset 0.1 nohost 0\n"
+      "ODOM 0 0 0 0 0 0 1.0 h 0\nODOM 1 0 0.2 0 0 0 2.0 h 0\nODOM 3 0 0.4 0 0 0 3.0 h 0\n" +
+      flaser(1.5) + "\n" + flaser(2.75) + "\n";
+  const CarmenLog raw = readCarmenLog(dir.file("o.clf", text));
+  const CarmenLog corrected = readCarmenLog(
+      dir.file("c.log", "FLASER 3 1.5 2.25 3 1 1 1.5707963267948966 1 1 1.5707963267948966 2 h 2\n"));
+  CarmenRecordingReport report;
+  const Recording rec = fromCarmen(raw, &corrected, {}, &report);
+  EXPECT_EQ(report.odometry_source, "ODOM lines");
+  EXPECT_NEAR(rec.base_to_laser.x, 0.1, 1e-15);
+  ASSERT_EQ(rec.scans.size(), 2u);
+  EXPECT_NEAR(rec.scans[0].odom.x, 0.5, 1e-12);
+  EXPECT_NEAR(rec.scans[0].odom.theta, 0.1, 1e-12);
+  EXPECT_NEAR(rec.scans[1].odom.x, 2.5, 1e-12);
+  EXPECT_NEAR(rec.scans[1].odom.theta, 0.35, 1e-12);
+  // The keyframe pairs with the first raw scan (same ranges); its base pose is the laser pose
+  // moved 0.1 m backwards along the heading (+y): (1, 0.9, pi/2).
+  ASSERT_EQ(rec.keyframes.size(), 1u);
+  EXPECT_EQ(rec.keyframes[0].scan_index, 0u);
+  EXPECT_NEAR(rec.keyframes[0].pose.x, 1.0, 1e-12);
+  EXPECT_NEAR(rec.keyframes[0].pose.y, 0.9, 1e-12);
+  EXPECT_NEAR(rec.keyframes[0].pose.theta, kPi / 2, 1e-12);
+}
+
+TEST(CarmenRecording, IntelRecording)
+{
+  std::string raw_path, corrected_path;
+  if (!dataset("intel.clf.bz2", raw_path) || !dataset("intel-corrected.log.gz", corrected_path)) return;
+  const CarmenLog raw = readCarmenLog(raw_path);
+  const CarmenLog corrected = readCarmenLog(corrected_path);
+  CarmenRecordingReport report;
+  const Recording rec = fromCarmen(raw, &corrected, {}, &report);
+  ASSERT_EQ(rec.scans.size(), 13631u);
+  EXPECT_EQ(rec.geometry.beam_count, 180u);
+  EXPECT_DOUBLE_EQ(report.no_return_range, static_cast<double>(81.83f));  // README: Intel writes 81.83
+  EXPECT_EQ(report.odometry_source, "scan odometry fields");
+  // Stamps: strictly increasing, never earlier than written, unchanged where the log was in order.
+  std::size_t unchanged = 0;
+  for (std::size_t i = 0; i < rec.scans.size(); ++i)
+  {
+    if (i > 0) ASSERT_GE(rec.scans[i].stamp - rec.scans[i - 1].stamp, 1e-3 - 1e-6) << i;
+    ASSERT_GE(rec.scans[i].stamp, raw.scans[i].timestamp) << i;
+    if (rec.scans[i].stamp == raw.scans[i].timestamp) ++unchanged;
+    ASSERT_EQ(rec.scans[i].odom.x, raw.scans[i].robot_pose.x);
+  }
+  // At least the 631 backward steps of the README had to move; most stamps stay.
+  EXPECT_GE(report.stamps_adjusted, 631u);
+  EXPECT_EQ(unchanged + report.stamps_adjusted, rec.scans.size());
+  EXPECT_GT(unchanged, rec.scans.size() / 2);
+  ASSERT_EQ(rec.keyframes.size(), 910u);
+  EXPECT_EQ(rec.keyframes.front().scan_index, 169u);
+  EXPECT_EQ(rec.keyframes.back().scan_index, 13583u);
+  // Mounting is the identity (robot_frontlaser_offset 0.0): keyframe pose = corrected laser pose.
+  for (std::size_t k = 0; k < rec.keyframes.size(); ++k)
+  {
+    EXPECT_NEAR(rec.keyframes[k].pose.x, corrected.scans[k].laser_pose.x, 1e-12);
+    EXPECT_NEAR(rec.keyframes[k].pose.y, corrected.scans[k].laser_pose.y, 1e-12);
+    EXPECT_NEAR(std::remainder(rec.keyframes[k].pose.theta - corrected.scans[k].laser_pose.theta, 2 * kPi),
+                0.0, 1e-12);
+  }
+  // max_scans keeps a prefix and the keyframes inside it.
+  CarmenRecordingOptions first1000;
+  first1000.max_scans = 1000;
+  const Recording prefix = fromCarmen(raw, &corrected, first1000);
+  EXPECT_EQ(prefix.scans.size(), 1000u);
+  for (const CorrectedKeyframe& kf : prefix.keyframes) EXPECT_LT(kf.scan_index, 1000u);
+  EXPECT_EQ(prefix.geometry.range_max, rec.geometry.range_max);
+}
