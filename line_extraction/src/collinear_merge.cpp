@@ -61,40 +61,59 @@ void CollinearMerger::refit(const PreparedScan& scan, ExtractionResult& out)
   seg.end = last - (last.dot(n) - fit.radius) * n;
 }
 
+void CollinearMerger::track(const PreparedScan& scan, const ExtractionResult& out)
+{
+  if (tracked_) return;
+  const Segment& seg = out.segments.back();
+  sums_.clear();
+  for (int k = seg.index_begin; k < seg.index_end; ++k)
+  {
+    const int idx = out.point_indices[k];
+    member_[idx] = 1;
+    sums_.add(scan.points[idx]);
+  }
+  tracked_ = true;
+}
+
+void CollinearMerger::untrack(const ExtractionResult& out)
+{
+  if (!tracked_) return;
+  const Segment& seg = out.segments.back();
+  for (int k = seg.index_begin; k < seg.index_end; ++k) member_[out.point_indices[k]] = 0;
+  tracked_ = false;
+}
+
 void CollinearMerger::merge(const PreparedScan& scan, const ExtractionResult& in, ExtractionResult& out,
                             bool wrap)
 {
   if (member_.size() < scan.size()) member_.resize(scan.size(), 0);
   const std::size_t first_out = out.segments.size();
-  bool growing = false;
+  tracked_ = false;
   for (const Segment& seg : in.segments)
   {
-    if (growing && mergeable(out.segments.back(), seg))
+    if (out.segments.size() > first_out && mergeable(out.segments.back(), seg))
     {
+      // Sums and marks are built only for segments that do merge.
+      track(scan, out);
       absorb(scan, in, seg, out);
       refit(scan, out);
       continue;
     }
-    // Start a new segment: unmark the previous one's points.
-    if (growing)
-    {
-      const Segment& prev = out.segments.back();
-      for (int k = prev.index_begin; k < prev.index_end; ++k) member_[out.point_indices[k]] = 0;
-    }
-    sums_.clear();
+    untrack(out);
     Segment copy = seg;
     copy.index_begin = static_cast<int>(out.point_indices.size());
+    out.point_indices.insert(out.point_indices.end(), in.point_indices.begin() + seg.index_begin,
+                             in.point_indices.begin() + seg.index_end);
+    copy.index_end = static_cast<int>(out.point_indices.size());
     out.segments.push_back(copy);
-    absorb(scan, in, seg, out);
-    out.segments.back().index_end = static_cast<int>(out.point_indices.size());
-    growing = true;
   }
 
   // Around a full circle the last segment may continue the first one.
   if (wrap && out.segments.size() >= first_out + 2 && mergeable(out.segments.back(), out.segments[first_out]))
   {
-    // The last segment's points are at the tail of out.point_indices and still
-    // marked; appending the first's points there gives the union in scan order.
+    // The last segment's points are at the tail of out.point_indices; appending
+    // the first's points there gives the union in scan order.
+    track(scan, out);
     const Segment first = out.segments[first_out];
     for (int k = first.index_begin; k < first.index_end; ++k)
     {
@@ -105,20 +124,12 @@ void CollinearMerger::merge(const PreparedScan& scan, const ExtractionResult& in
       out.point_indices.push_back(idx);
     }
     refit(scan, out);
+    untrack(out);  // the marks cover the merged point list
     out.segments[first_out] = out.segments.back();
     out.segments.pop_back();
   }
   // Leave the marks clear for the next call.
-  if (growing)
-  {
-    const Segment& last = out.segments.back();
-    for (int k = last.index_begin; k < last.index_end; ++k) member_[out.point_indices[k]] = 0;
-    if (wrap)
-    {
-      const Segment& f = out.segments[first_out];
-      for (int k = f.index_begin; k < f.index_end; ++k) member_[out.point_indices[k]] = 0;
-    }
-  }
+  if (out.segments.size() > first_out) untrack(out);
 }
 
 }  // namespace line_extraction

@@ -89,12 +89,14 @@ class Iepf : public Extractor
   void extractRange(const PreparedScan& scan, PointRange range, ExtractionResult& out) override
   {
     pieces_.clear();
+    if (range.size() <= 0) return;
+    prefix_.build(scan, range);
     splitter_.split(scan, range, threshold_, max_gap_, pieces_);
-    resolveOverlaps(scan, pieces_);
+    resolveOverlaps(scan, pieces_, &prefix_);
     for (const PointRange& p : pieces_)
     {
       if (p.size() < min_points_) continue;
-      const LineFit fit = fitLine(sumRange(scan, p.begin, p.end), range_sigma_);
+      const LineFit fit = fitLine(prefix_.sums(p.begin, p.end), range_sigma_);
       if (fit.valid) appendSegment(scan, fit, p, out);
     }
   }
@@ -105,6 +107,7 @@ class Iepf : public Extractor
   double max_gap_, range_sigma_;
   IepfSplitter splitter_;
   std::vector<PointRange> pieces_;
+  PrefixSums prefix_;
 };
 
 std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)

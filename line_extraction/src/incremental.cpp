@@ -32,6 +32,8 @@ class Incremental : public Extractor
   void extractRange(const PreparedScan& scan, PointRange range, ExtractionResult& out) override
   {
     segments_.clear();
+    if (range.size() <= 0) return;
+    prefix_.build(scan, range);
     const auto& pts = scan.points;
     const double max_gap2 = max_gap_ * max_gap_;
     int i = range.begin;
@@ -46,7 +48,7 @@ class Incremental : public Extractor
         i = gap;
         continue;
       }
-      LineSums sums = sumRange(scan, i, i + seed_points_);
+      LineSums sums = prefix_.sums(i, i + seed_points_);
       LineNormal line;
       if (!fitNormal(sums, line) || !allNear(scan, line, i, i + seed_points_))
       {
@@ -84,11 +86,11 @@ class Incremental : public Extractor
       segments_.push_back({i, end});
       i = end;
     }
-    resolveOverlaps(scan, segments_);
+    resolveOverlaps(scan, segments_, &prefix_);
     for (const PointRange& s : segments_)
     {
       if (s.size() < min_points_) continue;
-      const LineFit fit = fitLine(sumRange(scan, s.begin, s.end), range_sigma_);
+      const LineFit fit = fitLine(prefix_.sums(s.begin, s.end), range_sigma_);
       if (fit.valid) appendSegment(scan, fit, s, out);
     }
   }
@@ -105,6 +107,7 @@ class Incremental : public Extractor
   int step_, seed_points_, min_points_;
   double max_gap_, range_sigma_;
   std::vector<PointRange> segments_;
+  PrefixSums prefix_;
 };
 
 std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)

@@ -173,8 +173,10 @@ void PrefixSums::build(const PreparedScan& scan, PointRange range)
   }
 }
 
-void resolveOverlaps(const PreparedScan& scan, std::vector<PointRange>& segments)
+void resolveOverlaps(const PreparedScan& scan, std::vector<PointRange>& segments, const PrefixSums* prefix)
 {
+  auto sumRange = [&](const PreparedScan& sc, int b, int e)
+  { return prefix ? prefix->sums(b, e) : line_extraction::sumRange(sc, b, e); };
   const std::size_t n = segments.size();
   for (std::size_t k = 0; k + 1 < n; ++k)
   {

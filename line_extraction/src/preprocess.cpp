@@ -60,16 +60,32 @@ void Preprocessor::prepare(const ScanInput& scan, PreparedScan& out)
   updateBeams(scan);
   const double lo = std::max(scan.range_min, 0.0);
   const double hi = std::min(scan.range_max, max_usable_range_);
+  // Sized for every beam, written through pointers, then cut to the valid count
+  // (resizing keeps the capacity, so a warmed-up scan does not allocate).
+  out.points.resize(scan.count);
+  out.ranges.resize(scan.count);
+  out.angles.resize(scan.count);
+  out.beam_index.resize(scan.count);
+  Vec2* points = out.points.data();
+  double* ranges = out.ranges.data();
+  double* angles = out.angles.data();
+  int* beams = out.beam_index.data();
+  std::size_t n = 0;
   for (std::size_t i = 0; i < scan.count; ++i)
   {
     const double r = scan.ranges[i];
     // NaN fails every comparison, +inf fails r < hi, -inf fails r >= lo.
     if (!(r >= lo && r < hi && r > 0.0)) continue;
-    out.points.emplace_back(r * cos_[i], r * sin_[i]);
-    out.ranges.push_back(r);
-    out.angles.push_back(scan.angle_min + static_cast<double>(i) * scan.angle_increment);
-    out.beam_index.push_back(static_cast<int>(i));
+    points[n] = Vec2(r * cos_[i], r * sin_[i]);
+    ranges[n] = r;
+    angles[n] = scan.angle_min + static_cast<double>(i) * scan.angle_increment;
+    beams[n] = static_cast<int>(i);
+    ++n;
   }
+  out.points.resize(n);
+  out.ranges.resize(n);
+  out.angles.resize(n);
+  out.beam_index.resize(n);
   if (out.full_circle) startAtWidestGap(out);
 }
 

@@ -34,6 +34,8 @@ class SeededRegionGrowing : public Extractor
   void extractRange(const PreparedScan& scan, PointRange range, ExtractionResult& out) override
   {
     segments_.clear();
+    if (range.size() < seed_points_) return;
+    prefix_.build(scan, range);
     const auto& pts = scan.points;
     const double max_gap2 = max_gap_ * max_gap_;
     int i = range.begin;
@@ -46,7 +48,7 @@ class SeededRegionGrowing : public Extractor
         i = bad;
         continue;
       }
-      LineSums sums = sumRange(scan, i, i + seed_points_);
+      LineSums sums = prefix_.sums(i, i + seed_points_);
       int fitted = seed_points_;  // points in the last fit
       int end = i + seed_points_;
       // Forward growth. Refitting after every point is what the method asks for;
@@ -79,11 +81,11 @@ class SeededRegionGrowing : public Extractor
       segments_.push_back({begin, end});
       i = end;
     }
-    resolveOverlaps(scan, segments_);
+    resolveOverlaps(scan, segments_, &prefix_);
     for (const PointRange& s : segments_)
     {
       if (s.size() < min_points_) continue;
-      const LineFit fit = fitLine(sumRange(scan, s.begin, s.end), range_sigma_);
+      const LineFit fit = fitLine(prefix_.sums(s.begin, s.end), range_sigma_);
       if (!fit.valid) continue;
       // Length between the projections of the end points onto the line.
       const Vec2 u(-std::sin(fit.angle), std::cos(fit.angle));
@@ -103,7 +105,7 @@ class SeededRegionGrowing : public Extractor
     // A gap inside the window: no seed can contain it.
     for (int k = i + 1; k < end; ++k)
       if ((pts[k] - pts[k - 1]).squaredNorm() > max_gap2) return k;
-    if (!fitNormal(sumRange(scan, i, end), line)) return i + 1;
+    if (!fitNormal(prefix_.sums(i, end), line)) return i + 1;
     for (int k = i; k < end; ++k)
     {
       const Vec2& p = pts[k];
@@ -121,6 +123,7 @@ class SeededRegionGrowing : public Extractor
   int min_points_;
   double min_length_, max_gap_, range_sigma_;
   std::vector<PointRange> segments_;
+  PrefixSums prefix_;
 };
 
 std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)

@@ -45,6 +45,8 @@ class Smsm : public Extractor
   void extractRange(const PreparedScan& scan, PointRange range, ExtractionResult& out) override
   {
     clusters_.clear();
+    if (range.size() <= 0) return;
+    prefix_.build(scan, range);
     breakpointClusters(scan, range, breakpoint_, clusters_);
     // Join clusters that are contiguous in the scan and whose facing ends are close.
     joined_.clear();
@@ -61,12 +63,12 @@ class Smsm : public Extractor
     for (const PointRange& c : joined_)
       // Breakpoints already separate the clusters: no gap limit inside one.
       splitter_.split(scan, c, threshold_, std::numeric_limits<double>::infinity(), pieces_);
-    resolveOverlaps(scan, pieces_);
+    resolveOverlaps(scan, pieces_, &prefix_);
     lines_.clear();
     for (const PointRange& p : pieces_)
     {
       if (p.size() < min_points_) continue;
-      const LineFit fit = fitLine(sumRange(scan, p.begin, p.end), range_sigma_);
+      const LineFit fit = fitLine(prefix_.sums(p.begin, p.end), range_sigma_);
       if (fit.valid) appendSegment(scan, fit, p, lines_);
     }
     merger_.merge(scan, lines_, out, false);
@@ -80,6 +82,7 @@ class Smsm : public Extractor
   IepfSplitter splitter_;
   CollinearMerger merger_;
   std::vector<PointRange> clusters_, joined_, pieces_;
+  PrefixSums prefix_;
   ExtractionResult lines_;
 };
 

@@ -59,7 +59,7 @@ class SplitAndMerge : public Extractor
       }
       merged_.push_back(p);
     }
-    resolveOverlaps(scan, merged_);
+    resolveOverlaps(scan, merged_, &prefix_);
     for (PointRange p : merged_)
     {
       trimEnds(scan, p);

@@ -39,10 +39,13 @@ class CollinearMerger
   void absorb(const PreparedScan& scan, const ExtractionResult& in, const Segment& seg,
               ExtractionResult& out);
   void refit(const PreparedScan& scan, ExtractionResult& out);
+  void track(const PreparedScan& scan, const ExtractionResult& out);
+  void untrack(const ExtractionResult& out);
 
   CollinearMergeParams params_;
   LineSums sums_;                      // points of the segment being grown (out.segments.back())
   std::vector<unsigned char> member_;  // marks its points, for the union
+  bool tracked_ = false;               // sums_ and member_ describe out.segments.back()
 };
 
 }  // namespace line_extraction

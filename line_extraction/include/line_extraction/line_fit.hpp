@@ -126,7 +126,9 @@ class PrefixSums
 /// when segment k+1 starts before segment k ends, each contested point goes to the
 /// line it is nearer to, splitting where the two distances cross. Touching segments
 /// (k+1 starts where k ends) contest the two points at the junction. Segments left with
-/// fewer than 2 points get size 0 (callers skip them).
-void resolveOverlaps(const PreparedScan& scan, std::vector<PointRange>& segments);
+/// fewer than 2 points get size 0 (callers skip them). `prefix`, when given, must
+/// cover the segments and saves summing their points again.
+void resolveOverlaps(const PreparedScan& scan, std::vector<PointRange>& segments,
+                     const PrefixSums* prefix = nullptr);
 
 }  // namespace line_extraction
