@@ -1,0 +1,210 @@
+// ROS wrapper of the extraction pipeline: sensor_msgs/LaserScan on `scan` ->
+// line_map_msgs/LineSegmentArray on `line_segments` (+ RViz markers), in the
+// scan's frame and with its stamp. All the work is in the ROS-free core.
+#include <line_map_msgs/LineSegmentArray.h>
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <sensor_msgs/LaserScan.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <iomanip>
+#include <memory>
+#include <pluginlib/class_list_macros.hpp>
+#include <sstream>
+#include <string>
+
+#include "line_extraction/line_extractor.hpp"
+
+namespace line_extraction
+{
+namespace
+{
+/// XmlRpc scalar -> the string form linemap::ParamSet parses; false for other types.
+bool toParamString(XmlRpc::XmlRpcValue& v, std::string& out)
+{
+  switch (v.getType())
+  {
+    case XmlRpc::XmlRpcValue::TypeBoolean:
+      out = static_cast<bool>(v) ? "true" : "false";
+      return true;
+    case XmlRpc::XmlRpcValue::TypeInt:
+      out = std::to_string(static_cast<int>(v));
+      return true;
+    case XmlRpc::XmlRpcValue::TypeDouble:
+    {
+      std::ostringstream s;
+      s << std::setprecision(17) << static_cast<double>(v);
+      out = s.str();
+      return true;
+    }
+    case XmlRpc::XmlRpcValue::TypeString:
+      out = static_cast<std::string>(v);
+      return true;
+    default:
+      return false;
+  }
+}
+
+/// Every parameter under the private namespace, keys relative to it ("srg/seed_points").
+linemap::ParamSet readPrivateParams(const ros::NodeHandle& private_nh)
+{
+  linemap::ParamSet params;
+  const std::string prefix = private_nh.getNamespace() + "/";
+  std::vector<std::string> names;
+  ros::param::getParamNames(names);
+  for (const std::string& name : names)
+  {
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    XmlRpc::XmlRpcValue value;
+    std::string text;
+    if (private_nh.getParam(name, value) && toParamString(value, text))
+      params.set(name.substr(prefix.size()), text);
+  }
+  return params;
+}
+
+std_msgs::ColorRGBA color(float r, float g, float b)
+{
+  std_msgs::ColorRGBA c;
+  c.r = r;
+  c.g = g;
+  c.b = b;
+  c.a = 1.0f;
+  return c;
+}
+
+geometry_msgs::Point point(const Vec2& p)
+{
+  geometry_msgs::Point q;
+  q.x = p.x();
+  q.y = p.y();
+  q.z = 0.0;
+  return q;
+}
+}  // namespace
+
+/// The ROS side: reads the parameters, converts messages, calls the core.
+class LineExtractionRos
+{
+ public:
+  LineExtractionRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
+  {
+    const linemap::ParamSet params = readPrivateParams(private_nh);
+    // Throws linemap::ParameterError naming the parameter; the nodelet reports it.
+    extractor_ = std::make_unique<LineExtractor>(params);
+    segments_pub_ = nh.advertise<line_map_msgs::LineSegmentArray>("line_segments", 10);
+    markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_segments_markers", 1);
+    scan_sub_ = nh.subscribe("scan", 10, &LineExtractionRos::scanCallback, this);
+    ROS_INFO("line_extraction: algorithm '%s'%s", extractor_->params().algorithm.c_str(),
+             extractor_->params().clustering ? " with breakpoint clustering" : "");
+  }
+
+ private:
+  void scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg)
+  {
+    const bool want_segments = segments_pub_.getNumSubscribers() > 0;
+    const bool want_markers = markers_pub_.getNumSubscribers() > 0;
+    if (!want_segments && !want_markers) return;
+    ScanInput scan;
+    scan.ranges = msg->ranges.data();
+    scan.count = msg->ranges.size();
+    scan.angle_min = msg->angle_min;
+    scan.angle_increment = msg->angle_increment;
+    scan.range_min = msg->range_min;
+    scan.range_max = msg->range_max;
+    scan.intensities = msg->intensities.data();
+    scan.intensity_count = msg->intensities.size();
+    const ExtractionResult* result = nullptr;
+    try
+    {
+      result = &extractor_->extract(scan);
+    }
+    catch (const ScanError& e)
+    {
+      ROS_WARN_THROTTLE(5.0, "line_extraction: scan from frame '%s' skipped: %s",
+                        msg->header.frame_id.c_str(), e.what());
+      return;
+    }
+    if (want_segments) publishSegments(msg->header, *result);
+    if (want_markers) publishMarkers(msg->header, *result);
+  }
+
+  void publishSegments(const std_msgs::Header& header, const ExtractionResult& result)
+  {
+    line_map_msgs::LineSegmentArrayPtr out(new line_map_msgs::LineSegmentArray);
+    out->header = header;
+    out->segments.resize(result.segments.size());
+    for (std::size_t i = 0; i < result.segments.size(); ++i)
+    {
+      const Segment& s = result.segments[i];
+      line_map_msgs::LineSegment& m = out->segments[i];
+      m.start = point(s.start);
+      m.end = point(s.end);
+      m.angle = s.angle;
+      m.radius = s.radius;
+      m.covariance = {s.covariance(0, 0), s.covariance(0, 1), s.covariance(1, 0), s.covariance(1, 1)};
+      m.num_points = static_cast<uint32_t>(s.num_points);
+    }
+    segments_pub_.publish(out);
+  }
+
+  void publishMarkers(const std_msgs::Header& header, const ExtractionResult& result)
+  {
+    visualization_msgs::MarkerArrayPtr out(new visualization_msgs::MarkerArray);
+    const char* ns[3] = {"lines", "start_points", "end_points"};
+    const int type[3] = {visualization_msgs::Marker::LINE_LIST, visualization_msgs::Marker::POINTS,
+                         visualization_msgs::Marker::POINTS};
+    const std_msgs::ColorRGBA colors[3] = {color(0.2f, 0.4f, 1.0f), color(1.0f, 0.0f, 0.0f),
+                                           color(0.0f, 1.0f, 0.0f)};
+    for (int k = 0; k < 3; ++k)
+    {
+      visualization_msgs::Marker m;
+      m.header = header;
+      m.ns = ns[k];
+      m.id = 0;
+      m.type = type[k];
+      // An empty marker is deleted rather than sent without points.
+      m.action =
+          result.segments.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
+      m.pose.orientation.w = 1.0;
+      m.scale.x = k == 0 ? 0.03 : 0.08;
+      m.scale.y = 0.08;
+      m.color = colors[k];
+      for (const Segment& s : result.segments)
+      {
+        if (k == 0 || k == 1) m.points.push_back(point(s.start));
+        if (k == 0 || k == 2) m.points.push_back(point(s.end));
+      }
+      out->markers.push_back(m);
+    }
+    markers_pub_.publish(out);
+  }
+
+  std::unique_ptr<LineExtractor> extractor_;
+  ros::Publisher segments_pub_, markers_pub_;
+  ros::Subscriber scan_sub_;
+};
+
+class LineExtractionNodelet : public nodelet::Nodelet
+{
+ private:
+  void onInit() override
+  {
+    try
+    {
+      ros_ = std::make_unique<LineExtractionRos>(getNodeHandle(), getPrivateNodeHandle());
+    }
+    catch (const linemap::ParameterError& e)
+    {
+      // Stay loaded but idle: nothing is subscribed, the error names the parameter.
+      NODELET_FATAL("line_extraction: not starting: %s (namespace %s)", e.what(),
+                    getPrivateNodeHandle().getNamespace().c_str());
+    }
+  }
+
+  std::unique_ptr<LineExtractionRos> ros_;
+};
+
+}  // namespace line_extraction
+
+PLUGINLIB_EXPORT_CLASS(line_extraction::LineExtractionNodelet, nodelet::Nodelet)
