@@ -1,0 +1,500 @@
+// ROS wrapper of the line map mergers: line_segments (+ tf) -> keyframe gate -> merger -> line_map,
+// and optimized_trajectory -> map adjustment. All merging logic lives in the ROS-free core.
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <line_map_msgs/LineMap.h>
+#include <line_map_msgs/LineSegmentArray.h>
+#include <line_map_msgs/LoadMap.h>
+#include <line_map_msgs/ResetMap.h>
+#include <line_map_msgs/SaveMap.h>
+#include <message_filters/subscriber.h>
+#include <nav_msgs/Path.h>
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <tf2/utils.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
+#include <tf2_ros/transform_listener.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <pluginlib/class_list_macros.hpp>
+#include <string>
+
+#include "line_map_merging/merger.hpp"
+#include "line_map_merging/trajectory_correction.hpp"
+
+namespace line_map_merging
+{
+namespace
+{
+/// Flattens the private parameter tree into "block/name" keys.
+void flatten(const XmlRpc::XmlRpcValue& value, const std::string& prefix, linemap::ParamSet& out)
+{
+  switch (value.getType())
+  {
+    case XmlRpc::XmlRpcValue::TypeStruct:
+      for (auto it = value.begin(); it != value.end(); ++it)
+        flatten(it->second, prefix.empty() ? it->first : prefix + "/" + it->first, out);
+      break;
+    case XmlRpc::XmlRpcValue::TypeBoolean:
+      out.set(prefix, static_cast<bool>(const_cast<XmlRpc::XmlRpcValue&>(value)) ? "true" : "false");
+      break;
+    case XmlRpc::XmlRpcValue::TypeInt:
+      out.set(prefix, std::to_string(static_cast<int>(const_cast<XmlRpc::XmlRpcValue&>(value))));
+      break;
+    case XmlRpc::XmlRpcValue::TypeDouble:
+    {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.17g", static_cast<double>(const_cast<XmlRpc::XmlRpcValue&>(value)));
+      out.set(prefix, buf);
+      break;
+    }
+    case XmlRpc::XmlRpcValue::TypeString:
+      out.set(prefix, static_cast<std::string>(const_cast<XmlRpc::XmlRpcValue&>(value)));
+      break;
+    default:
+      break;  // lists and binary values are not merger parameters
+  }
+}
+
+/// Yaw of a quaternion, or nothing when it is not finite or not normalised.
+bool yawOf(const geometry_msgs::Quaternion& q, double& yaw)
+{
+  const double n = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+  if (!std::isfinite(n) || std::abs(n - 1.0) > 1e-3) return false;
+  yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+  return true;
+}
+
+bool poseOf(const geometry_msgs::Transform& t, linemap::Pose2& pose)
+{
+  double yaw = 0.0;
+  if (!yawOf(t.rotation, yaw) || !std::isfinite(t.translation.x) || !std::isfinite(t.translation.y)) return false;
+  pose = linemap::Pose2(t.translation.x, t.translation.y, yaw);
+  return true;
+}
+
+double msSince(std::chrono::steady_clock::time_point t0)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+class LineMapMergingNodelet : public nodelet::Nodelet
+{
+public:
+  ~LineMapMergingNodelet() override
+  {
+    if (filter_) filter_->clear();
+  }
+
+private:
+  using SegmentsFilter = tf2_ros::MessageFilter<line_map_msgs::LineSegmentArray>;
+
+  void onInit() override
+  {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    method_ = pnh.param<std::string>("method", "cae");
+    map_frame_ = pnh.param<std::string>("map_frame", "map");
+    base_frame_ = pnh.param<std::string>("base_frame", "base_link");
+    keyframe_distance_ = pnh.param("keyframe_distance", 0.2);
+    keyframe_angle_ = pnh.param("keyframe_angle", 10.0 * linemap::kPi / 180.0);
+    stamp_tolerance_ = pnh.param("stamp_tolerance", 0.01);
+    tf_timeout_ = pnh.param("tf_timeout", 0.5);
+    publish_labels_ = pnh.param("publish_labels", false);
+    marker_width_ = pnh.param("marker_width", 0.03);
+    const int queue_size = std::max(1, pnh.param("queue_size", 100));
+
+    linemap::ParamSet params;
+    XmlRpc::XmlRpcValue tree;
+    if (ros::param::get(pnh.getNamespace(), tree)) flatten(tree, "", params);
+    try
+    {
+      merger_ = makeMerger(method_, params);
+    }
+    catch (const std::exception& e)
+    {
+      NODELET_FATAL("line_map_merging: %s", e.what());
+      throw;
+    }
+
+    tf_buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(120.0));
+    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
+
+    map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
+    marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
+    segments_sub_.subscribe(nh, "line_segments", queue_size);
+    filter_ = std::make_unique<SegmentsFilter>(segments_sub_, *tf_buffer_, map_frame_, queue_size, nh);
+    filter_->registerCallback(
+        boost::bind(&LineMapMergingNodelet::onSegments, this, boost::placeholders::_1));
+    filter_->registerFailureCallback(boost::bind(&LineMapMergingNodelet::onTfFailure, this,
+                                                 boost::placeholders::_1, boost::placeholders::_2));
+    trajectory_sub_ = nh.subscribe("optimized_trajectory", 2, &LineMapMergingNodelet::onTrajectory, this);
+    save_srv_ = pnh.advertiseService("save_map", &LineMapMergingNodelet::onSave, this);
+    load_srv_ = pnh.advertiseService("load_map", &LineMapMergingNodelet::onLoad, this);
+    reset_srv_ = pnh.advertiseService("reset_map", &LineMapMergingNodelet::onReset, this);
+
+    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
+    diagnostics_->setHardwareID("none");
+    diagnostics_->add("line map merging", this, &LineMapMergingNodelet::produceDiagnostics);
+    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      diagnostics_->update();
+    });
+    NODELET_INFO("line_map_merging: method '%s' in frame '%s', keyframe gate %.2f m / %.1f deg", method_.c_str(),
+                 map_frame_.c_str(), keyframe_distance_, keyframe_angle_ * 180.0 / linemap::kPi);
+  }
+
+  void onTfFailure(const line_map_msgs::LineSegmentArray::ConstPtr& msg, tf2_ros::FilterFailureReason reason)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++dropped_scans_;
+    NODELET_WARN_THROTTLE(5.0, "line_map_merging: dropped segments at %.3f: no transform %s -> %s (reason %d)",
+                          msg->header.stamp.toSec(), map_frame_.c_str(), msg->header.frame_id.c_str(),
+                          static_cast<int>(reason));
+  }
+
+  void onSegments(const ros::MessageEvent<const line_map_msgs::LineSegmentArray>& event)
+  {
+    const auto& msg = event.getConstMessage();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if ((ros::Time::now() - event.getReceiptTime()).toSec() > tf_timeout_)
+    {
+      ++dropped_scans_;
+      NODELET_WARN_THROTTLE(5.0, "line_map_merging: segments at %.3f waited more than %.2f s for tf; dropped",
+                            msg->header.stamp.toSec(), tf_timeout_);
+      return;
+    }
+    linemap::Pose2 laser, mount;
+    try
+    {
+      if (!poseOf(tf_buffer_->lookupTransform(map_frame_, msg->header.frame_id, msg->header.stamp).transform,
+                  laser))
+      {
+        ++dropped_scans_;
+        NODELET_WARN_THROTTLE(5.0, "line_map_merging: transform %s -> %s is not a valid pose; scan dropped",
+                              map_frame_.c_str(), msg->header.frame_id.c_str());
+        return;
+      }
+    }
+    catch (const tf2::TransformException& e)
+    {
+      ++dropped_scans_;
+      NODELET_WARN_THROTTLE(5.0, "line_map_merging: %s", e.what());
+      return;
+    }
+    if (!base_frame_.empty() && base_frame_ != msg->header.frame_id)
+    {
+      try
+      {
+        if (!poseOf(tf_buffer_->lookupTransform(base_frame_, msg->header.frame_id, msg->header.stamp).transform,
+                    mount))
+          mount = linemap::Pose2();
+      }
+      catch (const tf2::TransformException& e)
+      {
+        // Without base -> laser the trajectory is applied to the laser pose directly.
+        NODELET_WARN_THROTTLE(30.0, "line_map_merging: no %s -> %s transform (%s); taking them as the same frame",
+                              base_frame_.c_str(), msg->header.frame_id.c_str(), e.what());
+      }
+    }
+
+    // Keyframe gate on the robot (base) pose.
+    const linemap::Pose2 base = laser * mount.inverse();
+    if (have_last_ && std::hypot(base.x - last_base_.x, base.y - last_base_.y) < keyframe_distance_ &&
+        std::abs(linemap::normalizeAngle(base.theta - last_base_.theta)) < keyframe_angle_)
+    {
+      ++gated_scans_;
+      return;
+    }
+
+    Keyframe keyframe;
+    keyframe.index = next_index_;
+    keyframe.stamp = msg->header.stamp.toSec();
+    keyframe.pose = laser;
+    keyframe.mount = mount;
+    keyframe.segments.reserve(msg->segments.size());
+    for (const auto& s : msg->segments)
+      keyframe.segments.emplace_back(linemap::Vec2(s.start.x, s.start.y), linemap::Vec2(s.end.x, s.end.y));
+    const auto t0 = std::chrono::steady_clock::now();
+    AddResult result;
+    try
+    {
+      result = merger_->addKeyframe(keyframe);
+    }
+    catch (const std::exception& e)
+    {
+      ++dropped_scans_;
+      NODELET_WARN_THROTTLE(5.0, "line_map_merging: keyframe rejected: %s", e.what());
+      return;
+    }
+    last_otm_ms_ = msSince(t0);
+    ++next_index_;
+    last_base_ = base;
+    have_last_ = true;
+    if (result.rejected > 0)
+    {
+      bad_segments_ += result.rejected;
+      NODELET_WARN_THROTTLE(5.0, "line_map_merging: %zu non-finite or zero-length segments skipped (%zu so far)",
+                            result.rejected, bad_segments_);
+    }
+    publish(msg->header.stamp);
+  }
+
+  void onTrajectory(const nav_msgs::Path::ConstPtr& path)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (path->poses.empty())
+    {
+      ++bad_trajectories_;
+      NODELET_WARN_THROTTLE(5.0, "line_map_merging: empty optimized_trajectory ignored");
+      return;
+    }
+    if (!path->header.frame_id.empty() && path->header.frame_id != map_frame_)
+    {
+      ++bad_trajectories_;
+      NODELET_WARN_THROTTLE(5.0, "line_map_merging: optimized_trajectory in frame '%s', expected '%s'; ignored",
+                            path->header.frame_id.c_str(), map_frame_.c_str());
+      return;
+    }
+    std::vector<KeyframeInfo> keyframes = merger_->keyframes();
+    std::sort(keyframes.begin(), keyframes.end(),
+              [](const KeyframeInfo& a, const KeyframeInfo& b) { return a.stamp < b.stamp; });
+    std::map<std::uint64_t, linemap::Pose2> matched;
+    std::size_t unmatched = 0, invalid = 0;
+    for (const auto& p : path->poses)
+    {
+      double yaw = 0.0;
+      if (!yawOf(p.pose.orientation, yaw) || !std::isfinite(p.pose.position.x) || !std::isfinite(p.pose.position.y))
+      {
+        ++invalid;
+        continue;
+      }
+      const auto k = matchByStamp(keyframes, p.header.stamp.toSec(), stamp_tolerance_);
+      if (!k)
+      {
+        ++unmatched;
+        continue;
+      }
+      // The trajectory holds base poses; the merger keeps laser poses.
+      matched[keyframes[*k].index] = linemap::Pose2(p.pose.position.x, p.pose.position.y, yaw) * keyframes[*k].mount;
+    }
+    unmatched_poses_ += unmatched;
+    bad_poses_ += invalid;
+    if (invalid > 0)
+      NODELET_WARN_THROTTLE(5.0, "line_map_merging: %zu trajectory poses with a non-normalised quaternion or "
+                                 "non-finite position ignored", invalid);
+    if (unmatched > 0)
+      NODELET_INFO_THROTTLE(5.0, "line_map_merging: %zu of %zu trajectory poses match no keyframe (tolerance %.3f s)",
+                            unmatched, path->poses.size(), stamp_tolerance_);
+    const auto poses = correctKeyframes(keyframes, matched);
+    if (poses.empty()) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    try
+    {
+      const AdjustResult r = merger_->adjust(poses);
+      last_gma_ms_ = msSince(t0);
+      NODELET_DEBUG("line_map_merging: adjusted %zu keyframes (%zu matched) in %.1f ms; %zu leaves split, %zu merged",
+                    r.moved, matched.size(), last_gma_ms_, r.split, r.merged);
+    }
+    catch (const std::exception& e)
+    {
+      NODELET_WARN_THROTTLE(5.0, "line_map_merging: adjustment failed: %s", e.what());
+      return;
+    }
+    ++adjustments_;
+    publish(path->header.stamp.isZero() ? ros::Time::now() : path->header.stamp);
+  }
+
+  bool onSave(line_map_msgs::SaveMap::Request& req, line_map_msgs::SaveMap::Response& res)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    try
+    {
+      merger_->save(req.path);
+      res.success = true;
+      res.message = "saved " + std::to_string(merger_->segmentCount()) + " segments to " + req.path;
+    }
+    catch (const std::exception& e)
+    {
+      res.success = false;
+      res.message = e.what();
+    }
+    return true;
+  }
+
+  bool onLoad(line_map_msgs::LoadMap::Request& req, line_map_msgs::LoadMap::Response& res)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    try
+    {
+      merger_->load(req.path);
+    }
+    catch (const std::exception& e)
+    {
+      res.success = false;
+      res.message = e.what();
+      return true;
+    }
+    next_index_ = 0;
+    for (const KeyframeInfo& k : merger_->keyframes()) next_index_ = std::max(next_index_, k.index + 1);
+    have_last_ = false;
+    res.success = true;
+    res.message = "loaded " + std::to_string(merger_->segmentCount()) + " segments, " +
+                  std::to_string(merger_->keyframeCount()) + " keyframes from " + req.path;
+    publish(ros::Time::now());
+    return true;
+  }
+
+  bool onReset(line_map_msgs::ResetMap::Request&, line_map_msgs::ResetMap::Response& res)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    merger_->reset();
+    next_index_ = 0;
+    have_last_ = false;
+    res.success = true;
+    res.message = "map cleared";
+    publish(ros::Time::now());
+    return true;
+  }
+
+  void publish(const ros::Time& stamp)
+  {
+    const std::vector<MapSegment> map = merger_->map();
+    line_map_msgs::LineMap msg;
+    msg.header.stamp = stamp;
+    msg.header.frame_id = map_frame_;
+    msg.segments.resize(map.size());
+    for (std::size_t i = 0; i < map.size(); ++i)
+    {
+      auto& out = msg.segments[i];
+      const linemap::Segment2& s = map[i].segment;
+      out.id = map[i].id;
+      out.merged_count = map[i].merged_count;
+      out.segment.start.x = s.start.x();
+      out.segment.start.y = s.start.y();
+      out.segment.end.x = s.end.x();
+      out.segment.end.y = s.end.y();
+      const linemap::HessianLine h = linemap::hessianFromPoints(s.start, s.end);
+      out.segment.angle = h.angle;
+      out.segment.radius = h.radius;
+      out.segment.num_points = 0;
+    }
+    msg.original_segments = static_cast<std::uint32_t>(merger_->leafCount());
+    msg.keyframes = static_cast<std::uint32_t>(merger_->keyframeCount());
+    map_pub_.publish(msg);
+    if (marker_pub_.getNumSubscribers() > 0) publishMarkers(msg);
+  }
+
+  void publishMarkers(const line_map_msgs::LineMap& map)
+  {
+    visualization_msgs::MarkerArray array;
+    visualization_msgs::Marker clear;
+    clear.header = map.header;
+    clear.action = visualization_msgs::Marker::DELETEALL;
+    array.markers.push_back(clear);
+
+    auto make = [&](const std::string& ns, int type, float r, float g, float b, double scale) {
+      visualization_msgs::Marker m;
+      m.header = map.header;
+      m.ns = ns;
+      m.type = type;
+      m.action = visualization_msgs::Marker::ADD;
+      m.pose.orientation.w = 1.0;
+      m.scale.x = scale;
+      m.scale.y = scale;
+      m.color.r = r;
+      m.color.g = g;
+      m.color.b = b;
+      m.color.a = 1.0;
+      return m;
+    };
+    auto lines = make("segments", visualization_msgs::Marker::LINE_LIST, 0.1f, 0.3f, 1.0f, marker_width_);
+    auto starts = make("start_points", visualization_msgs::Marker::POINTS, 1.0f, 0.0f, 0.0f, 2.0 * marker_width_);
+    auto ends = make("end_points", visualization_msgs::Marker::POINTS, 0.0f, 0.8f, 0.0f, 2.0 * marker_width_);
+    for (const auto& s : map.segments)
+    {
+      lines.points.push_back(s.segment.start);
+      lines.points.push_back(s.segment.end);
+      starts.points.push_back(s.segment.start);
+      ends.points.push_back(s.segment.end);
+    }
+    if (!lines.points.empty())
+    {
+      array.markers.push_back(lines);
+      array.markers.push_back(starts);
+      array.markers.push_back(ends);
+    }
+    if (publish_labels_)
+    {
+      for (const auto& s : map.segments)
+      {
+        auto label = make("labels", visualization_msgs::Marker::TEXT_VIEW_FACING, 1.0f, 1.0f, 1.0f, 0.0);
+        label.id = static_cast<int>(s.id % 2147483647u);
+        label.scale.z = 0.2;
+        label.pose.position.x = 0.5 * (s.segment.start.x + s.segment.end.x);
+        label.pose.position.y = 0.5 * (s.segment.start.y + s.segment.end.y);
+        label.text = std::to_string(s.id);
+        array.markers.push_back(label);
+      }
+    }
+    marker_pub_.publish(array);
+  }
+
+  void produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& stat)
+  {
+    // Called from the diagnostics timer, which holds mutex_.
+    stat.summary(dropped_scans_ > 0 || bad_poses_ > 0 ? diagnostic_msgs::DiagnosticStatus::WARN
+                                                      : diagnostic_msgs::DiagnosticStatus::OK,
+                 dropped_scans_ > 0 ? "scans dropped (no transform)" : "merging");
+    stat.add("method", method_);
+    stat.add("keyframes", merger_->keyframeCount());
+    stat.add("leaves", merger_->leafCount());
+    stat.add("map segments", merger_->segmentCount());
+    stat.add("last OTM time [ms]", last_otm_ms_);
+    stat.add("last GMA time [ms]", last_gma_ms_);
+    stat.add("adjustments", adjustments_);
+    stat.add("dropped scans", dropped_scans_);
+    stat.add("scans below the keyframe gate", gated_scans_);
+    stat.add("bad segments", bad_segments_);
+    stat.add("bad trajectory poses", bad_poses_);
+    stat.add("unmatched trajectory poses", unmatched_poses_);
+    stat.add("ignored trajectories", bad_trajectories_);
+  }
+
+  std::mutex mutex_;
+  std::unique_ptr<Merger> merger_;
+  std::string method_, map_frame_, base_frame_;
+  double keyframe_distance_ = 0.2, keyframe_angle_ = 0.1745, stamp_tolerance_ = 0.01, tf_timeout_ = 0.5;
+  bool publish_labels_ = false;
+  double marker_width_ = 0.03;
+
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  message_filters::Subscriber<line_map_msgs::LineSegmentArray> segments_sub_;
+  std::unique_ptr<SegmentsFilter> filter_;
+  ros::Subscriber trajectory_sub_;
+  ros::Publisher map_pub_, marker_pub_;
+  ros::ServiceServer save_srv_, load_srv_, reset_srv_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::WallTimer diag_timer_;
+
+  std::uint64_t next_index_ = 0;
+  linemap::Pose2 last_base_;
+  bool have_last_ = false;
+  double last_otm_ms_ = 0.0, last_gma_ms_ = 0.0;
+  std::size_t dropped_scans_ = 0, gated_scans_ = 0, bad_segments_ = 0, bad_poses_ = 0, unmatched_poses_ = 0,
+              bad_trajectories_ = 0, adjustments_ = 0;
+};
+
+}  // namespace line_map_merging
+
+PLUGINLIB_EXPORT_CLASS(line_map_merging::LineMapMergingNodelet, nodelet::Nodelet)
