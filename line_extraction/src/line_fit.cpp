@@ -87,33 +87,48 @@ LineFit fitLine(const LineSums& sums, double range_sigma)
 bool fitNormal(const LineSums& sums, LineNormal& out)
 {
   if (sums.n < 2.0) return false;
-  const Moments m = centred(sums);
-  const double a = m.cyy - m.cxx, b = -2.0 * m.cxy;
-  const double h = std::sqrt(a * a + b * b);
-  if (!(m.cxx + m.cyy + h > 0.0)) return false;
-  // Half-angle formulas for (cos 2t, sin 2t) = (a, b)/h, taking the larger of the
-  // two components from the square root so that it stays accurate.
-  const double c2 = h > 0.0 ? a / h : 1.0, s2 = h > 0.0 ? b / h : 0.0;
-  double c, s;
-  if (c2 >= 0.0)
+  const double inv_n = 1.0 / sums.n;
+  const double mx = sums.sx * inv_n, my = sums.sy * inv_n;
+  const double cxx = std::max(0.0, sums.sxx - sums.sx * mx), cyy = std::max(0.0, sums.syy - sums.sy * my);
+  const double cxy = sums.sxy - sums.sx * my;
+  const double dxy = cxx - cyy;
+  const double h = std::sqrt(dxy * dxy + 4.0 * cxy * cxy);
+  if (!(cxx + cyy + h > 0.0)) return false;
+  // The normal is the eigenvector of the scatter matrix for its smaller eigenvalue
+  // lmin = (cxx + cyy - h)/2, taken from the row of (S - lmin I) with the larger
+  // diagonal entry for accuracy: one square root and no trigonometry.
+  double vx, vy;
+  if (dxy >= 0.0)
   {
-    c = std::sqrt(0.5 * (1.0 + c2));
-    s = s2 / (2.0 * c);
+    vx = cxy;
+    vy = -0.5 * (dxy + h);  // lmin - cxx
   }
   else
   {
-    s = std::sqrt(0.5 * (1.0 - c2));
-    c = s2 / (2.0 * s);
+    vx = 0.5 * (dxy - h);  // lmin - cyy
+    vy = cxy;
   }
-  double r = m.mx * c + m.my * s;
+  const double norm2 = vx * vx + vy * vy;
+  if (norm2 > 0.0)
+  {
+    const double inv = 1.0 / std::sqrt(norm2);
+    vx *= inv;
+    vy *= inv;
+  }
+  else
+  {
+    vx = 1.0;  // isotropic scatter: no preferred direction
+    vy = 0.0;
+  }
+  double r = mx * vx + my * vy;
   if (r < 0.0)
   {
     r = -r;
-    c = -c;
-    s = -s;
+    vx = -vx;
+    vy = -vy;
   }
-  out.nx = c;
-  out.ny = s;
+  out.nx = vx;
+  out.ny = vy;
   out.radius = r;
   return true;
 }
