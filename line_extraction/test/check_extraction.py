@@ -50,43 +50,71 @@ def walls():
             (wrap(math.pi / 2 - yaw), HALF - cy), (wrap(-math.pi / 2 - yaw), HALF + cy)]
 
 
+def wall_errors(segments):
+    """For each wall, whether some segment lies on it (1 cm, 0.01 rad)."""
+    found = []
+    for angle, radius in walls():
+        near = [s for s in segments
+                if abs(s.radius - radius) < 0.01 and abs(math.remainder(s.angle - angle, 2 * math.pi)) < 0.01]
+        found.append(near[0] if near else None)
+    return found
+
+
 class CheckExtraction(unittest.TestCase):
-    def test_segments_of_a_square_room(self):
-        received = []
-        markers = []
-        rospy.Subscriber("line_segments", LineSegmentArray, received.append)
-        rospy.Subscriber("line_segments_markers", MarkerArray, markers.append)
+    """Namespaces (private parameters, lists): `full` must find the four walls,
+    `light` must answer each scan with its stamp and frame, `idle` (bad
+    parameters) must not advertise line_segments at all."""
+
+    def collect(self, namespaces):
+        received = {ns: [] for ns in namespaces}
+        markers = {ns: [] for ns in namespaces}
+        subs = []
+        for ns in namespaces:
+            subs.append(rospy.Subscriber(ns + "/line_segments", LineSegmentArray, received[ns].append))
+            subs.append(rospy.Subscriber(ns + "/line_segments_markers", MarkerArray, markers[ns].append))
         pub = rospy.Publisher("scan", LaserScan, queue_size=1)
         stamp = rospy.Time(1234, 567000000)
         deadline = rospy.get_time() + 30.0
-        while not received and rospy.get_time() < deadline and not rospy.is_shutdown():
+        while rospy.get_time() < deadline and not rospy.is_shutdown():
+            if all(received[ns] and markers[ns] for ns in namespaces):
+                break
             pub.publish(room_scan(stamp))
             rospy.sleep(0.2)
-        self.assertTrue(received, "no LineSegmentArray on line_segments within 30 s")
-        msg = received[0]
-        self.assertEqual(msg.header.stamp, stamp)
-        self.assertEqual(msg.header.frame_id, "test_laser")
-        self.assertGreaterEqual(len(msg.segments), 4)
-        for angle, radius in walls():
-            near = [s for s in msg.segments
-                    if abs(s.radius - radius) < 0.01 and abs(math.remainder(s.angle - angle, 2 * math.pi)) < 0.01]
-            self.assertTrue(near, "no segment on the wall angle %.3f radius %.3f" % (angle, radius))
-            s = near[0]
-            self.assertGreater(s.num_points, 10)
-            self.assertGreater(s.covariance[0], 0.0)
-            self.assertGreater(s.covariance[3], 0.0)
-            self.assertAlmostEqual(s.covariance[1], s.covariance[2])
-        # Markers: lines, start points, end points, in the scan's frame.
-        deadline = rospy.get_time() + 10.0
-        while not markers and rospy.get_time() < deadline:
-            pub.publish(room_scan(stamp))
-            rospy.sleep(0.2)
-        self.assertTrue(markers, "no MarkerArray on line_segments_markers")
-        self.assertEqual(len(markers[0].markers), 3)
-        for m in markers[0].markers:
-            self.assertEqual(m.header.frame_id, "test_laser")
-            self.assertEqual(m.header.stamp, stamp)
-        self.assertEqual(len(markers[0].markers[0].points), 2 * len(markers[0].markers[1].points))
+        return stamp, received, markers
+
+    def test_segments_of_a_square_room(self):
+        full = rospy.get_param("~full", ["srg"])
+        light = rospy.get_param("~light", [])
+        stamp, received, markers = self.collect(full + light)
+        for ns in full + light:
+            self.assertTrue(received[ns], "no LineSegmentArray on %s/line_segments within 30 s" % ns)
+            msg = received[ns][0]
+            self.assertEqual(msg.header.stamp, stamp, ns)
+            self.assertEqual(msg.header.frame_id, "test_laser", ns)
+            self.assertTrue(markers[ns], "no MarkerArray on %s/line_segments_markers" % ns)
+            m = markers[ns][0]
+            self.assertEqual(len(m.markers), 3, ns)  # lines, start points, end points
+            for marker in m.markers:
+                self.assertEqual(marker.header.frame_id, "test_laser", ns)
+                self.assertEqual(marker.header.stamp, stamp, ns)
+        for ns in full:
+            msg = received[ns][0]
+            self.assertGreaterEqual(len(msg.segments), 4, ns)
+            for wall, s in zip(walls(), wall_errors(msg.segments)):
+                self.assertIsNotNone(s, "%s: no segment on the wall angle %.3f radius %.3f" % (ns, wall[0], wall[1]))
+                self.assertGreater(s.num_points, 10, ns)
+                self.assertGreater(s.covariance[0], 0.0, ns)
+                self.assertGreater(s.covariance[3], 0.0, ns)
+                self.assertAlmostEqual(s.covariance[1], s.covariance[2])
+            m = markers[ns][0]
+            self.assertEqual(len(m.markers[0].points), 2 * len(msg.segments), ns)
+            self.assertEqual(len(m.markers[1].points), len(msg.segments), ns)
+        # Every other nodelet of the manager has advertised by now: the idle ones
+        # (bad parameters) must not have.
+        topics = [t for t, _ in rospy.get_published_topics()]
+        for ns in rospy.get_param("~idle", []):
+            self.assertNotIn("/" + ns + "/line_segments", topics)
+        self.assertIn("/" + (full + light)[0] + "/line_segments", topics)
 
 
 if __name__ == "__main__":
