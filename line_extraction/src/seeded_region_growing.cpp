@@ -124,11 +124,13 @@ class SeededRegionGrowing : public Extractor
     for (int k = i; k < end; ++k)
     {
       const Vec2& p = pts[k];
-      if (line.distance(p) > line_distance_) return i + 1;
-      // The beam through p meets the line at range radius / cos(beam - normal).
-      const double cos_incidence = (p.x() * line.nx + p.y() * line.ny) / scan.ranges[k];
-      if (cos_incidence <= 1e-6) return i + 1;
-      if (std::abs(line.radius / cos_incidence - scan.ranges[k]) > predict_distance_) return i + 1;
+      const double along_normal = p.x() * line.nx + p.y() * line.ny;  // range * cos(beam - normal)
+      const double d = std::abs(along_normal - line.radius);
+      if (d > line_distance_) return i + 1;
+      // The beam through p meets the line at range radius / cos(beam - normal), so
+      // p is d / cos(beam - normal) from that predicted point; compared without division.
+      if (along_normal <= 1e-6 * scan.ranges[k]) return i + 1;
+      if (d * scan.ranges[k] > predict_distance_ * along_normal) return i + 1;
     }
     return -1;
   }
