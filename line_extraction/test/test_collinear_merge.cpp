@@ -105,3 +105,26 @@ TEST(CollinearMerge, WrapJoinsLastIntoFirst)
   EXPECT_NEAR(out.segments[0].end.x(), 1.45, 0.01);
   EXPECT_EQ(out.segments[1].num_points, 30);
 }
+
+TEST(CollinearMerge, GapLimitKeepsADoorwayOpen)
+{
+  // One wall y = 2 with a 1 m doorway between x = 0 and x = -1.
+  std::mt19937 rng(8);
+  PreparedScan scan;
+  addPoints(scan, 2.0, -0.05, 41, 2.0, 0.005, rng);   // x from 2 to 0
+  addPoints(scan, -1.0, -0.05, 41, 2.0, 0.005, rng);  // x from -1 to -3
+  ExtractionResult in;
+  fitAndAppend(scan, {0, 41}, in);
+  fitAndAppend(scan, {41, 82}, in);
+  CollinearMergeParams params;
+  params.max_gap = 0.5;
+  CollinearMerger gated(params);
+  ExtractionResult out;
+  gated.merge(scan, in, out, false);
+  EXPECT_EQ(out.segments.size(), 2u);
+  params.max_gap = 1.5;
+  CollinearMerger wide(params);
+  out.clear();
+  wide.merge(scan, in, out, false);
+  EXPECT_EQ(out.segments.size(), 1u);
+}

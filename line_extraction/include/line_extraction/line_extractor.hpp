@@ -22,7 +22,8 @@ struct PipelineParams
   double max_usable_range = 30.0;
   BreakpointParams breakpoint;
   bool merge = true;
-  CollinearMergeParams merge_params;
+  /// Merge gate 2.77, largest bridged gap 0.5 m (a doorway stays open).
+  CollinearMergeParams merge_params{2.77, 0.01, 0.5};
   int min_points = 5;       ///< per output segment
   double min_length = 0.0;  ///< per output segment [m]
 
