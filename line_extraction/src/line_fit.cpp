@@ -178,7 +178,9 @@ void appendSegment(const PreparedScan& scan, const LineFit& fit, PointRange memb
 void PrefixSums::build(const PreparedScan& scan, PointRange range)
 {
   offset_ = range.begin;
-  cum_.resize(static_cast<std::size_t>(range.size()) + 1);
+  // Grow only: shrinking and regrowing would zero-fill the tail on every call.
+  const std::size_t needed = static_cast<std::size_t>(std::max(range.size(), 0)) + 1;
+  if (cum_.size() < needed) cum_.resize(needed);
   LineSums acc;
   cum_[0] = acc;
   for (int i = range.begin; i < range.end; ++i)
