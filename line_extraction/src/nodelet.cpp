@@ -7,62 +7,17 @@
 #include <sensor_msgs/LaserScan.h>
 #include <visualization_msgs/MarkerArray.h>
 
-#include <iomanip>
 #include <memory>
 #include <pluginlib/class_list_macros.hpp>
-#include <sstream>
 #include <string>
 
 #include "line_extraction/line_extractor.hpp"
+#include "line_extraction/ros/param_loader.hpp"
 
 namespace line_extraction
 {
 namespace
 {
-/// XmlRpc scalar -> the string form linemap::ParamSet parses; false for other types.
-bool toParamString(XmlRpc::XmlRpcValue& v, std::string& out)
-{
-  switch (v.getType())
-  {
-    case XmlRpc::XmlRpcValue::TypeBoolean:
-      out = static_cast<bool>(v) ? "true" : "false";
-      return true;
-    case XmlRpc::XmlRpcValue::TypeInt:
-      out = std::to_string(static_cast<int>(v));
-      return true;
-    case XmlRpc::XmlRpcValue::TypeDouble:
-    {
-      std::ostringstream s;
-      s << std::setprecision(17) << static_cast<double>(v);
-      out = s.str();
-      return true;
-    }
-    case XmlRpc::XmlRpcValue::TypeString:
-      out = static_cast<std::string>(v);
-      return true;
-    default:
-      return false;
-  }
-}
-
-/// Every parameter under the private namespace, keys relative to it ("srg/seed_points").
-linemap::ParamSet readPrivateParams(const ros::NodeHandle& private_nh)
-{
-  linemap::ParamSet params;
-  const std::string prefix = private_nh.getNamespace() + "/";
-  std::vector<std::string> names;
-  ros::param::getParamNames(names);
-  for (const std::string& name : names)
-  {
-    if (name.compare(0, prefix.size(), prefix) != 0) continue;
-    XmlRpc::XmlRpcValue value;
-    std::string text;
-    if (private_nh.getParam(name, value) && toParamString(value, text))
-      params.set(name.substr(prefix.size()), text);
-  }
-  return params;
-}
-
 std_msgs::ColorRGBA color(float r, float g, float b)
 {
   std_msgs::ColorRGBA c;
@@ -89,7 +44,7 @@ class LineExtractionRos
  public:
   LineExtractionRos(ros::NodeHandle nh, ros::NodeHandle private_nh)
   {
-    const linemap::ParamSet params = readPrivateParams(private_nh);
+    const linemap::ParamSet params = linemap_ros::loadParamSet(private_nh);
     // Throws linemap::ParameterError naming the parameter; the nodelet reports it.
     extractor_ = std::make_unique<LineExtractor>(params);
     segments_pub_ = nh.advertise<line_map_msgs::LineSegmentArray>("line_segments", 10);
