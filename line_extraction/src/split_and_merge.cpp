@@ -34,6 +34,7 @@ class SplitAndMerge : public Extractor
     if (range.size() <= 0) return;
     prefix_.build(scan, range);
     pieces_.clear();
+    split_parents_.clear();
     const double max_gap2 = max_gap_ * max_gap_;
     int start = range.begin;
     for (int i = range.begin + 1; i <= range.end; ++i)
@@ -51,7 +52,7 @@ class SplitAndMerge : public Extractor
       if (!merged_.empty())
       {
         PointRange& last = merged_.back();
-        if (p.begin <= last.end && findSplit(scan, {last.begin, p.end}) < 0)
+        if (p.begin <= last.end && !wasSplit(last.begin, p.end) && findSplit(scan, {last.begin, p.end}) < 0)
         {
           last.end = p.end;
           continue;
@@ -62,6 +63,7 @@ class SplitAndMerge : public Extractor
     resolveOverlaps(scan, merged_, &prefix_);
     for (PointRange p : merged_)
     {
+      if (p.size() < min_points_) continue;  // trimming only shrinks
       trimEnds(scan, p);
       if (p.size() < min_points_) continue;
       const LineFit fit = fitLine(prefix_.sums(p.begin, p.end), range_sigma_);
@@ -84,6 +86,7 @@ class SplitAndMerge : public Extractor
         pieces_.push_back(r);
         continue;
       }
+      split_parents_.push_back(r);
       stack_.push_back({k, r.end});
       stack_.push_back({r.begin, k + 1});
     }
@@ -104,6 +107,15 @@ class SplitAndMerge : public Extractor
       else
         --p.end;
     }
+  }
+
+  /// True when [begin, end) was itself split: two sibling pieces never merge back
+  /// (findSplit is deterministic), so the union need not be tested again.
+  bool wasSplit(int begin, int end) const
+  {
+    for (const PointRange& r : split_parents_)
+      if (r.begin == begin && r.end == end) return true;
+    return false;
   }
 
   /// The split point of r, or -1 when r is one line.
@@ -144,7 +156,7 @@ class SplitAndMerge : public Extractor
   int min_points_;
   double max_gap_, range_sigma_;
   PrefixSums prefix_;
-  std::vector<PointRange> stack_, pieces_, merged_;
+  std::vector<PointRange> stack_, pieces_, merged_, split_parents_;
 };
 
 std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)
