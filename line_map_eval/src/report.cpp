@@ -1,0 +1,313 @@
+// Console table, JSON (yaml-cpp's emitter in JSON-compatible flow style) and Markdown reports.
+#include "line_map_eval/report.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace line_map_eval
+{
+namespace
+{
+constexpr double kMm = 1000.0;
+
+std::string fixed(double value, int decimals)
+{
+  if (!std::isfinite(value)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", decimals, value);
+  return buf;
+}
+
+struct Column
+{
+  std::string header;
+  bool left = false;
+};
+
+std::vector<Column> columns()
+{
+  return {{"merger", true}, {"scans"},    {"orig segs"},  {"orig min mm"}, {"orig max mm"},
+          {"orig mean mm"}, {"map segs"}, {"map min mm"}, {"map max mm"},  {"map mean mm"},
+          {"quality %"},    {"error mm"}, {"frame ms"},   {"total ms"}};
+}
+
+std::vector<std::string> row(const MergerRun& r)
+{
+  return {r.name,
+          std::to_string(r.scans),
+          std::to_string(r.original_segments),
+          fixed(r.originals.shortest * kMm, 1),
+          fixed(r.originals.longest * kMm, 1),
+          fixed(r.originals.mean * kMm, 1),
+          std::to_string(r.map_segments),
+          fixed(r.map.shortest * kMm, 1),
+          fixed(r.map.longest * kMm, 1),
+          fixed(r.map.mean * kMm, 1),
+          fixed(r.quality.quality, 2),
+          fixed(r.error.mean_error * kMm, 2),
+          fixed(r.per_frame_ms, 3),
+          fixed(r.total_ms, 1)};
+}
+
+/// Rounds for the JSON output so that the files stay readable; keeps null for non-finite values.
+void number(YAML::Emitter& out, double value, int decimals = 3)
+{
+  if (!std::isfinite(value))
+  {
+    out << YAML::Null;
+    return;
+  }
+  const double scale = std::pow(10.0, decimals);
+  out << std::round(value * scale) / scale;
+}
+
+void key(YAML::Emitter& out, const char* k)
+{
+  out << YAML::Key << k << YAML::Value;
+}
+
+void emitRun(YAML::Emitter& out, const MergerRun& r)
+{
+  out << YAML::BeginMap;
+  key(out, "scans");
+  out << r.scans;
+  key(out, "original_segments");
+  out << r.original_segments;
+  key(out, "original_shortest_mm");
+  number(out, r.originals.shortest * kMm);
+  key(out, "original_longest_mm");
+  number(out, r.originals.longest * kMm);
+  key(out, "original_mean_length_mm");
+  number(out, r.originals.mean * kMm);
+  key(out, "map_segments");
+  out << r.map_segments;
+  key(out, "shortest_mm");
+  number(out, r.map.shortest * kMm);
+  key(out, "longest_mm");
+  number(out, r.map.longest * kMm);
+  key(out, "mean_length_mm");
+  number(out, r.map.mean * kMm);
+  key(out, "quality_pct");
+  number(out, r.quality.quality);
+  key(out, "error_mm");
+  number(out, r.error.mean_error * kMm);
+  key(out, "max_error_mm");
+  number(out, r.error.max_error * kMm);
+  key(out, "error_assignment");
+  out << r.error_assignment;
+  key(out, "assigned_originals");
+  out << r.error.assigned;
+  key(out, "unassigned_originals");
+  out << r.error.unassigned;
+  key(out, "per_frame_ms");
+  number(out, r.per_frame_ms, 4);
+  key(out, "total_ms");
+  number(out, r.total_ms);
+  key(out, "adjust_ms");
+  number(out, r.adjust_ms);
+  key(out, "adjustments");
+  out << r.adjustments;
+  key(out, "evaluation_ms");
+  number(out, r.evaluation_ms);
+  key(out, "online");
+  out << r.online;
+  key(out, "provenance");
+  out << r.provenance;
+  key(out, "quality_before_adjust_pct");
+  number(out, r.quality_before_adjust ? *r.quality_before_adjust : std::nan(""));
+  if (r.ground_truth)
+  {
+    const GroundTruthResult& g = *r.ground_truth;
+    key(out, "ground_truth");
+    out << YAML::BeginMap;
+    key(out, "coverage_pct");
+    number(out, g.coverage * 100.0);
+    key(out, "undetected_walls");
+    out << g.undetected_walls;
+    key(out, "max_endpoint_error_mm");
+    number(out, g.max_endpoint_error * kMm);
+    key(out, "mean_vertex_error_mm");
+    number(out, g.mean_vertex_error * kMm);
+    key(out, "missed_corners");
+    out << g.missed_corners;
+    key(out, "corners");
+    out << g.corners.size();
+    key(out, "walls");
+    out << g.walls.size();
+    out << YAML::EndMap;
+  }
+  key(out, "files");
+  out << YAML::BeginSeq;
+  for (const auto& f : r.files) out << f;
+  out << YAML::EndSeq;
+  out << YAML::EndMap;
+}
+
+void writeFile(const std::filesystem::path& path, const std::string& text)
+{
+  std::ofstream out(path);
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error(path.string() + ": cannot write the report");
+}
+
+}  // namespace
+
+std::string formatTable(const BatchResult& result)
+{
+  const auto cols = columns();
+  std::vector<std::vector<std::string>> cells;
+  cells.emplace_back();
+  for (const auto& c : cols) cells.back().push_back(c.header);
+  for (const auto& r : result.mergers) cells.push_back(row(r));
+  std::vector<std::size_t> width(cols.size(), 0);
+  for (const auto& line : cells)
+    for (std::size_t i = 0; i < line.size(); ++i) width[i] = std::max(width[i], line[i].size());
+  std::ostringstream out;
+  for (const auto& line : cells)
+  {
+    for (std::size_t i = 0; i < line.size(); ++i)
+    {
+      const std::string pad(width[i] - line[i].size(), ' ');
+      out << (i ? "  " : "") << (cols[i].left ? line[i] + pad : pad + line[i]);
+    }
+    out << '\n';
+  }
+  return out.str();
+}
+
+std::string toJson(const BatchResult& result)
+{
+  YAML::Emitter out;
+  out.SetMapFormat(YAML::Flow);
+  out.SetSeqFormat(YAML::Flow);
+  out.SetStringFormat(YAML::DoubleQuoted);
+  out.SetBoolFormat(YAML::TrueFalseBool);
+  out.SetBoolFormat(YAML::LowerCase);
+  out.SetNullFormat(YAML::LowerNull);
+  out.SetDoublePrecision(12);
+  out << YAML::BeginMap;
+  key(out, "dataset");
+  out << result.dataset;
+  key(out, "kind");
+  out << result.kind;
+  key(out, "extractor");
+  out << result.extractor;
+  key(out, "loop_closure");
+  out << result.loop_closure;
+  key(out, "adjust_every");
+  out << result.adjust_every;
+  key(out, "candidate_scans");
+  out << result.candidate_scans;
+  key(out, "scans");
+  out << result.keyframes;
+  key(out, "original_segments");
+  out << result.originals.count;
+  key(out, "original_shortest_mm");
+  number(out, result.originals.shortest * kMm);
+  key(out, "original_longest_mm");
+  number(out, result.originals.longest * kMm);
+  key(out, "original_mean_length_mm");
+  number(out, result.originals.mean * kMm);
+  key(out, "scan_points");
+  out << result.scan_points;
+  key(out, "extraction_ms");
+  number(out, result.extraction_ms);
+  key(out, "table_ms");
+  number(out, result.table_ms);
+  key(out, "parameters");
+  out << YAML::BeginMap;
+  for (const auto& [k, v] : result.parameters.values())
+  {
+    out << YAML::Key << k << YAML::Value << v;
+  }
+  out << YAML::EndMap;
+  key(out, "mergers");
+  out << YAML::BeginMap;
+  for (const auto& r : result.mergers)
+  {
+    out << YAML::Key << r.name << YAML::Value;
+    emitRun(out, r);
+  }
+  out << YAML::EndMap;
+  out << YAML::EndMap;
+  if (!out.good()) throw std::runtime_error(std::string("report.json: ") + out.GetLastError());
+  return std::string(out.c_str()) + "\n";
+}
+
+std::string toMarkdown(const BatchResult& result)
+{
+  std::ostringstream md;
+  md << "# Line map comparison: " << result.dataset << "\n\n";
+  md << "- dataset kind: " << result.kind
+     << (result.loop_closure
+             ? " (online mergers merge on odometry and receive the corrected trajectory every " +
+                   (result.adjust_every ? std::to_string(result.adjust_every) + " keyframes and " : "") +
+                   "at the end; offline mergers get the corrected poses)"
+             : " (the poses are final for every merger)")
+     << "\n";
+  md << "- extractor: " << result.extractor << "; " << result.keyframes << " keyframes after gating of "
+     << result.candidate_scans << " candidates; extraction " << fixed(result.extraction_ms, 1) << " ms\n";
+  md << "- lookup table: " << result.scan_points << " registered scan points under the final poses, built in "
+     << fixed(result.table_ms, 1) << " ms\n\n";
+
+  const auto cols = columns();
+  md << "|";
+  for (const auto& c : cols) md << " " << c.header << " |";
+  md << "\n|";
+  for (const auto& c : cols) md << (c.left ? "---|" : "---:|");
+  md << "\n";
+  for (const auto& r : result.mergers)
+  {
+    md << "|";
+    for (const auto& cell : row(r)) md << " " << cell << " |";
+    md << "\n";
+  }
+  md << "\nOriginal segments and their lengths are those of Table I of the CAE-RLSM paper, map segments "
+        "those of Table III. Quality is the correlation quality against the lookup table of the registered "
+        "scans; error the mean distance of the originals' midpoints to their map segment's line. Per-frame "
+        "runtime is the median addKeyframe time of online mergers; total runtime covers every addKeyframe, "
+        "adjust and the final map.\n\n";
+  md << "## Notes per merger\n\n";
+  for (const auto& r : result.mergers)
+  {
+    md << "- **" << r.name << "** (" << (r.online ? "online" : "offline") << "): error from "
+       << r.error_assignment << " (" << r.error.assigned << " originals assigned, " << r.error.unassigned
+       << " without a map segment; max " << fixed(r.error.max_error * kMm, 1) << " mm); evaluation "
+       << fixed(r.evaluation_ms, 1) << " ms";
+    if (r.adjustments) md << "; " << r.adjustments << " adjustments, " << fixed(r.adjust_ms, 1) << " ms";
+    if (r.quality_before_adjust)
+      md << "; quality before the final adjustment " << fixed(*r.quality_before_adjust, 2) << " %";
+    if (r.ground_truth)
+    {
+      const auto& g = *r.ground_truth;
+      md << "; ground truth: coverage " << fixed(g.coverage * 100.0, 1) << " %, " << g.undetected_walls
+         << " undetected walls, max endpoint error " << fixed(g.max_endpoint_error * kMm, 1)
+         << " mm, mean vertex error " << fixed(g.mean_vertex_error * kMm, 1) << " mm, " << g.missed_corners
+         << " of " << g.corners.size() << " corners missed";
+    }
+    md << "\n";
+    for (const auto& f : r.files) md << "  - `" << f << "`\n";
+  }
+  md << "\n## Parameters\n\n";
+  for (const auto& [k, v] : result.parameters.values()) md << "- `" << k << "`: `" << v << "`\n";
+  return md.str();
+}
+
+void writeReports(const BatchResult& result, const std::string& dir)
+{
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir + ": cannot create the directory: " + ec.message());
+  writeFile(std::filesystem::path(dir) / "report.json", toJson(result));
+  writeFile(std::filesystem::path(dir) / "report.md", toMarkdown(result));
+}
+
+}  // namespace line_map_eval

@@ -1,0 +1,239 @@
+// The batch pipeline on a simulated 4 x 4 m room: every merger produces every column, the JSON
+// report parses with the documented keys, the loop closure does not lower CAE-RLSM's quality, and
+// --param overrides reach the extractor and the gate.
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "line_map_eval/batch.hpp"
+#include "line_map_eval/report.hpp"
+#include "line_map_merging/merger.hpp"
+
+using namespace line_map_eval;
+namespace fs = std::filesystem;
+
+namespace
+{
+const std::string kRoot = LINEMAP_SOURCE_DIR;
+
+linemap::ParamSet defaultParams()
+{
+  std::vector<std::string> files;
+  for (const char* name : {"line_extraction.yaml", "line_map_merging.yaml", "line_map_eval.yaml"})
+    if (fs::exists(kRoot + "/config/" + name)) files.push_back(kRoot + "/config/" + name);
+  return loadParameterFiles(files);
+}
+
+/// The square room with a strong systematic heading drift (0.02 rad per metre, about 9 degrees
+/// over the lap), so that the odometry map is visibly wrong and the loop closure matters.
+const BatchDataset& driftingRoom()
+{
+  static const BatchDataset dataset = []
+  {
+    World world = loadWorld(kRoot + "/config/worlds/square_room.yaml");
+    world.odometry.heading_bias = 0.02;
+    return simulatedDataset(world);
+  }();
+  return dataset;
+}
+
+BatchOptions quietOptions()
+{
+  BatchOptions o;
+  o.params = defaultParams();
+  o.progress = false;
+  o.adjust_every = 0;  // one loop closure at the end: the map before it is the odometry map
+  return o;
+}
+
+}  // namespace
+
+TEST(Batch, EveryMergerProducesEveryColumn)
+{
+  const BatchDataset& room = driftingRoom();
+  ASSERT_TRUE(room.truth);
+  ASSERT_TRUE(room.loop_closure);
+  BatchOptions options = quietOptions();
+  const fs::path out = fs::temp_directory_path() / ("linemap_batch_test_" + std::to_string(::getpid()));
+  options.out_dir = out.string();
+  const BatchResult result = runBatch(room, options);
+
+  ASSERT_EQ(result.mergers.size(), line_map_merging::mergerNames().size());
+  EXPECT_GT(result.keyframes, 10u);
+  EXPECT_LE(result.keyframes, result.candidate_scans);
+  for (const MergerRun& r : result.mergers)
+  {
+    SCOPED_TRACE(r.name);
+    EXPECT_EQ(r.scans, result.keyframes);
+    EXPECT_GT(r.original_segments, r.scans);  // the room shows at least two walls in every scan
+    EXPECT_GT(r.map_segments, 0u);
+    EXPECT_LT(r.map_segments, r.original_segments);
+    // No segment can be longer than the room's 4 m walls (plus the noise of its endpoints), unless
+    // the merger kept pieces merged on the drifting odometry (online without adjustment).
+    EXPECT_LE(r.originals.longest, 4.05);
+    if (!r.online || line_map_merging::makeMerger(r.name, options.params)->supportsAdjustment())
+      EXPECT_LE(r.map.longest, 4.05);
+    EXPECT_LE(r.map.shortest, r.map.mean);
+    EXPECT_LE(r.map.mean, r.map.longest);
+    // Merging fuses pieces of one wall seen from several places into longer segments.
+    EXPECT_GT(r.map.longest, 2.5);
+    EXPECT_GT(r.quality.quality, 0.0);
+    EXPECT_LE(r.quality.quality, 100.0);
+    ASSERT_TRUE(std::isfinite(r.error.mean_error));
+    EXPECT_LT(r.error.mean_error, 0.05);
+    EXPECT_GT(r.error.assigned, 0u);
+    EXPECT_TRUE(std::isfinite(r.total_ms));
+    if (r.online) EXPECT_TRUE(std::isfinite(r.per_frame_ms));
+    ASSERT_TRUE(r.ground_truth);
+    EXPECT_EQ(r.ground_truth->walls.size(), 8u);
+    EXPECT_TRUE(fs::exists(out / r.name / "map.svg"));
+    EXPECT_TRUE(fs::exists(out / r.name / "map.pdf"));
+    EXPECT_TRUE(fs::exists(out / r.name / "map.png"));
+    EXPECT_TRUE(fs::exists(out / r.name / "lookup_table.png"));
+  }
+
+  // JSON: yaml-cpp reads JSON; every documented key is there with the values of the run.
+  writeReports(result, out.string());
+  const YAML::Node json = YAML::LoadFile((out / "report.json").string());
+  EXPECT_EQ(json["extractor"].as<std::string>(), result.extractor);
+  EXPECT_EQ(json["dataset"].as<std::string>(), "square_room");
+  ASSERT_TRUE(json["parameters"].IsMap());
+  EXPECT_EQ(json["parameters"]["algorithm"].as<std::string>(), result.extractor);
+  for (const MergerRun& r : result.mergers)
+  {
+    SCOPED_TRACE(r.name);
+    const YAML::Node m = json["mergers"][r.name];
+    ASSERT_TRUE(m.IsMap());
+    for (const char* key : {"scans", "original_segments", "map_segments", "shortest_mm", "longest_mm",
+                            "mean_length_mm", "quality_pct", "error_mm", "per_frame_ms", "total_ms"})
+      EXPECT_TRUE(m[key].IsDefined()) << key;
+    EXPECT_EQ(m["scans"].as<std::size_t>(), r.scans);
+    EXPECT_EQ(m["map_segments"].as<std::size_t>(), r.map_segments);
+    EXPECT_NEAR(m["longest_mm"].as<double>(), r.map.longest * 1000.0, 1e-3);
+    EXPECT_NEAR(m["quality_pct"].as<double>(), r.quality.quality, 1e-3);
+    EXPECT_NEAR(m["error_mm"].as<double>(), r.error.mean_error * 1000.0, 1e-3);
+  }
+  const std::string md = toMarkdown(result);
+  EXPECT_NE(md.find("| merger |"), std::string::npos);
+  fs::remove_all(out);
+}
+
+TEST(Batch, LoopClosureDoesNotLowerCaeQuality)
+{
+  BatchOptions options = quietOptions();
+  options.mergers = {"cae"};
+  const BatchResult result = runBatch(driftingRoom(), options);
+  ASSERT_EQ(result.mergers.size(), 1u);
+  const MergerRun& cae = result.mergers[0];
+  ASSERT_TRUE(cae.quality_before_adjust);
+  EXPECT_EQ(cae.adjustments, 1u);
+  // The odometry map is rotated by up to ~9 degrees against the registered scans, so it must
+  // score lower than the adjusted map, which lies on the scans.
+  EXPECT_GT(cae.quality.quality, *cae.quality_before_adjust);
+  // A map on the walls scores at least exp(-1/2) per pixel when within one cell of the scan points.
+  EXPECT_GE(cae.quality.quality, 60.0);
+  EXPECT_LT(cae.error.mean_error, 0.05);
+  EXPECT_EQ(cae.error_assignment, "provenance");
+}
+
+TEST(Batch, PeriodicAdjustmentsFollowEvery)
+{
+  BatchOptions options = quietOptions();
+  options.mergers = {"cae"};
+  options.adjust_every = 10;
+  const BatchResult result = runBatch(driftingRoom(), options);
+  const std::size_t k = result.keyframes;
+  // One adjustment after every 10 keyframes (not after the last one) plus the final one.
+  EXPECT_EQ(result.mergers[0].adjustments, (k - 1) / 10 + 1);
+}
+
+TEST(Batch, ParamOverridesReachTheExtractorAndTheGate)
+{
+  BatchOptions options = quietOptions();
+  options.mergers = {"cae"};
+  options.extractor = "srg";
+  applyOverride(options.params, "srg/seed_points=-3");
+  try
+  {
+    runBatch(driftingRoom(), options);
+    FAIL() << "an impossible seed_points was accepted";
+  }
+  catch (const linemap::ParameterError& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("srg/seed_points"), std::string::npos) << e.what();
+  }
+
+  options = quietOptions();
+  options.mergers = {"cae"};
+  applyOverride(options.params, "min_length=1.5");
+  const BatchResult longer = runBatch(driftingRoom(), options);
+  EXPECT_GE(longer.originals.shortest, 1.5);
+
+  options = quietOptions();
+  options.mergers = {"cae"};
+  applyOverride(options.params, "keyframe_distance=0");
+  applyOverride(options.params, "keyframe_angle=0");
+  const BatchResult all = runBatch(driftingRoom(), options);
+  EXPECT_EQ(all.keyframes, all.candidate_scans);
+  options.params.set("keyframe_distance", "1.0");
+  options.params.set("keyframe_angle", "6.3");  // never by turning
+  const BatchResult sparse = runBatch(driftingRoom(), options);
+  // The lap is about 8 m long: one keyframe per metre driven, plus the first.
+  EXPECT_GE(sparse.keyframes, 6u);
+  EXPECT_LE(sparse.keyframes, 10u);
+}
+
+TEST(Batch, BadInputNamesTheProblem)
+{
+  linemap::ParamSet params;
+  EXPECT_THROW(applyOverride(params, "no_equals_sign"), linemap::ParameterError);
+  EXPECT_THROW(applyOverride(params, "=1"), linemap::ParameterError);
+  applyOverride(params, "a/b=c=d");
+  EXPECT_EQ(params.getString("a/b", ""), "c=d");
+
+  BatchOptions options = quietOptions();
+  options.mergers = {"no_such_merger"};
+  try
+  {
+    runBatch(driftingRoom(), options);
+    FAIL() << "an unknown merger was accepted";
+  }
+  catch (const linemap::ParameterError& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("no_such_merger"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Batch, NestedYamlIsFlattened)
+{
+  const fs::path file =
+      fs::temp_directory_path() / ("linemap_batch_params_" + std::to_string(::getpid()) + ".yaml");
+  {
+    std::ofstream out(file);
+    out << "algorithm: iepf\nsrg:\n  seed_points: 7\nfusion:\n  deep:\n    x: 1.5\nlist: [1, 2]\n";
+  }
+  const linemap::ParamSet p = loadParameterFiles({file.string()});
+  EXPECT_EQ(p.getString("algorithm", ""), "iepf");
+  EXPECT_EQ(p.getInt("srg/seed_points", 0), 7);
+  EXPECT_DOUBLE_EQ(p.getDouble("fusion/deep/x", 0.0), 1.5);
+  EXPECT_EQ(p.getString("list", ""), "[1, 2]");
+  {
+    std::ofstream out(file);
+    out << "a: [unclosed\n";
+  }
+  try
+  {
+    loadParameterFiles({file.string()});
+    FAIL() << "a malformed file was accepted";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+  }
+  fs::remove(file);
+}
