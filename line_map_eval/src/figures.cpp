@@ -108,7 +108,7 @@ void drawLookup(cairo_t* cr, const LookupTable& t, const FigureLayout& l, int pa
     for (int ix = 0; ix < t.width(); ++ix)
     {
       const float val = std::clamp(v[static_cast<std::size_t>(iy) * t.width() + ix], 0.0f, 1.0f);
-      const auto g = static_cast<std::uint32_t>(std::lround(255.0 * (1.0 - 0.85 * val)));
+      const auto g = static_cast<std::uint32_t>(std::lround(255.0 * (1.0 - 0.6 * val)));
       row[ix] = 0xFF000000u | (g << 16) | (g << 8) | g;
     }
   }

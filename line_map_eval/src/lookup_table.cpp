@@ -72,7 +72,7 @@ LookupTable LookupTable::build(const std::vector<Vec2>& world_points, const Look
   }
   // Kernel half-width in cells; the window keeps one spare cell beyond it on each side.
   const double radius_m = params.kernel_radius * params.sigma;
-  const int r = static_cast<int>(std::floor(radius_m / res));
+  const int r = static_cast<int>(std::floor(radius_m / res + 1e-9));  // 3 sigma = 3 cells stays 3
   const double wx = std::floor(max_x / res) - std::floor(min_x / res) + 2.0 * r + 3.0;
   const double wy = std::floor(max_y / res) - std::floor(min_y / res) + 2.0 * r + 3.0;
   if (wx * wy > kMaxCells || std::abs(min_x / res) > 1e9 || std::abs(max_x / res) > 1e9 ||

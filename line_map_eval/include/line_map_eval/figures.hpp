@@ -33,7 +33,7 @@ struct FigureStyle
 
 /// One map panel. Segments are drawn dark blue with a red disc at each start and a green disc
 /// at each end, over the scan points in light grey, over the lookup table (if any) in greys
-/// (white 0 to dark grey 1).
+/// (white for 0 to grey 40 % for 1, so the dark blue map stays visible on it).
 struct MapFigure
 {
   std::vector<linemap::Segment2> segments;

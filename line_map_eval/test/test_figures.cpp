@@ -1,0 +1,190 @@
+// Figures: every format is written, the PNG has the laid-out size and the endpoint colours.
+#include <cairo.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "line_map_eval/figures.hpp"
+
+using line_map_eval::drawComparison;
+using line_map_eval::drawLookupTable;
+using line_map_eval::drawMap;
+using line_map_eval::FigureStyle;
+using line_map_eval::MapFigure;
+using linemap::Segment2;
+using linemap::Vec2;
+
+namespace
+{
+std::string tempDir()
+{
+  std::string tmpl = ::testing::TempDir() + "linemap_figuresXXXXXX";
+  char* dir = mkdtemp(&tmpl[0]);
+  if (!dir) return ::testing::TempDir();
+  return dir;
+}
+
+std::string readFile(const std::string& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+FigureStyle testStyle()
+{
+  FigureStyle s;
+  s.pixels_per_metre = 50.0;
+  s.margin = 20.0;
+  s.caption_height = 28.0;
+  s.padding = 0.25;
+  s.endpoint_radius = 3.0;
+  return s;
+}
+
+// Two 4 m walls, 2 m apart, drawn in opposite directions; points every 2 cm 4 cm inside them.
+MapFigure testFigure()
+{
+  MapFigure f;
+  f.segments = {Segment2(Vec2(0, 0), Vec2(4, 0)), Segment2(Vec2(4, 2), Vec2(0, 2))};
+  for (int i = 0; i <= 200; ++i)
+  {
+    f.scan_points.emplace_back(0.02 * i, 0.04);
+    f.scan_points.emplace_back(0.02 * i, 1.96);
+  }
+  f.scan_points.emplace_back(2.0, 1.0);
+  f.caption = "test room - true walls";
+  return f;
+}
+
+struct Rgb
+{
+  int r, g, b;
+};
+
+Rgb pixel(cairo_surface_t* img, int x, int y)
+{
+  const unsigned char* data = cairo_image_surface_get_data(img);
+  const int stride = cairo_image_surface_get_stride(img);
+  const std::uint32_t v = reinterpret_cast<const std::uint32_t*>(data + y * stride)[x];
+  return {static_cast<int>((v >> 16) & 0xFF), static_cast<int>((v >> 8) & 0xFF), static_cast<int>(v & 0xFF)};
+}
+
+bool isRed(const Rgb& c)
+{
+  return c.r > 200 && c.g < 60 && c.b < 60;
+}
+bool isGreen(const Rgb& c)
+{
+  return c.g > 140 && c.r < 60 && c.b < 60;
+}
+}  // namespace
+
+TEST(Figures, ScaleBarIsARoundNumberOfMetres)
+{
+  EXPECT_DOUBLE_EQ(line_map_eval::scaleBarLength(4.5), 1.0);
+  EXPECT_DOUBLE_EQ(line_map_eval::scaleBarLength(9.0), 2.0);
+  EXPECT_DOUBLE_EQ(line_map_eval::scaleBarLength(25.0), 5.0);
+  EXPECT_DOUBLE_EQ(line_map_eval::scaleBarLength(40.0), 10.0);
+  EXPECT_DOUBLE_EQ(line_map_eval::scaleBarLength(1.0), 0.2);
+}
+
+TEST(Figures, MapInAllFormatsWithEndpointColours)
+{
+  const std::string dir = tempDir();
+  const auto files = drawMap(testFigure(), dir + "/map", line_map_eval::kFigureAllFormats, testStyle());
+  ASSERT_EQ(files.size(), 3u);
+  EXPECT_EQ(files[0], dir + "/map.svg");
+  EXPECT_EQ(files[1], dir + "/map.pdf");
+  EXPECT_EQ(files[2], dir + "/map.png");
+  const std::string svg = readFile(dir + "/map.svg");
+  EXPECT_NE(svg.find("<svg"), std::string::npos);
+  EXPECT_EQ(readFile(dir + "/map.pdf").rfind("%PDF", 0), 0u);
+
+  cairo_surface_t* img = cairo_image_surface_create_from_png((dir + "/map.png").c_str());
+  ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
+  // World box [-0.25, 4.25] x [-0.25, 2.25] at 50 px/m: 225 x 125 px, plus 2 x 20 margin and 28 caption.
+  EXPECT_EQ(cairo_image_surface_get_width(img), 265);
+  EXPECT_EQ(cairo_image_surface_get_height(img), 193);
+  // canvas x = 20 + (x + 0.25) * 50, y = 20 + (2.25 - y) * 50 (y up).
+  EXPECT_TRUE(isRed(pixel(img, 32, 132)));     // start (0, 0)
+  EXPECT_TRUE(isGreen(pixel(img, 232, 132)));  // end (4, 0)
+  EXPECT_TRUE(isRed(pixel(img, 232, 32)));     // start (4, 2)
+  EXPECT_TRUE(isGreen(pixel(img, 32, 32)));    // end (0, 2)
+  const Rgb line = pixel(img, 132, 132);       // (2, 0): dark blue
+  EXPECT_LT(line.r, 80);
+  EXPECT_GT(line.b, line.r + 40);
+  const Rgb point = pixel(img, 132, 82);  // the lone scan point (2, 1): light grey
+  EXPECT_EQ(point.r, 0xB4);
+  EXPECT_EQ(point.g, 0xB4);
+  EXPECT_EQ(point.b, 0xB4);
+  const Rgb paper = pixel(img, 82, 82);  // (1, 1): nothing there
+  EXPECT_EQ(paper.r, 255);
+  EXPECT_EQ(paper.g, 255);
+  EXPECT_EQ(paper.b, 255);
+  cairo_surface_destroy(img);
+}
+
+TEST(Figures, ExtensionSelectsTheFormatAndComparisonSharesTheScale)
+{
+  const std::string dir = tempDir();
+  const auto files = drawMap(testFigure(), dir + "/only.png", line_map_eval::kFigureAllFormats, testStyle());
+  ASSERT_EQ(files.size(), 1u);
+  struct stat st;
+  EXPECT_NE(stat((dir + "/only.svg").c_str(), &st), 0);
+
+  MapFigure after = testFigure();
+  after.segments = {Segment2(Vec2(0, 0), Vec2(4, 0))};
+  after.caption = "after";
+  const auto cmp = drawComparison(testFigure(), after, dir + "/cmp", line_map_eval::kFigurePng, testStyle());
+  ASSERT_EQ(cmp.size(), 1u);
+  cairo_surface_t* img = cairo_image_surface_create_from_png(cmp[0].c_str());
+  ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
+  EXPECT_EQ(cairo_image_surface_get_width(img), 2 * 265);
+  EXPECT_EQ(cairo_image_surface_get_height(img), 193);
+  EXPECT_TRUE(isRed(pixel(img, 265 + 32, 132)));     // the right panel's start (0, 0)
+  EXPECT_TRUE(isGreen(pixel(img, 265 + 232, 132)));  // and end (4, 0)
+  cairo_surface_destroy(img);
+}
+
+TEST(Figures, LookupTableFigureIsGreyscaleUnderTheMap)
+{
+  const std::string dir = tempDir();
+  std::vector<Vec2> pts;
+  for (int i = 0; i <= 400; ++i) pts.emplace_back(0.01 * i, 1.025);
+  const line_map_eval::LookupTable t = line_map_eval::LookupTable::build(pts, {});  // 5 cm, sigma 5 cm
+  const auto files = drawLookupTable(t, {Segment2(Vec2(0, 1.025), Vec2(4, 1.025))}, "lookup", dir + "/lut",
+                                     line_map_eval::kFigureAllFormats, testStyle());
+  ASSERT_EQ(files.size(), 3u);
+  for (const std::string& f : files) EXPECT_GT(readFile(f).size(), 100u) << f;
+  cairo_surface_t* img = cairo_image_surface_create_from_png((dir + "/lut.png").c_str());
+  ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
+  // Window: cells x -4..84, y 16..24 (the points' cells 0..80 x 20 plus 3 + 1 each side), i.e.
+  // [-0.2, 4.25] x [0.8, 1.25] m, padded 0.25 m: 4.95 m x 0.95 m = 247.5 x 47.5 px.
+  EXPECT_EQ(cairo_image_surface_get_width(img), 288);   // ceil(247.5 + 40)
+  EXPECT_EQ(cairo_image_surface_get_height(img), 116);  // ceil(47.5 + 40 + 28)
+  // (2, 1.125) is two cells (2 sigma) above the wall: exp(-2) -> grey 255 (1 - 0.6 e^-2) = 234,
+  // at canvas (20 + 2.45 * 50, 20 + (1.5 - 1.125) * 50) = (142.5, 38.75).
+  const Rgb grey = pixel(img, 142, 38);
+  EXPECT_EQ(grey.r, grey.g);
+  EXPECT_EQ(grey.g, grey.b);
+  EXPECT_NEAR(grey.r, 234, 1);
+  cairo_surface_destroy(img);
+}
+
+TEST(Figures, UnwritableFileNamesTheFile)
+{
+  try
+  {
+    drawMap(testFigure(), "/nonexistent_dir_linemap/x.png", line_map_eval::kFigurePng, testStyle());
+    FAIL() << "no exception";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent_dir_linemap/x.png"), std::string::npos) << e.what();
+  }
+}

@@ -1,0 +1,180 @@
+// Correlation quality q: closed-form cases and a synthetic room.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "line_map_eval/map_quality.hpp"
+
+using line_map_eval::computeMapQuality;
+using line_map_eval::directionBin;
+using line_map_eval::LookupTable;
+using line_map_eval::LookupTableParams;
+using line_map_eval::QualityParams;
+using line_map_eval::QualityResult;
+using linemap::Segment2;
+using linemap::Vec2;
+
+namespace
+{
+LookupTableParams tableParams()
+{
+  LookupTableParams p;
+  p.resolution = 0.05;
+  p.sigma = 0.05;
+  p.kernel_radius = 3.0;
+  return p;
+}
+
+QualityParams qualityParams(double w)
+{
+  QualityParams p;
+  p.direction_bins = 8;
+  p.redundancy_penalty = w;
+  return p;
+}
+
+// Sum of L over the five cells (-2..2, 0) around a single point in cell (0, 0), sigma = 1 cell.
+const double kRowSum = 1.0 + 2.0 * std::exp(-0.5) + 2.0 * std::exp(-2.0);
+}  // namespace
+
+TEST(DirectionBin, UndirectedEightBins)
+{
+  const double pi = linemap::kPi;
+  EXPECT_EQ(directionBin(0.0, 8), 0);
+  EXPECT_EQ(directionBin(pi, 8), 0);  // the same wall walked the other way
+  EXPECT_EQ(directionBin(-pi, 8), 0);
+  EXPECT_EQ(directionBin(pi / 2, 8), 4);
+  EXPECT_EQ(directionBin(-pi / 2, 8), 4);
+  EXPECT_EQ(directionBin(0.3, 8), 0);    // 17 degrees
+  EXPECT_EQ(directionBin(0.5, 8), 1);    // 29 degrees
+  EXPECT_EQ(directionBin(-0.01, 8), 7);  // 179.4 degrees
+  EXPECT_EQ(directionBin(3.0 * pi / 4 - 0.01, 8), 5);
+  EXPECT_EQ(directionBin(1.0, 1), 0);
+}
+
+TEST(MapQuality, SingleSegmentOverOnePointInClosedForm)
+{
+  const LookupTable t = LookupTable::build({Vec2(0.025, 0.025)}, tableParams());
+  // Cells x = -2..2 (x from -1.5 to 2.5 cells) of row 0: L = e^-2, e^-1/2, 1, e^-1/2, e^-2.
+  const std::vector<Segment2> map = {Segment2(Vec2(-0.075, 0.025), Vec2(0.125, 0.025))};
+  const QualityResult r = computeMapQuality(t, map, qualityParams(1.0));
+  EXPECT_EQ(r.pixel_count, 5u);
+  EXPECT_EQ(r.redundant_pixels, 0u);
+  EXPECT_NEAR(r.nonredundant_sum, kRowSum, 1e-6);
+  EXPECT_NEAR(r.quality, 100.0 * kRowSum / 5.0, 1e-4);
+}
+
+TEST(MapQuality, ReversedDuplicateIsRedundantAndPenalised)
+{
+  const LookupTable t = LookupTable::build({Vec2(0.025, 0.025)}, tableParams());
+  const Segment2 s(Vec2(-0.075, 0.025), Vec2(0.125, 0.025));
+  const std::vector<Segment2> map = {s, Segment2(s.end, s.start)};
+  // w = 0.5: q = 100 (S - 0.5 S) / 10.
+  const QualityResult r = computeMapQuality(t, map, qualityParams(0.5));
+  EXPECT_EQ(r.pixel_count, 10u);
+  EXPECT_EQ(r.redundant_pixels, 5u);
+  EXPECT_NEAR(r.redundant_sum, kRowSum, 1e-6);
+  EXPECT_NEAR(r.quality, 100.0 * 0.5 * kRowSum / 10.0, 1e-4);
+  // w = 1 cancels the duplicate completely; w = 0 only dilutes by N.
+  EXPECT_NEAR(computeMapQuality(t, map, qualityParams(1.0)).quality, 0.0, 1e-9);
+  EXPECT_NEAR(computeMapQuality(t, map, qualityParams(0.0)).quality, 100.0 * kRowSum / 10.0, 1e-4);
+}
+
+TEST(MapQuality, CrossingSegmentOfOtherDirectionIsNotRedundant)
+{
+  const LookupTable t = LookupTable::build({Vec2(0.025, 0.025)}, tableParams());
+  const std::vector<Segment2> map = {Segment2(Vec2(-0.075, 0.025), Vec2(0.125, 0.025)),
+                                     Segment2(Vec2(0.025, -0.075), Vec2(0.025, 0.125))};
+  const QualityResult r = computeMapQuality(t, map, qualityParams(1.0));
+  EXPECT_EQ(r.pixel_count, 10u);
+  EXPECT_EQ(r.redundant_pixels, 0u);  // they share cell (0, 0) but not the direction bin
+  EXPECT_NEAR(r.quality, 100.0 * 2.0 * kRowSum / 10.0, 1e-4);
+}
+
+TEST(MapQuality, EmptyMapAndBadInput)
+{
+  const LookupTable t = LookupTable::build({Vec2(0.0, 0.0)}, tableParams());
+  const QualityResult r = computeMapQuality(t, {}, qualityParams(1.0));
+  EXPECT_EQ(r.pixel_count, 0u);
+  EXPECT_EQ(r.quality, 0.0);
+  const std::vector<Segment2> bad = {Segment2(Vec2(0, 0), Vec2(std::nan(""), 1.0))};
+  EXPECT_THROW(computeMapQuality(t, bad, qualityParams(1.0)), std::invalid_argument);
+  QualityParams p = qualityParams(1.0);
+  p.direction_bins = 0;
+  EXPECT_THROW(computeMapQuality(t, {}, p), linemap::ParameterError);
+  linemap::ParamSet ps;
+  ps.set("eval/redundancy_penalty", "-1");
+  EXPECT_THROW(QualityParams::fromParams(ps), linemap::ParameterError);
+}
+
+namespace
+{
+// A 8 m x 6 m room with a 2 m inner wall, the corner off the grid lines.
+std::vector<Segment2> room()
+{
+  const Vec2 a(0.31, 0.17), b(8.31, 0.17), c(8.31, 6.17), d(0.31, 6.17);
+  return {Segment2(a, b), Segment2(b, c), Segment2(c, d), Segment2(d, a),
+          Segment2(Vec2(4.31, 0.17), Vec2(4.31, 2.17))};
+}
+
+// Points every 1.5 cm on every wall, 5 mm Gaussian noise across the wall.
+std::vector<Vec2> sampleWalls(const std::vector<Segment2>& walls)
+{
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  std::vector<Vec2> pts;
+  for (const Segment2& w : walls)
+  {
+    const Vec2 dir = (w.end - w.start).normalized();
+    const Vec2 normal(-dir.y(), dir.x());
+    const int n = static_cast<int>(w.length() / 0.015);
+    for (int i = 0; i <= n; ++i) pts.push_back(w.start + (i * 0.015) * dir + noise(rng) * normal);
+  }
+  return pts;
+}
+
+std::vector<Segment2> transformed(const std::vector<Segment2>& map, const linemap::Pose2& p)
+{
+  std::vector<Segment2> out;
+  for (const Segment2& s : map) out.push_back(s.transformed(p));
+  return out;
+}
+}  // namespace
+
+TEST(MapQuality, TrueWallsScoreHigherThanShiftedRotatedOrDuplicatedMaps)
+{
+  const std::vector<Segment2> walls = room();
+  const LookupTable t = LookupTable::build(sampleWalls(walls), tableParams());
+  const QualityParams qp = qualityParams(1.0);
+  const QualityResult truth = computeMapQuality(t, walls, qp);
+  // Every wall cell holds a point (or is next to one at 1/4 of a cell noise): q close to 100 %.
+  EXPECT_GT(truth.quality, 90.0);
+  EXPECT_EQ(truth.redundant_pixels, 0u);
+
+  // Shifted 0.1 m = 2 sigma across the vertical walls: their pixels drop to about e^-2.
+  const QualityResult shifted = computeMapQuality(t, transformed(walls, linemap::Pose2(0.1, 0.0, 0.0)), qp);
+  EXPECT_LT(shifted.quality, truth.quality - 20.0);
+  const QualityResult shifted_xy =
+      computeMapQuality(t, transformed(walls, linemap::Pose2(0.07, 0.07, 0.0)), qp);
+  EXPECT_LT(shifted_xy.quality, truth.quality - 20.0);
+
+  // Rotated 2 degrees about the room centre: up to 0.14 m off at the ends of the long walls.
+  const Vec2 centre(4.31, 3.17);
+  const linemap::Pose2 to_centre(centre.x(), centre.y(), 0.0);
+  const linemap::Pose2 rot =
+      to_centre * linemap::Pose2(0, 0, 2.0 * linemap::kPi / 180.0) * to_centre.inverse();
+  const QualityResult rotated = computeMapQuality(t, transformed(walls, rot), qp);
+  EXPECT_LT(rotated.quality, truth.quality - 20.0);
+
+  // Every segment twice: all N pixels of the copy are redundant and cancel the original's.
+  std::vector<Segment2> doubled = walls;
+  doubled.insert(doubled.end(), walls.begin(), walls.end());
+  const QualityResult dup = computeMapQuality(t, doubled, qp);
+  EXPECT_EQ(dup.pixel_count, 2 * truth.pixel_count);
+  EXPECT_EQ(dup.redundant_pixels, truth.pixel_count);
+  EXPECT_NEAR(dup.quality, 0.0, 1e-9);
+  // With a milder penalty it still loses: q_dup = (1 - w) / 2 * q_true.
+  const QualityResult dup_half = computeMapQuality(t, doubled, qualityParams(0.5));
+  EXPECT_NEAR(dup_half.quality, 0.25 * truth.quality, 1e-6);
+}
