@@ -112,6 +112,9 @@ void writeBag(const Recording& rec, const std::string& path, const BagWriterOpti
     auto header = boost::make_shared<ros::M_string>();
     (*header)["callerid"] = "/carmen_to_bag";
     (*header)["latching"] = "1";
+    (*header)["type"] = ros::message_traits::datatype<tf2_msgs::TFMessage>();
+    (*header)["md5sum"] = ros::message_traits::md5sum<tf2_msgs::TFMessage>();
+    (*header)["message_definition"] = ros::message_traits::definition<tf2_msgs::TFMessage>();
     bag.write("/tf_static", t0, static_tf, header);
 
     sensor_msgs::LaserScan scan;
