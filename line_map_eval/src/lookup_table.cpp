@@ -133,7 +133,7 @@ void appendWorldPoints(const linemap::Pose2& laser_pose, const std::vector<Vec2>
                        std::vector<Vec2>& out)
 {
   const double c = std::cos(laser_pose.theta), s = std::sin(laser_pose.theta);
-  out.reserve(out.size() + laser_points.size());
+  // No exact reserve here: called once per scan, it would defeat the vector's geometric growth.
   for (const Vec2& p : laser_points)
     out.emplace_back(c * p.x() - s * p.y() + laser_pose.x, s * p.x() + c * p.y() + laser_pose.y);
 }
@@ -142,6 +142,7 @@ std::vector<Vec2> registeredScanPoints(const Recording& recording)
 {
   const ScanGeometry& g = recording.geometry;
   std::vector<Vec2> out;
+  out.reserve(recording.keyframes.size() * g.beam_count);
   std::vector<Vec2> local;
   for (const CorrectedKeyframe& kf : recording.keyframes)
   {
