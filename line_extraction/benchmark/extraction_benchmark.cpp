@@ -73,8 +73,7 @@ struct Options
   double min_seconds = 0.5;
   std::size_t min_scans = 1000;
   int repetitions = 3;
-  std::size_t truth_min_beams = 10;
-  double truth_min_length = 0.6;
+  line_extraction::TruthRule truth_rule;
   linemap::ParamSet params;
 };
 
@@ -167,7 +166,7 @@ void loadTruth(Dataset& d, const Options& o)
     const std::vector<double> pose = field<std::vector<double>>(s, "pose", file);
     if (pose.size() != 3)
       throw std::runtime_error(file + ": 'pose' of scan " + std::to_string(i) + " needs 3 values");
-    const linemap::Pose2 map_to_laser = linemap::Pose2(pose[0], pose[1], pose[2]).inverse();
+    const linemap::Pose2 laser_pose(pose[0], pose[1], pose[2]);
     const YAML::Node visible = s["visible"];
     if (!visible) continue;
     for (const YAML::Node& v : visible)
@@ -176,12 +175,10 @@ void loadTruth(Dataset& d, const Options& o)
       if (seg.size() != 4)
         throw std::runtime_error(file + ":" + std::to_string(v.Mark().line + 1) +
                                  ": 'segment' needs 4 values");
-      const linemap::Segment2 piece =
-          linemap::Segment2({seg[0], seg[1]}, {seg[2], seg[3]}).transformed(map_to_laser);
+      const linemap::Segment2 piece({seg[0], seg[1]}, {seg[2], seg[3]});
       TrueLine t;
-      t.line = linemap::hessianFromPoints(piece.start, piece.end);
-      t.counted =
-          field<std::size_t>(v, "beams", file) >= o.truth_min_beams && piece.length() >= o.truth_min_length;
+      t.line = line_extraction::lineInLaserFrame(laser_pose, piece);
+      t.counted = o.truth_rule.counts(field<std::size_t>(v, "beams", file), piece.length());
       d.truth[i].push_back(t);
     }
   }
@@ -283,7 +280,8 @@ void writeJson(const std::vector<Row>& rows, const Options& o)
   f.precision(9);
   f << "{\n  \"format\": \"linemap_extraction_benchmark/1\",\n  \"settings\": {\"min_seconds\": "
     << o.min_seconds << ", \"min_scans\": " << o.min_scans << ", \"repetitions\": " << o.repetitions
-    << ", \"truth_min_beams\": " << o.truth_min_beams << ", \"truth_min_length\": " << o.truth_min_length
+    << ", \"truth_min_beams\": " << o.truth_rule.min_beams
+    << ", \"truth_min_length\": " << o.truth_rule.min_length
     << ", \"matching\": {\"sigma_radius\": 0.03, \"sigma_angle\": 0.03, \"gate\": 2.77}},\n  \"datasets\": [";
   for (std::size_t i = 0; i < o.datasets.size(); ++i)
   {
@@ -407,9 +405,9 @@ Options parseArgs(int argc, char** argv)
     else if (a == "--repetitions")
       o.repetitions = std::max(1, static_cast<int>(number(a, v)));
     else if (a == "--truth-min-beams")
-      o.truth_min_beams = static_cast<std::size_t>(number(a, v));
+      o.truth_rule.min_beams = static_cast<std::size_t>(number(a, v));
     else if (a == "--truth-min-length")
-      o.truth_min_length = number(a, v);
+      o.truth_rule.min_length = number(a, v);
     else if (a == "--param")
     {
       const auto kv = splitPair(v, a);

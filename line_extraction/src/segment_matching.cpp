@@ -56,6 +56,12 @@ std::vector<LineMatch> matchLines(const std::vector<linemap::HessianLine>& extra
   return matches;
 }
 
+linemap::HessianLine lineInLaserFrame(const linemap::Pose2& laser_pose, const linemap::Segment2& piece)
+{
+  const linemap::Segment2 local = piece.transformed(laser_pose.inverse());
+  return linemap::hessianFromPoints(local.start, local.end);
+}
+
 void MatchStatistics::add(std::size_t extracted_count, std::size_t truth_count,
                           const std::vector<LineMatch>& matches, const std::vector<bool>& counted)
 {

@@ -99,3 +99,23 @@ TEST(SegmentMatching, StatisticsCountRatesAndSpread)
   EXPECT_EQ(empty.truePositiveRate(), 0.0);
   EXPECT_EQ(empty.falsePositiveRate(), 0.0);
 }
+
+TEST(SegmentMatching, TrueLineInTheLaserFrame)
+{
+  // Wall y = 3 (x from 0 to 4); laser at (1, 1) facing +y: the wall is 2 m straight ahead,
+  // i.e. the line x = 2 of the laser frame (normal angle 0).
+  const HessianLine l =
+      lineInLaserFrame(linemap::Pose2(1.0, 1.0, kPi / 2.0), linemap::Segment2({0.0, 3.0}, {4.0, 3.0}));
+  EXPECT_NEAR(l.radius, 2.0, 1e-12);
+  EXPECT_NEAR(l.angle, 0.0, 1e-12);
+  // Facing -x instead: the wall is on the laser's right (-y axis), normal angle -pi/2.
+  const HessianLine r =
+      lineInLaserFrame(linemap::Pose2(1.0, 1.0, kPi), linemap::Segment2({0.0, 3.0}, {4.0, 3.0}));
+  EXPECT_NEAR(r.radius, 2.0, 1e-12);
+  EXPECT_NEAR(r.angle, -kPi / 2.0, 1e-12);
+
+  const TruthRule rule;
+  EXPECT_TRUE(rule.counts(10, 0.6));
+  EXPECT_FALSE(rule.counts(9, 5.0));
+  EXPECT_FALSE(rule.counts(50, 0.59));
+}

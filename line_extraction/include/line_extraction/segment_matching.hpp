@@ -39,6 +39,19 @@ std::vector<LineMatch> matchLines(const std::vector<linemap::HessianLine>& extra
                                   const std::vector<linemap::HessianLine>& truth,
                                   const MatchingOptions& options = MatchingOptions());
 
+/// The line of a map-frame wall piece as a laser at `laser_pose` (map frame) sees it.
+linemap::HessianLine lineInLaserFrame(const linemap::Pose2& laser_pose, const linemap::Segment2& piece);
+
+/// Which true wall pieces an extractor is required to find: those hit by at least
+/// min_beams beams and at least min_length long (the strictest output minimum of
+/// the extractors, srg's 10 points and 0.6 m, so that every extractor is judged alike).
+struct TruthRule
+{
+  std::size_t min_beams = 10;
+  double min_length = 0.6;  ///< [m]
+  bool counts(std::size_t beams, double length) const { return beams >= min_beams && length >= min_length; }
+};
+
 /// Detection statistics accumulated over many scans.
 /// TruePos = matched counted true lines / counted true lines; FalsePos =
 /// (extracted - matched) / extracted. A true line that is not counted (e.g.
