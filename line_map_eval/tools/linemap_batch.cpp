@@ -11,6 +11,7 @@
 
 #include "line_map_eval/bag_reader.hpp"
 #include "line_map_eval/batch.hpp"
+#include "line_map_eval/ground_truth.hpp"
 #include "line_map_eval/progress.hpp"
 #include "line_map_eval/report.hpp"
 #include "line_map_merging/merger.hpp"
@@ -202,6 +203,9 @@ int main(int argc, char** argv)
       const bool trajectory = !bag.recording.keyframes.empty();
       dataset = datasetFromRecording(std::move(bag.recording), stem(dataset_path),
                                      trajectory ? "bag+trajectory" : "bag");
+      // A simulated bag carries its ground truth next to it (simulate_world writes OUT.truth.yaml).
+      const std::string truth = truthPathForBag(dataset_path);
+      if (fs::exists(truth)) dataset.truth = readGroundTruth(truth);
     }
     else
       dataset = loadCarmenRegistered(dataset_path);
