@@ -222,6 +222,15 @@ std::string toJson(const BatchResult& result)
   number(out, result.extraction_ms);
   key(out, "table_ms");
   number(out, result.table_ms);
+  // The whole evaluation of one map: the shared table plus that map's quality, error and statistics.
+  key(out, "map_evaluation_ms");
+  out << YAML::BeginMap;
+  for (const auto& r : result.mergers)
+  {
+    out << YAML::Key << r.name << YAML::Value;
+    number(out, result.table_ms + r.evaluation_ms);
+  }
+  out << YAML::EndMap;
   key(out, "parameters");
   out << YAML::BeginMap;
   for (const auto& [k, v] : result.parameters.values())
