@@ -5,6 +5,8 @@
 #include <cmath>
 #include <string>
 
+#include "line_extraction/isolated_points.hpp"
+
 namespace line_extraction
 {
 namespace
@@ -30,6 +32,7 @@ PipelineParams PipelineParams::fromParams(const linemap::ParamSet& ps)
     bad("breakpoint_lambda", "must be in (0, pi/2) rad");
   p.breakpoint.min_points = ps.getInt("cluster_min_points", p.breakpoint.min_points);
   if (p.breakpoint.min_points < 1) bad("cluster_min_points", "must be >= 1");
+  p.remove_isolated = ps.getBool("remove_isolated", p.remove_isolated);
   p.merge = ps.getBool("merge", p.merge);
   p.merge_params.range_sigma = p.range_sigma;
   p.merge_params.gate = ps.getDouble("merge_gate", p.merge_params.gate);
@@ -58,6 +61,7 @@ const ExtractionResult& LineExtractor::extract(const ScanInput& scan)
   merged_.clear();
   clusters_.clear();
   preprocessor_.prepare(scan, prepared_);
+  if (params_.remove_isolated) removeIsolatedPoints(prepared_, params_.breakpoint);
   const PointRange all{0, static_cast<int>(prepared_.size())};
   if (all.size() < 2) return result_;
 

@@ -21,6 +21,7 @@ struct PipelineParams
   double range_sigma = 0.01;  ///< point noise for covariances and breakpoints [m]
   double max_usable_range = 30.0;
   BreakpointParams breakpoint;
+  bool remove_isolated = false;  ///< drop lone readings between two neighbours of one surface
   bool merge = true;
   /// Merge gate 2.77, largest bridged gap 0.5 m (a doorway stays open).
   CollinearMergeParams merge_params{2.77, 0.01, 0.5};
