@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <boost/iostreams/copy.hpp>
 #include <boost/iostreams/filter/bzip2.hpp>
 #include <boost/iostreams/filter/gzip.hpp>
@@ -14,6 +15,7 @@
 
 #include "line_map_eval/carmen_log.hpp"
 #include "line_map_eval/carmen_recording.hpp"
+#include "line_map_eval/progress.hpp"
 
 using namespace line_map_eval;
 
@@ -243,6 +245,21 @@ TEST(CarmenLog, PlainGzipAndBzip2GiveIdenticalRecords)
   const CarmenLog gz = readCarmenLog(dir.file("b.clf", compress(text, true)));
   const CarmenLog bz = readCarmenLog(dir.file("c.log", compress(text, false)));
   ASSERT_GT(plain.scans.size(), 500u);
+  // Truncated compressed files are errors naming the file, not silently shorter logs.
+  for (const bool gzip : {true, false})
+  {
+    const std::string packed = compress(text, gzip);
+    const std::string cut = dir.file(gzip ? "cut.gz" : "cut.bz2", packed.substr(0, packed.size() / 2));
+    try
+    {
+      readCarmenLog(cut);
+      ADD_FAILURE() << "truncated " << (gzip ? "gzip" : "bzip2") << " accepted";
+    }
+    catch (const std::runtime_error& e)
+    {
+      EXPECT_NE(std::string(e.what()).find(cut), std::string::npos) << e.what();
+    }
+  }
   for (const CarmenLog* other : {&gz, &bz})
   {
     ASSERT_EQ(other->scans.size(), plain.scans.size());
@@ -419,4 +436,33 @@ TEST(CarmenRecording, IntelRecording)
   EXPECT_EQ(prefix.scans.size(), 1000u);
   for (const CorrectedKeyframe& kf : prefix.keyframes) EXPECT_LT(kf.scan_index, 1000u);
   EXPECT_EQ(prefix.geometry.range_max, rec.geometry.range_max);
+}
+
+TEST(ProgressBar, SilentUnlessFinishedWhenNotATerminal)
+{
+  std::ostringstream log, tty, off;
+  {
+    ProgressBar bar("convert", 10, true, log, false);
+    for (std::size_t i = 1; i <= 10; ++i) bar.update(i);
+    EXPECT_EQ(log.str(), "");
+    bar.finish();
+    bar.finish();
+  }
+  EXPECT_EQ(log.str().rfind("convert [" + std::string(30, '#') + "] 10/10 100%", 0), 0u) << log.str();
+  const std::string printed = log.str();
+  EXPECT_EQ(std::count(printed.begin(), printed.end(), '\n'), 1);
+  {
+    ProgressBar bar("convert", 4, true, tty, true);
+    bar.update(2);
+    bar.update(4);
+    bar.finish();
+  }
+  EXPECT_NE(tty.str().find('\r'), std::string::npos);
+  EXPECT_NE(tty.str().find("4/4"), std::string::npos);
+  {
+    ProgressBar bar("convert", 4, false, off, true);
+    bar.update(4);
+    bar.finish();
+  }
+  EXPECT_EQ(off.str(), "");
 }
