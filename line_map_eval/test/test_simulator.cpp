@@ -364,9 +364,15 @@ TEST(GroundTruth, HandComputedVisiblePieces)
   EXPECT_NEAR((vis[2].segment.start - Vec2(x34, 4)).norm(), 0, 1e-9);
   EXPECT_NEAR((vis[2].segment.end - Vec2(1, 4)).norm(), 0, 1e-9);
 
-  // A higher threshold drops nothing here, one above the largest count drops all.
-  EXPECT_EQ(visibleWallPieces(walls, pose, laser.angleMin(), laser.angleIncrement(), wall, range, 68).size(),
-            0u);
+  // The threshold is inclusive: 57 keeps the three walls, 58 only the 67-beam one, 68 none.
+  const auto count = [&](std::size_t min_beams)
+  {
+    return visibleWallPieces(walls, pose, laser.angleMin(), laser.angleIncrement(), wall, range, min_beams)
+        .size();
+  };
+  EXPECT_EQ(count(57), 3u);
+  EXPECT_EQ(count(58), 1u);
+  EXPECT_EQ(count(68), 0u);
 }
 
 TEST(GroundTruth, FileRoundTripAndPiecesOnTheirWalls)
