@@ -3,8 +3,10 @@
 // reports, figures and map files.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -214,6 +216,12 @@ int main(int argc, char** argv)
     std::cout << result.dataset << " (" << result.kind << "), extractor " << result.extractor << ", "
               << result.keyframes << " keyframes of " << result.candidate_scans << " candidates\n"
               << formatTable(result);
+    double slowest_evaluation = 0.0;
+    for (const auto& r : result.mergers) slowest_evaluation = std::max(slowest_evaluation, r.evaluation_ms);
+    std::cout << std::fixed << std::setprecision(1) << "extraction " << result.extraction_ms
+              << " ms; lookup table of " << result.scan_points << " scan points " << result.table_ms
+              << " ms; evaluation of one map <= " << result.table_ms + slowest_evaluation
+              << " ms (table included)\n";
     writeReports(result, out_dir);
     std::cout << "wrote " << (fs::path(out_dir) / "report.json").string() << ", "
               << (fs::path(out_dir) / "report.md").string() << " and the figures under " << out_dir << "/\n";
