@@ -39,10 +39,13 @@ void CaeRlsm::updateTransforms()
 void CaeRlsm::refuse(Node& node) const
 {
   // Two passes over the leaves: the moments fix the line, then the endpoints fix its extent.
+  thread_local std::vector<Segment2> world;
+  world.clear();
+  for (std::uint32_t l : node.leaves) world.push_back(worldLeaf(l));
   FusionMoments moments;
-  for (std::uint32_t l : node.leaves) moments.add(worldLeaf(l));
+  for (const Segment2& s : world) moments.add(s);
   FusedLine line(moments);
-  for (std::uint32_t l : node.leaves) line.include(worldLeaf(l));
+  for (const Segment2& s : world) line.include(s);
   node.moments = moments;
   node.segment = line.segment();
 }
