@@ -1,0 +1,277 @@
+// mergers_benchmark: every merger of line_map_merging (makeMerger names) on the simulated worlds
+// (every scan a keyframe at its TRUE laser pose) and on the Intel corrected keyframes (GMapping
+// poses), segments extracted with the default extractor (srg). One row per dataset and method: map
+// segments, shortest/longest/mean segment length, total runtime (all addKeyframe calls + map()) and,
+// for the online methods, the per-keyframe addKeyframe time (median and maximum). Median over --runs
+// runs. Prints a table and writes JSON. Targets: every method <= 1 s on Intel, online ones <= 20 ms
+// per keyframe.
+//
+//   rosrun line_map_eval mergers_benchmark [--intel PATH] [--worlds DIR] [--json PATH] [--runs N]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "line_extraction/line_extractor.hpp"
+#include "line_map_eval/carmen_log.hpp"
+#include "line_map_eval/simulator.hpp"
+#include "line_map_eval/world.hpp"
+#include "line_map_merging/merger.hpp"
+
+namespace
+{
+using Clock = std::chrono::steady_clock;
+using line_map_merging::Keyframe;
+
+double millis(Clock::time_point a, Clock::time_point b)
+{
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+double median(std::vector<double> v)
+{
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  return v[(v.size() - 1) / 2];
+}
+
+struct Dataset
+{
+  std::string name;
+  std::vector<Keyframe> keyframes;
+  std::size_t segments = 0;
+};
+
+Keyframe extractKeyframe(line_extraction::LineExtractor& extractor, const std::vector<float>& ranges,
+                         const line_map_eval::ScanGeometry& g, std::size_t index, double stamp,
+                         const linemap::Pose2& laser_pose)
+{
+  line_extraction::ScanInput input;
+  input.ranges = ranges.data();
+  input.count = ranges.size();
+  input.angle_min = g.angle_min;
+  input.angle_increment = g.angle_increment;
+  input.range_min = g.range_min;
+  input.range_max = g.range_max;
+  Keyframe k;
+  k.index = index;
+  k.stamp = stamp;
+  k.pose = laser_pose;
+  for (const auto& s : extractor.extract(input).segments) k.segments.emplace_back(s.start, s.end);
+  return k;
+}
+
+Dataset simulated(const std::string& path)
+{
+  const auto sim = line_map_eval::simulate(line_map_eval::loadWorld(path));
+  Dataset d;
+  d.name = "sim:" + sim.world.name;
+  line_extraction::LineExtractor extractor{linemap::ParamSet()};
+  for (std::size_t i = 0; i < sim.recording.scans.size(); ++i)
+    d.keyframes.push_back(extractKeyframe(extractor, sim.recording.scans[i].ranges, sim.recording.geometry, i,
+                                          sim.recording.scans[i].stamp, sim.truth.scans[i].pose));
+  return d;
+}
+
+Dataset intel(const std::string& path)
+{
+  const auto log = line_map_eval::readCarmenLog(path);
+  if (log.scans.empty()) throw std::runtime_error(path + ": no scans");
+  Dataset d;
+  d.name = "intel-corrected";
+  line_extraction::LineExtractor extractor{linemap::ParamSet()};
+  for (std::size_t i = 0; i < log.scans.size(); ++i)
+  {
+    const auto& scan = log.scans[i];
+    // Intel writes no-return readings as 81.83 m (datasets README).
+    const auto g = line_map_eval::carmenBeamGeometry(scan.ranges.size(), 81.83);
+    d.keyframes.push_back(extractKeyframe(extractor, scan.ranges, g, i, scan.timestamp, scan.laser_pose));
+  }
+  return d;
+}
+
+struct Row
+{
+  std::string dataset, method;
+  bool online = false;
+  std::size_t keyframes = 0, leaves = 0, segments = 0;
+  double shortest = 0.0, longest = 0.0, mean = 0.0;
+  double total_ms = 0.0;
+  double frame_median_ms = std::nan(""), frame_max_ms = std::nan("");
+};
+
+Row measure(const Dataset& d, const std::string& method, int runs)
+{
+  Row row;
+  row.dataset = d.name;
+  row.method = method;
+  std::vector<double> totals, medians, maxima;
+  for (int r = 0; r < runs; ++r)
+  {
+    auto merger = line_map_merging::makeMerger(method, linemap::ParamSet());
+    std::vector<double> frames;
+    frames.reserve(d.keyframes.size());
+    const auto t0 = Clock::now();
+    for (const Keyframe& k : d.keyframes)
+    {
+      const auto a = Clock::now();
+      merger->addKeyframe(k);
+      frames.push_back(millis(a, Clock::now()));
+    }
+    const auto map = merger->map();
+    totals.push_back(millis(t0, Clock::now()));
+    medians.push_back(median(frames));
+    maxima.push_back(*std::max_element(frames.begin(), frames.end()));
+    if (r == 0)
+    {
+      // Offline methods only store in addKeyframe: the map is their work.
+      row.online = method == "cae" || method == "oto";
+      row.keyframes = merger->keyframeCount();
+      row.leaves = merger->leafCount();
+      row.segments = map.size();
+      double sum = 0.0;
+      row.shortest = map.empty() ? 0.0 : std::numeric_limits<double>::infinity();
+      for (const auto& m : map)
+      {
+        const double l = m.segment.length();
+        row.shortest = std::min(row.shortest, l);
+        row.longest = std::max(row.longest, l);
+        sum += l;
+      }
+      row.mean = map.empty() ? 0.0 : sum / static_cast<double>(map.size());
+    }
+  }
+  row.total_ms = median(totals);
+  if (row.online)
+  {
+    row.frame_median_ms = median(medians);
+    row.frame_max_ms = median(maxima);
+  }
+  return row;
+}
+
+std::string jsonNumber(double v)
+{
+  if (!std::isfinite(v)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  // Defaults relative to this file: line_map_eval/benchmark/ -> repository root and the shared datasets.
+  const std::string here = __FILE__;
+  const std::string root = here.substr(0, here.rfind('/')) + "/../..";
+  std::string intel_path = root + "/../shared/datasets/intel-corrected.log.gz";
+  std::string worlds = root + "/config/worlds";
+  std::string json = "mergers_benchmark.json";
+  int runs = 3;
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string
+    {
+      if (i + 1 >= argc)
+      {
+        std::fprintf(stderr, "mergers_benchmark: %s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--intel")
+      intel_path = value();
+    else if (a == "--worlds")
+      worlds = value();
+    else if (a == "--json")
+      json = value();
+    else if (a == "--runs")
+      runs = std::max(1, std::atoi(value().c_str()));
+    else
+    {
+      std::fprintf(stderr,
+                   "usage: mergers_benchmark [--intel PATH] [--worlds DIR] [--json PATH] [--runs N]\n");
+      return a == "--help" ? 0 : 2;
+    }
+  }
+
+  std::vector<Dataset> datasets;
+  for (const char* w : {"square_room", "loop", "office"})
+  {
+    try
+    {
+      datasets.push_back(simulated(worlds + "/" + w + ".yaml"));
+    }
+    catch (const std::exception& e)
+    {
+      std::fprintf(stderr, "mergers_benchmark: world %s skipped: %s\n", w, e.what());
+    }
+  }
+  try
+  {
+    datasets.push_back(intel(intel_path));
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "mergers_benchmark: Intel skipped: %s\n", e.what());
+  }
+  if (datasets.empty())
+  {
+    std::fprintf(stderr, "mergers_benchmark: no dataset could be read\n");
+    return 1;
+  }
+
+  std::vector<Row> rows;
+  try
+  {
+    for (const Dataset& d : datasets)
+      for (const std::string& m : line_map_merging::mergerNames()) rows.push_back(measure(d, m, runs));
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "mergers_benchmark: %s\n", e.what());
+    return 1;
+  }
+
+  std::printf("%-18s %-12s %6s %7s %8s %8s %8s %8s %10s %11s %10s\n", "dataset", "method", "kf", "leaves",
+              "segments", "min [m]", "max [m]", "mean [m]", "total [ms]", "frame med", "frame max");
+  for (const Row& r : rows)
+  {
+    std::printf("%-18s %-12s %6zu %7zu %8zu %8.3f %8.3f %8.3f %10.2f", r.dataset.c_str(), r.method.c_str(),
+                r.keyframes, r.leaves, r.segments, r.shortest, r.longest, r.mean, r.total_ms);
+    if (r.online)
+      std::printf(" %11.4f %10.4f\n", r.frame_median_ms, r.frame_max_ms);
+    else
+      std::printf(" %11s %10s\n", "-", "-");
+  }
+
+  std::ofstream out(json);
+  out << "{\n  \"runs\": " << runs << ",\n  \"rows\": [\n";
+  for (std::size_t i = 0; i < rows.size(); ++i)
+  {
+    const Row& r = rows[i];
+    out << "    {\"dataset\": \"" << r.dataset << "\", \"method\": \"" << r.method
+        << "\", \"online\": " << (r.online ? "true" : "false") << ", \"keyframes\": " << r.keyframes
+        << ", \"leaves\": " << r.leaves << ", \"segments\": " << r.segments
+        << ", \"shortest_m\": " << jsonNumber(r.shortest) << ", \"longest_m\": " << jsonNumber(r.longest)
+        << ", \"mean_m\": " << jsonNumber(r.mean) << ", \"total_ms\": " << jsonNumber(r.total_ms)
+        << ", \"frame_median_ms\": " << jsonNumber(r.frame_median_ms)
+        << ", \"frame_max_ms\": " << jsonNumber(r.frame_max_ms) << "}" << (i + 1 < rows.size() ? "," : "")
+        << "\n";
+  }
+  out << "  ]\n}\n";
+  if (!out)
+  {
+    std::fprintf(stderr, "mergers_benchmark: cannot write %s\n", json.c_str());
+    return 1;
+  }
+  std::printf("JSON: %s\n", json.c_str());
+  return 0;
+}
