@@ -2,14 +2,16 @@
 // consecutive points; the fidelity between neighbouring windows is the Mahalanobis
 // distance of their (radius, angle) with the summed covariances. Runs of windows
 // whose neighbours agree are clustered into one line (its points are the union of
-// the windows), the clusters' shared points go to the nearer line, and collinear
-// neighbours are merged.
+// the windows), clusters that drifted are split at their farthest point, shared
+// points go to the nearer line, and collinear neighbours are merged.
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <vector>
 
 #include "line_extraction/collinear_merge.hpp"
 #include "line_extraction/extractor_registry.hpp"
+#include "line_extraction/iepf.hpp"
 #include "line_extraction/line_fit.hpp"
 #include "line_extraction/param_checks.hpp"
 
@@ -33,6 +35,9 @@ class LineRegression : public Extractor
         min_windows_(intParamAtLeast(ps, "line_regression/min_windows", 2, 1)),
         max_gap_(positiveParam(ps, "line_regression/max_gap", 0.3)),
         range_sigma_(rangeSigmaParam(ps)),
+        max_distance_(positiveParam(ps, "line_regression/max_distance", 0.05)),
+        residual_limit_(positiveParam(ps, "line_regression/residual_gate", 15.09) * range_sigma_ *
+                        range_sigma_),
         merger_(mergeParams(ps))
   {
   }
@@ -56,7 +61,10 @@ class LineRegression : public Extractor
       const int b = range.begin + w, e = b + window_;
       if (w > 0 && (scan.points[e - 1] - scan.points[e - 2]).squaredNorm() > max_gap2) last_gap = e - 1;
       const LineFit fit = fitLine(prefix_.sums(b, e), range_sigma_);
-      valid_[w] = fit.valid && last_gap <= b;
+      // A window whose residuals are beyond the noise (a spike, a corner) is no
+      // line: without this test the windows sharing one spike agree with each
+      // other and carry it into a segment.
+      valid_[w] = fit.valid && last_gap <= b && fit.sum_squared_residuals <= residual_limit_;
       Segment& s = windows_[w];
       s.angle = fit.angle;
       s.radius = fit.radius;
@@ -74,11 +82,17 @@ class LineRegression : public Extractor
         clusters_.push_back({range.begin + run_start, range.begin + (w - 1) + window_});
       run_start = (w < count && valid_[w]) ? w : -1;
     }
-    resolveOverlaps(scan, clusters_);
-    lines_.clear();
+    // Neighbouring windows agree along a gentle curve or a shallow corner too, so
+    // a cluster can drift; each is split (end-point fit) where a point is farther
+    // than max_distance from its chord.
+    pieces_.clear();
     for (const PointRange& c : clusters_)
+      splitter_.split(scan, c, max_distance_, std::numeric_limits<double>::infinity(), pieces_);
+    resolveOverlaps(scan, pieces_, &prefix_);
+    lines_.clear();
+    for (const PointRange& c : pieces_)
     {
-      if (c.size() < 2) continue;
+      if (c.size() < window_) continue;
       const LineFit fit = fitLine(prefix_.sums(c.begin, c.end), range_sigma_);
       if (fit.valid) appendSegment(scan, fit, c, lines_);
     }
@@ -90,11 +104,14 @@ class LineRegression : public Extractor
   double threshold_;
   int min_windows_;
   double max_gap_, range_sigma_;
+  double max_distance_;    ///< of a point from its cluster's chord [m]
+  double residual_limit_;  ///< largest sum of squared residuals of a window [m^2]
   CollinearMerger merger_;
   PrefixSums prefix_;
   std::vector<Segment> windows_;
   std::vector<unsigned char> valid_;
-  std::vector<PointRange> clusters_;
+  std::vector<PointRange> clusters_, pieces_;
+  IepfSplitter splitter_;
   ExtractionResult lines_;
 };
 

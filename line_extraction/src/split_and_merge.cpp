@@ -66,8 +66,7 @@ class SplitAndMerge : public Extractor
       if (p.size() < min_points_) continue;  // trimming only shrinks
       trimEnds(scan, p);
       if (p.size() < min_points_) continue;
-      const LineFit fit = fitLine(prefix_.sums(p.begin, p.end), range_sigma_);
-      if (fit.valid) appendSegment(scan, fit, p, out);
+      appendInliers(scan, p, out);
     }
   }
 
@@ -107,6 +106,30 @@ class SplitAndMerge : public Extractor
       else
         --p.end;
     }
+  }
+
+  /// Fits the piece without the lone points the pair rule let through (a single
+  /// spike never splits, but it must not pull the line either).
+  void appendInliers(const PreparedScan& scan, PointRange p, ExtractionResult& out)
+  {
+    LineNormal line;
+    LineSums sums = prefix_.sums(p.begin, p.end);
+    if (!fitNormal(sums, line)) return;
+    members_.clear();
+    for (int k = p.begin; k < p.end; ++k)
+    {
+      if (line.distance(scan.points[k]) <= threshold_)
+        members_.push_back(k);
+      else
+        sums.remove(scan.points[k]);
+    }
+    if (static_cast<int>(members_.size()) < min_points_) return;
+    const LineFit fit = fitLine(sums, range_sigma_);
+    if (!fit.valid) return;
+    if (static_cast<int>(members_.size()) == p.size())
+      appendSegment(scan, fit, p, out);
+    else
+      appendSegment(scan, fit, members_.data(), static_cast<int>(members_.size()), out);
   }
 
   /// True when [begin, end) was itself split: two sibling pieces never merge back
@@ -157,6 +180,7 @@ class SplitAndMerge : public Extractor
   double max_gap_, range_sigma_;
   PrefixSums prefix_;
   std::vector<PointRange> stack_, pieces_, merged_, split_parents_;
+  std::vector<int> members_;
 };
 
 std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)
