@@ -74,12 +74,20 @@ class CheckExtraction(unittest.TestCase):
             subs.append(rospy.Subscriber(ns + "/line_segments_markers", MarkerArray, markers[ns].append))
         pub = rospy.Publisher("scan", LaserScan, queue_size=1)
         stamp = rospy.Time(1234, 567000000)
+        # Interleaved unusable scans (zero angle_increment) are skipped with a warning.
+        bad = room_scan(rospy.Time(999, 0))
+        bad.angle_increment = 0.0
         deadline = rospy.get_time() + 30.0
         while rospy.get_time() < deadline and not rospy.is_shutdown():
             if all(received[ns] and markers[ns] for ns in namespaces):
                 break
+            pub.publish(bad)
+            rospy.sleep(0.1)
             pub.publish(room_scan(stamp))
-            rospy.sleep(0.2)
+            rospy.sleep(0.1)
+        for ns in namespaces:
+            for msg in received[ns]:
+                self.assertEqual(msg.header.stamp, stamp, "%s answered an unusable scan" % ns)
         return stamp, received, markers
 
     def test_segments_of_a_square_room(self):
