@@ -1,0 +1,86 @@
+// The online evaluator behind the evaluator nodelet (ROS-free): keeps the registered
+// keyframe scans and original segments, re-registers them when an optimised trajectory
+// arrives, and scores a line map against them.
+#pragma once
+
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+#include "line_extraction/params.hpp"
+#include "line_map_eval/error_metric.hpp"
+#include "line_map_eval/lookup_table.hpp"
+#include "line_map_eval/map_quality.hpp"
+#include "line_map_eval/map_statistics.hpp"
+#include "line_map_merging/fusion.hpp"
+#include "line_map_merging/keyframe_gate.hpp"
+
+namespace line_map_eval
+{
+struct EvaluatorParams
+{
+  line_map_merging::KeyframeGateParams gate;
+  double stamp_tolerance = 0.05;  ///< [s] trajectory pose <-> stored frame matching
+  LookupTableParams table;
+  QualityParams quality;
+  line_map_merging::FusionParams fusion;  ///< assigns originals to map segments for the error metric
+
+  /// Keys "keyframe_distance", "keyframe_angle", "stamp_tolerance", "eval/...", "fusion/...".
+  static EvaluatorParams fromParams(const linemap::ParamSet& params);
+};
+
+struct MapMetrics
+{
+  QualityResult quality;
+  ErrorMetricResult error;
+  MapStatistics statistics;
+};
+
+class MapEvaluator
+{
+ public:
+  explicit MapEvaluator(const EvaluatorParams& params);
+
+  /// Stores a scan's valid points (laser frame) taken at `laser_pose` (laser in map) when the
+  /// keyframe gate admits it; returns whether it was stored.
+  bool addScan(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Vec2> points);
+  /// Stores the original segments (laser frame) of a scan, gated like the scans.
+  bool addSegments(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Segment2> segments);
+
+  /// Re-registers every stored frame: `laser_poses` are (stamp, new laser pose) pairs; frames
+  /// matched by stamp take their pose, the others the interpolated correction of their matched
+  /// neighbours. Returns how many trajectory poses matched no stored frame.
+  std::size_t applyTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses);
+
+  /// Scores `map` (map frame); rebuilds the lookup table first when frames changed.
+  MapMetrics evaluate(const std::vector<linemap::Segment2>& map);
+  /// The lookup table of the last evaluate() (empty before).
+  const LookupTable& table() const { return table_; }
+
+  std::size_t scanCount() const { return scans_.size(); }
+  std::size_t originalCount() const;
+  void reset();
+
+ private:
+  struct Frame
+  {
+    double stamp = 0.0;
+    linemap::Pose2 pose;
+    std::vector<linemap::Vec2> points;
+    std::vector<linemap::Segment2> segments;
+  };
+  static std::size_t reregister(std::vector<Frame>& frames,
+                                const std::vector<std::pair<double, linemap::Pose2>>& laser_poses,
+                                double tolerance);
+
+  EvaluatorParams params_;
+  line_map_merging::KeyframeGate scan_gate_;
+  line_map_merging::KeyframeGate segment_gate_;
+  std::vector<Frame> scans_;
+  std::vector<Frame> segments_;
+  LookupTable table_;
+  bool table_dirty_ = true;
+};
+
+}  // namespace line_map_eval

@@ -1,0 +1,114 @@
+#include "line_map_eval/map_evaluator.hpp"
+
+#include <algorithm>
+#include <map>
+
+#include "line_map_merging/trajectory_correction.hpp"
+
+namespace line_map_eval
+{
+EvaluatorParams EvaluatorParams::fromParams(const linemap::ParamSet& params)
+{
+  EvaluatorParams p;
+  p.gate = line_map_merging::KeyframeGateParams::fromParams(params);
+  p.stamp_tolerance = params.getDouble("stamp_tolerance", p.stamp_tolerance);
+  if (!(p.stamp_tolerance >= 0.0)) throw linemap::ParameterError("parameter 'stamp_tolerance' must be >= 0");
+  p.table = LookupTableParams::fromParams(params);
+  p.quality = QualityParams::fromParams(params);
+  p.fusion = line_map_merging::FusionParams::fromParams(params);
+  return p;
+}
+
+MapEvaluator::MapEvaluator(const EvaluatorParams& params)
+    : params_(params), scan_gate_(params.gate), segment_gate_(params.gate)
+{
+}
+
+bool MapEvaluator::addScan(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Vec2> points)
+{
+  if (!scan_gate_.accept(laser_pose)) return false;
+  scans_.push_back({stamp, laser_pose, std::move(points), {}});
+  table_dirty_ = true;
+  return true;
+}
+
+bool MapEvaluator::addSegments(double stamp, const linemap::Pose2& laser_pose,
+                               std::vector<linemap::Segment2> segments)
+{
+  if (!segment_gate_.accept(laser_pose)) return false;
+  segments_.push_back({stamp, laser_pose, {}, std::move(segments)});
+  return true;
+}
+
+std::size_t MapEvaluator::reregister(std::vector<Frame>& frames,
+                                     const std::vector<std::pair<double, linemap::Pose2>>& laser_poses,
+                                     double tolerance)
+{
+  // Frames are appended in arrival order; stamps may repeat after a bag restart, so sort a view.
+  std::vector<line_map_merging::KeyframeInfo> infos(frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) infos[i] = {i, frames[i].stamp, frames[i].pose, {}};
+  std::stable_sort(infos.begin(), infos.end(),
+                   [](const auto& a, const auto& b) { return a.stamp < b.stamp; });
+  std::map<std::uint64_t, linemap::Pose2> matched;
+  std::size_t unmatched = 0;
+  for (const auto& [stamp, pose] : laser_poses)
+  {
+    const auto k = line_map_merging::matchByStamp(infos, stamp, tolerance);
+    if (k)
+      matched[infos[*k].index] = pose;
+    else
+      ++unmatched;
+  }
+  for (const auto& [index, pose] : line_map_merging::correctKeyframes(infos, matched))
+    frames[index].pose = pose;
+  return unmatched;
+}
+
+std::size_t MapEvaluator::applyTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses)
+{
+  const std::size_t unmatched = reregister(scans_, laser_poses, params_.stamp_tolerance);
+  reregister(segments_, laser_poses, params_.stamp_tolerance);
+  table_dirty_ = true;
+  return unmatched;
+}
+
+MapMetrics MapEvaluator::evaluate(const std::vector<linemap::Segment2>& map)
+{
+  if (table_dirty_)
+  {
+    std::vector<linemap::Vec2> world;
+    for (const Frame& f : scans_) appendWorldPoints(f.pose, f.points, world);
+    table_ = LookupTable::build(world, params_.table);
+    table_dirty_ = false;
+  }
+  std::vector<linemap::Segment2> originals;
+  for (const Frame& f : segments_)
+    for (const linemap::Segment2& s : f.segments) originals.push_back(s.transformed(f.pose));
+
+  MapMetrics m;
+  m.quality = computeMapQuality(table_, map, params_.quality);
+  // The map message carries no provenance: each original goes to the nearest map segment that
+  // meets the fusion conditions with it.
+  m.error = computeErrorMetric(originals, assignToMapSegments(originals, map, params_.fusion), map);
+  m.statistics = computeMapStatistics(map, originals.size());
+  return m;
+}
+
+std::size_t MapEvaluator::originalCount() const
+{
+  std::size_t n = 0;
+  for (const Frame& f : segments_) n += f.segments.size();
+  return n;
+}
+
+void MapEvaluator::reset()
+{
+  scans_.clear();
+  segments_.clear();
+  scan_gate_ = line_map_merging::KeyframeGate(params_.gate);
+  segment_gate_ = line_map_merging::KeyframeGate(params_.gate);
+  table_ = LookupTable();
+  table_dirty_ = true;
+}
+
+}  // namespace line_map_eval
