@@ -29,9 +29,12 @@ void QualityParams::validate() const
 
 int directionBin(double heading, int bins)
 {
-  double h = std::fmod(heading, linemap::kPi);
+  // Shift by half a bin so that bin 0 is centred on 0: axis-aligned walls (the common case
+  // indoors) sit in the middle of a bin, and a wall at +0.1 deg and its copy at -0.1 deg share it.
+  const double width = linemap::kPi / bins;
+  double h = std::fmod(heading + 0.5 * width, linemap::kPi);
   if (h < 0.0) h += linemap::kPi;
-  const int b = static_cast<int>(h / linemap::kPi * bins);
+  const int b = static_cast<int>(h / width);
   return std::clamp(b, 0, bins - 1);  // h may round up to pi
 }
 

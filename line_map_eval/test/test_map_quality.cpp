@@ -38,18 +38,23 @@ QualityParams qualityParams(double w)
 const double kRowSum = 1.0 + 2.0 * std::exp(-0.5) + 2.0 * std::exp(-2.0);
 }  // namespace
 
-TEST(DirectionBin, UndirectedEightBins)
+TEST(DirectionBin, UndirectedEightBinsCentredOnTheAxes)
 {
-  const double pi = linemap::kPi;
+  // Bins of 22.5 deg centred on 0, 22.5, 45, ... deg: bin 0 = [-11.25, 11.25) deg.
+  const double pi = linemap::kPi, deg = pi / 180.0;
   EXPECT_EQ(directionBin(0.0, 8), 0);
   EXPECT_EQ(directionBin(pi, 8), 0);  // the same wall walked the other way
   EXPECT_EQ(directionBin(-pi, 8), 0);
+  EXPECT_EQ(directionBin(-0.5 * deg, 8), 0);  // a hair below horizontal stays with horizontal
+  EXPECT_EQ(directionBin(pi - 0.5 * deg, 8), 0);
+  EXPECT_EQ(directionBin(11.0 * deg, 8), 0);
+  EXPECT_EQ(directionBin(-11.0 * deg, 8), 0);
+  EXPECT_EQ(directionBin(12.0 * deg, 8), 1);
+  EXPECT_EQ(directionBin(-12.0 * deg, 8), 7);
   EXPECT_EQ(directionBin(pi / 2, 8), 4);
   EXPECT_EQ(directionBin(-pi / 2, 8), 4);
-  EXPECT_EQ(directionBin(0.3, 8), 0);    // 17 degrees
-  EXPECT_EQ(directionBin(0.5, 8), 1);    // 29 degrees
-  EXPECT_EQ(directionBin(-0.01, 8), 7);  // 179.4 degrees
-  EXPECT_EQ(directionBin(3.0 * pi / 4 - 0.01, 8), 5);
+  EXPECT_EQ(directionBin(3.0 * pi / 4, 8), 6);
+  EXPECT_EQ(directionBin(-pi / 4, 8), 6);
   EXPECT_EQ(directionBin(1.0, 1), 0);
 }
 
@@ -79,6 +84,18 @@ TEST(MapQuality, ReversedDuplicateIsRedundantAndPenalised)
   // w = 1 cancels the duplicate completely; w = 0 only dilutes by N.
   EXPECT_NEAR(computeMapQuality(t, map, qualityParams(1.0)).quality, 0.0, 1e-9);
   EXPECT_NEAR(computeMapQuality(t, map, qualityParams(0.0)).quality, 100.0 * kRowSum / 10.0, 1e-4);
+}
+
+TEST(MapQuality, CopyTiltedToTheOtherSideOfHorizontalIsStillRedundant)
+{
+  const LookupTable t = LookupTable::build({Vec2(0.025, 0.025)}, tableParams());
+  // Headings +0.57 and -0.57 deg, both within row 0 over cells -2..2.
+  const std::vector<Segment2> map = {Segment2(Vec2(-0.075, 0.024), Vec2(0.125, 0.026)),
+                                     Segment2(Vec2(-0.075, 0.026), Vec2(0.125, 0.024))};
+  const QualityResult r = computeMapQuality(t, map, qualityParams(1.0));
+  EXPECT_EQ(r.pixel_count, 10u);
+  EXPECT_EQ(r.redundant_pixels, 5u);
+  EXPECT_NEAR(r.quality, 0.0, 1e-9);
 }
 
 TEST(MapQuality, CrossingSegmentOfOtherDirectionIsNotRedundant)

@@ -30,8 +30,9 @@ struct QualityResult
   double redundant_sum = 0.0;        ///< sum of L over the redundant pixels (before w)
 };
 
-/// Undirected direction bin of a heading: heading mod pi in [0, pi), split into `bins`
-/// equal bins, so a wall drawn in either direction falls into the same bin.
+/// Undirected direction bin of a heading: headings modulo pi in `bins` equal bins, bin k
+/// centred on k * pi / bins (bin 0 = [-pi/2bins, pi/2bins)), so a wall drawn in either
+/// direction falls into the same bin and axis-aligned walls lie in the middle of theirs.
 int directionBin(double heading, int bins);
 
 /// q = 100 / N * (sum over non-redundant pixels of L(p) - w * sum over redundant pixels of L(p)).
