@@ -1,44 +1,81 @@
 #!/usr/bin/env bash
-# `make demo`: builds, simulates the embedded default world, converts the Intel log
-# when ../shared/datasets is present, and writes everything under output/.
-# DATASET=intel runs the Intel part only; WORLD=config/worlds/<name>.yaml picks another world.
+# `make demo`: builds, simulates the embedded default world (the office, with odometry drift and
+# the true trajectory as the loop closure), plays it through launch/demo.launch headless and
+# faster than real time, saves the map through ~save_map, and compares every merger on the same
+# bag with linemap_batch. Results go to output/demo/.
+#   DATASET=intel  the same on ../shared/datasets (raw Intel log, odometry poses, corrected
+#                  trajectory as the loop closures) into output/intel/
+#   WORLD=config/worlds/loop.yaml  another simulated world
+#   RATE=20        playback rate of the bag
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 "$(dirname "$0")/build.sh" >/dev/null
 linemap_source_devel
 cd "$LINEMAP_ROOT"
 
-out="$LINEMAP_ROOT/output"
-world="${WORLD:-config/worlds/office.yaml}"
-datasets="$LINEMAP_ROOT/../shared/datasets"
 dataset="${DATASET:-sim}"
-mkdir -p "$out/demo"
+rate="${RATE:-20}"
+datasets="$LINEMAP_ROOT/../shared/datasets"
 
-written=()
-if [ "$dataset" = "sim" ]; then
-  name="$(basename "$world" .yaml)"
-  bag="$out/demo/$name.bag"
-  if [ ! -f "$bag" ] || [ "$world" -nt "$bag" ]; then
-    rosrun line_map_eval simulate_world "$world" "$bag" --seed 1
-  fi
-  written+=("$bag" "${bag%.bag}.truth.yaml")
-fi
-
-if [ -d "$datasets" ]; then
-  mkdir -p "$out/intel"
-  bag="$out/intel/intel.bag"
+if [ "$dataset" = "intel" ]; then
+  for f in intel.clf.bz2 intel-corrected.log.gz; do
+    [ -f "$datasets/$f" ] || { echo "demo: DATASET=intel needs $datasets/$f (missing)" >&2; exit 1; }
+  done
+  out="$LINEMAP_ROOT/output/intel"
+  bag="$out/intel.bag"
+  mkdir -p "$out"
   if [ ! -f "$bag" ]; then
     rosrun line_map_eval carmen_to_bag "$datasets/intel.clf.bz2" "$bag" \
       --corrected "$datasets/intel-corrected.log.gz" --every 50
   fi
-  written+=("$bag")
-elif [ "$dataset" = "intel" ]; then
-  echo "demo: DATASET=intel needs $datasets (missing)" >&2
-  exit 1
+  batch_input=("$datasets/intel.clf.bz2" --corrected "$datasets/intel-corrected.log.gz")
+else
+  world="${WORLD:-config/worlds/office.yaml}"
+  name="$(basename "$world" .yaml)"
+  out="$LINEMAP_ROOT/output/demo"
+  bag="$out/$name.bag"
+  mkdir -p "$out"
+  if [ ! -f "$bag" ] || [ "$world" -nt "$bag" ]; then
+    rosrun line_map_eval simulate_world "$world" "$bag" --seed 1
+  fi
+  batch_input=("$bag")
 fi
 
+# 1. The nodelet pipeline on the bag, as a user would run it.
+echo "demo: playing $(basename "$bag") through launch/replay.launch at ${rate}x"
+log="$out/roslaunch.log"
+roslaunch "$LINEMAP_ROOT/launch/replay.launch" bag:="$bag" rate:="$rate" output:=log >"$log" 2>&1 &
+launch_pid=$!
+stop_ros() {
+  kill -TERM "$launch_pid" 2>/dev/null || true
+  wait "$launch_pid" 2>/dev/null || true
+}
+trap stop_ros EXIT
+# Wait for the player to start and then to finish the bag.
+for _ in $(seq 1 120); do rosnode list 2>/dev/null | grep -q '^/player$' && break; sleep 0.5; done
+while rosnode list 2>/dev/null | grep -q '^/player$'; do sleep 1; done
+sleep 2
+map_file="$out/map.yaml"
+if rosservice call /line_map_merging/save_map "path: '$map_file'" >"$out/save_map.log" 2>&1; then
+  echo "demo: saved the nodelet's map to ${map_file#$LINEMAP_ROOT/}"
+else
+  echo "demo: ~save_map failed (see $out/save_map.log)" >&2
+fi
+rostopic echo -n 1 /map_quality >"$out/map_quality.txt" 2>/dev/null &
+echo_pid=$!
+sleep 3
+kill "$echo_pid" 2>/dev/null || true
+stop_ros
+trap - EXIT
+
+# 2. Every merger on the same data, with figures and the comparison table.
 echo
-echo "demo: wrote"
-for f in "${written[@]}"; do
-  printf '  %s (%s)\n' "${f#$LINEMAP_ROOT/}" "$(du -h "$f" | cut -f1)"
-done
+rosrun line_map_eval linemap_batch "${batch_input[@]}" --out "$out/batch"
+
+echo
+echo "demo: results in ${out#$LINEMAP_ROOT/}/"
+if [ -s "$out/map_quality.txt" ]; then
+  echo "  nodelet pipeline: $(grep -E '^(quality|segment_count):' "$out/map_quality.txt" | tr '\n' ' ')"
+fi
+echo "  ${out#$LINEMAP_ROOT/}/batch/report.md     comparison table (also report.json)"
+echo "  ${out#$LINEMAP_ROOT/}/batch/<merger>/map.{svg,pdf,png}   figures"
