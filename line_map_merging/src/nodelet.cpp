@@ -27,6 +27,7 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <string>
 
+#include "line_map_merging/keyframe_gate.hpp"
 #include "line_map_merging/merger.hpp"
 #include "line_map_merging/trajectory_correction.hpp"
 
@@ -76,7 +77,8 @@ bool yawOf(const geometry_msgs::Quaternion& q, double& yaw)
 bool poseOf(const geometry_msgs::Transform& t, linemap::Pose2& pose)
 {
   double yaw = 0.0;
-  if (!yawOf(t.rotation, yaw) || !std::isfinite(t.translation.x) || !std::isfinite(t.translation.y)) return false;
+  if (!yawOf(t.rotation, yaw) || !std::isfinite(t.translation.x) || !std::isfinite(t.translation.y))
+    return false;
   pose = linemap::Pose2(t.translation.x, t.translation.y, yaw);
   return true;
 }
@@ -89,13 +91,13 @@ double msSince(std::chrono::steady_clock::time_point t0)
 
 class LineMapMergingNodelet : public nodelet::Nodelet
 {
-public:
+ public:
   ~LineMapMergingNodelet() override
   {
     if (filter_) filter_->clear();
   }
 
-private:
+ private:
   using SegmentsFilter = tf2_ros::MessageFilter<line_map_msgs::LineSegmentArray>;
 
   void onInit() override
@@ -105,8 +107,6 @@ private:
     method_ = pnh.param<std::string>("method", "cae");
     map_frame_ = pnh.param<std::string>("map_frame", "map");
     base_frame_ = pnh.param<std::string>("base_frame", "base_link");
-    keyframe_distance_ = pnh.param("keyframe_distance", 0.2);
-    keyframe_angle_ = pnh.param("keyframe_angle", 10.0 * linemap::kPi / 180.0);
     stamp_tolerance_ = pnh.param("stamp_tolerance", 0.01);
     tf_timeout_ = pnh.param("tf_timeout", 0.5);
     publish_labels_ = pnh.param("publish_labels", false);
@@ -119,6 +119,7 @@ private:
     try
     {
       merger_ = makeMerger(method_, params);
+      gate_ = KeyframeGate(KeyframeGateParams::fromParams(params));
     }
     catch (const std::exception& e)
     {
@@ -133,8 +134,7 @@ private:
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
     segments_sub_.subscribe(nh, "line_segments", queue_size);
     filter_ = std::make_unique<SegmentsFilter>(segments_sub_, *tf_buffer_, map_frame_, queue_size, nh);
-    filter_->registerCallback(
-        boost::bind(&LineMapMergingNodelet::onSegments, this, boost::placeholders::_1));
+    filter_->registerCallback(boost::bind(&LineMapMergingNodelet::onSegments, this, boost::placeholders::_1));
     filter_->registerFailureCallback(boost::bind(&LineMapMergingNodelet::onTfFailure, this,
                                                  boost::placeholders::_1, boost::placeholders::_2));
     trajectory_sub_ = nh.subscribe("optimized_trajectory", 2, &LineMapMergingNodelet::onTrajectory, this);
@@ -145,19 +145,23 @@ private:
     diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
     diagnostics_->setHardwareID("none");
     diagnostics_->add("line map merging", this, &LineMapMergingNodelet::produceDiagnostics);
-    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      diagnostics_->update();
-    });
-    NODELET_INFO("line_map_merging: method '%s' in frame '%s', keyframe gate %.2f m / %.1f deg", method_.c_str(),
-                 map_frame_.c_str(), keyframe_distance_, keyframe_angle_ * 180.0 / linemap::kPi);
+    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0),
+                                     [this](const ros::WallTimerEvent&)
+                                     {
+                                       std::lock_guard<std::mutex> lock(mutex_);
+                                       diagnostics_->update();
+                                     });
+    NODELET_INFO("line_map_merging: method '%s' in frame '%s', keyframe gate %.2f m / %.1f deg",
+                 method_.c_str(), map_frame_.c_str(), gate_.params().distance,
+                 gate_.params().angle * 180.0 / linemap::kPi);
   }
 
   void onTfFailure(const line_map_msgs::LineSegmentArray::ConstPtr& msg, tf2_ros::FilterFailureReason reason)
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++dropped_scans_;
-    NODELET_WARN_THROTTLE(5.0, "line_map_merging: dropped segments at %.3f: no transform %s -> %s (reason %d)",
+    NODELET_WARN_THROTTLE(5.0,
+                          "line_map_merging: dropped segments at %.3f: no transform %s -> %s (reason %d)",
                           msg->header.stamp.toSec(), map_frame_.c_str(), msg->header.frame_id.c_str(),
                           static_cast<int>(reason));
   }
@@ -195,22 +199,23 @@ private:
     {
       try
       {
-        if (!poseOf(tf_buffer_->lookupTransform(base_frame_, msg->header.frame_id, msg->header.stamp).transform,
-                    mount))
+        if (!poseOf(
+                tf_buffer_->lookupTransform(base_frame_, msg->header.frame_id, msg->header.stamp).transform,
+                mount))
           mount = linemap::Pose2();
       }
       catch (const tf2::TransformException& e)
       {
         // Without base -> laser the trajectory is applied to the laser pose directly.
-        NODELET_WARN_THROTTLE(30.0, "line_map_merging: no %s -> %s transform (%s); taking them as the same frame",
+        NODELET_WARN_THROTTLE(30.0,
+                              "line_map_merging: no %s -> %s transform (%s); taking them as the same frame",
                               base_frame_.c_str(), msg->header.frame_id.c_str(), e.what());
       }
     }
 
     // Keyframe gate on the robot (base) pose.
     const linemap::Pose2 base = laser * mount.inverse();
-    if (have_last_ && std::hypot(base.x - last_base_.x, base.y - last_base_.y) < keyframe_distance_ &&
-        std::abs(linemap::normalizeAngle(base.theta - last_base_.theta)) < keyframe_angle_)
+    if (!gate_.wouldAccept(base))
     {
       ++gated_scans_;
       return;
@@ -238,12 +243,12 @@ private:
     }
     last_otm_ms_ = msSince(t0);
     ++next_index_;
-    last_base_ = base;
-    have_last_ = true;
+    gate_.accept(base);
     if (result.rejected > 0)
     {
       bad_segments_ += result.rejected;
-      NODELET_WARN_THROTTLE(5.0, "line_map_merging: %zu non-finite or zero-length segments skipped (%zu so far)",
+      NODELET_WARN_THROTTLE(5.0,
+                            "line_map_merging: %zu non-finite or zero-length segments skipped (%zu so far)",
                             result.rejected, bad_segments_);
     }
     publish(msg->header.stamp);
@@ -261,7 +266,8 @@ private:
     if (!path->header.frame_id.empty() && path->header.frame_id != map_frame_)
     {
       ++bad_trajectories_;
-      NODELET_WARN_THROTTLE(5.0, "line_map_merging: optimized_trajectory in frame '%s', expected '%s'; ignored",
+      NODELET_WARN_THROTTLE(5.0,
+                            "line_map_merging: optimized_trajectory in frame '%s', expected '%s'; ignored",
                             path->header.frame_id.c_str(), map_frame_.c_str());
       return;
     }
@@ -273,7 +279,8 @@ private:
     for (const auto& p : path->poses)
     {
       double yaw = 0.0;
-      if (!yawOf(p.pose.orientation, yaw) || !std::isfinite(p.pose.position.x) || !std::isfinite(p.pose.position.y))
+      if (!yawOf(p.pose.orientation, yaw) || !std::isfinite(p.pose.position.x) ||
+          !std::isfinite(p.pose.position.y))
       {
         ++invalid;
         continue;
@@ -285,16 +292,20 @@ private:
         continue;
       }
       // The trajectory holds base poses; the merger keeps laser poses.
-      matched[keyframes[*k].index] = linemap::Pose2(p.pose.position.x, p.pose.position.y, yaw) * keyframes[*k].mount;
+      matched[keyframes[*k].index] =
+          linemap::Pose2(p.pose.position.x, p.pose.position.y, yaw) * keyframes[*k].mount;
     }
     unmatched_poses_ += unmatched;
     bad_poses_ += invalid;
     if (invalid > 0)
-      NODELET_WARN_THROTTLE(5.0, "line_map_merging: %zu trajectory poses with a non-normalised quaternion or "
-                                 "non-finite position ignored", invalid);
+      NODELET_WARN_THROTTLE(5.0,
+                            "line_map_merging: %zu trajectory poses with a non-normalised quaternion or "
+                            "non-finite position ignored",
+                            invalid);
     if (unmatched > 0)
-      NODELET_INFO_THROTTLE(5.0, "line_map_merging: %zu of %zu trajectory poses match no keyframe (tolerance %.3f s)",
-                            unmatched, path->poses.size(), stamp_tolerance_);
+      NODELET_INFO_THROTTLE(
+          5.0, "line_map_merging: %zu of %zu trajectory poses match no keyframe (tolerance %.3f s)",
+          unmatched, path->poses.size(), stamp_tolerance_);
     const auto poses = correctKeyframes(keyframes, matched);
     if (poses.empty()) return;
     const auto t0 = std::chrono::steady_clock::now();
@@ -302,8 +313,14 @@ private:
     {
       const AdjustResult r = merger_->adjust(poses);
       last_gma_ms_ = msSince(t0);
-      NODELET_DEBUG("line_map_merging: adjusted %zu keyframes (%zu matched) in %.1f ms; %zu leaves split, %zu merged",
-                    r.moved, matched.size(), last_gma_ms_, r.split, r.merged);
+      // The gate measures motion from the last keyframe where it now is.
+      const auto last = std::max_element(poses.begin(), poses.end(),
+                                         [](const auto& a, const auto& b) { return a.first < b.first; });
+      for (const KeyframeInfo& k : keyframes)
+        if (k.index == last->first) gate_.setReference(last->second * k.mount.inverse());
+      NODELET_DEBUG(
+          "line_map_merging: adjusted %zu keyframes (%zu matched) in %.1f ms; %zu leaves split, %zu merged",
+          r.moved, matched.size(), last_gma_ms_, r.split, r.merged);
     }
     catch (const std::exception& e)
     {
@@ -346,7 +363,7 @@ private:
     }
     next_index_ = 0;
     for (const KeyframeInfo& k : merger_->keyframes()) next_index_ = std::max(next_index_, k.index + 1);
-    have_last_ = false;
+    gate_.reset();
     res.success = true;
     res.message = "loaded " + std::to_string(merger_->segmentCount()) + " segments, " +
                   std::to_string(merger_->keyframeCount()) + " keyframes from " + req.path;
@@ -359,7 +376,7 @@ private:
     std::lock_guard<std::mutex> lock(mutex_);
     merger_->reset();
     next_index_ = 0;
-    have_last_ = false;
+    gate_.reset();
     res.success = true;
     res.message = "map cleared";
     publish(ros::Time::now());
@@ -402,7 +419,8 @@ private:
     clear.action = visualization_msgs::Marker::DELETEALL;
     array.markers.push_back(clear);
 
-    auto make = [&](const std::string& ns, int type, float r, float g, float b, double scale) {
+    auto make = [&](const std::string& ns, int type, float r, float g, float b, double scale)
+    {
       visualization_msgs::Marker m;
       m.header = map.header;
       m.ns = ns;
@@ -418,7 +436,8 @@ private:
       return m;
     };
     auto lines = make("segments", visualization_msgs::Marker::LINE_LIST, 0.1f, 0.3f, 1.0f, marker_width_);
-    auto starts = make("start_points", visualization_msgs::Marker::POINTS, 1.0f, 0.0f, 0.0f, 2.0 * marker_width_);
+    auto starts =
+        make("start_points", visualization_msgs::Marker::POINTS, 1.0f, 0.0f, 0.0f, 2.0 * marker_width_);
     auto ends = make("end_points", visualization_msgs::Marker::POINTS, 0.0f, 0.8f, 0.0f, 2.0 * marker_width_);
     for (const auto& s : map.segments)
     {
@@ -473,7 +492,8 @@ private:
   std::mutex mutex_;
   std::unique_ptr<Merger> merger_;
   std::string method_, map_frame_, base_frame_;
-  double keyframe_distance_ = 0.2, keyframe_angle_ = 0.1745, stamp_tolerance_ = 0.01, tf_timeout_ = 0.5;
+  double stamp_tolerance_ = 0.01, tf_timeout_ = 0.5;
+  KeyframeGate gate_;
   bool publish_labels_ = false;
   double marker_width_ = 0.03;
 
@@ -488,8 +508,6 @@ private:
   ros::WallTimer diag_timer_;
 
   std::uint64_t next_index_ = 0;
-  linemap::Pose2 last_base_;
-  bool have_last_ = false;
   double last_otm_ms_ = 0.0, last_gma_ms_ = 0.0;
   std::size_t dropped_scans_ = 0, gated_scans_ = 0, bad_segments_ = 0, bad_poses_ = 0, unmatched_poses_ = 0,
               bad_trajectories_ = 0, adjustments_ = 0;
