@@ -55,7 +55,6 @@ class Fields
   Fields(const char* type, const std::vector<std::string_view>& tokens) : type_(type), tokens_(tokens) {}
 
   std::size_t remaining() const { return tokens_.size() - pos_; }
-  std::size_t position() const { return pos_; }  // 1-based index of the next field after the type - 1
 
   double number(const char* what)
   {
@@ -99,7 +98,7 @@ class Fields
  private:
   const char* type_;
   const std::vector<std::string_view>& tokens_;
-  std::size_t pos_ = 1;  // token 0 is the message type
+  std::size_t pos_ = 1;  // token 0 is the message type; field numbers in messages are 1-based
 };
 
 constexpr std::size_t kMaxBeams = 100000;
