@@ -97,6 +97,7 @@ void CaeRlsm::reset()
   leaves_.clear();
   nodes_.clear();
   index_.clear();
+  index_stale_ = false;
   next_id_ = 0;
 }
 

@@ -80,6 +80,7 @@ std::vector<std::uint32_t> CaeRlsm::splitInconsistentLeaves(Node& node) const
 
 void CaeRlsm::rebuildIndex()
 {
+  index_stale_ = false;
   if (!params_.spatial_index) return;
   std::vector<Entry> entries;
   entries.reserve(nodes_.size());
@@ -121,7 +122,7 @@ std::size_t CaeRlsm::mergeConsistentSegments()
     indexInsert(candidates.front(), target);
     // The merged segment and its neighbours may now meet the conditions with more segments.
     pending.insert(candidates.front());
-    if (params_.spatial_index)
+    if (params_.spatial_index && !index_stale_)
     {
       std::vector<Entry> near;
       index_.query(bgi::intersects(target.box), std::back_inserter(near));
@@ -141,26 +142,56 @@ AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap:
   for (const auto& [index, pose] : poses)
     if (!(std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.theta)))
       throw std::invalid_argument("adjust: pose of keyframe " + std::to_string(index) + " is not finite");
-  for (const auto& [index, pose] : poses)
+  tbb::task_arena arena(params_.threads > 0 ? params_.threads : tbb::task_arena::automatic);
+
+  // Hash lookups and sines are a good part of the work for 1e5+ keyframes: done in parallel too.
+  constexpr std::uint32_t kUnknown = UINT32_MAX;
+  std::vector<std::uint32_t> slots(poses.size());
+  arena.execute(
+      [&]
+      {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, poses.size(), 1024),
+                          [&](const tbb::blocked_range<std::size_t>& r)
+                          {
+                            for (std::size_t i = r.begin(); i != r.end(); ++i)
+                            {
+                              auto it = slot_of_.find(poses[i].first);
+                              slots[i] = it == slot_of_.end() ? kUnknown : it->second;
+                            }
+                          });
+      });
+  for (std::size_t i = 0; i < poses.size(); ++i)
   {
-    auto it = slot_of_.find(index);
-    if (it == slot_of_.end())
+    if (slots[i] == kUnknown)
     {
       ++result.unknown;
       continue;
     }
-    keyframes_[it->second].pose = {pose.x, pose.y, linemap::normalizeAngle(pose.theta)};
+    const linemap::Pose2& pose = poses[i].second;
+    keyframes_[slots[i]].pose = {pose.x, pose.y, linemap::normalizeAngle(pose.theta)};
     ++result.moved;
   }
   if (result.moved == 0) return result;
-  updateTransforms();
+  arena.execute(
+      [&]
+      {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keyframes_.size(), 1024),
+                          [&](const tbb::blocked_range<std::size_t>& r)
+                          {
+                            for (std::size_t i = r.begin(); i != r.end(); ++i)
+                            {
+                              const linemap::Pose2& p = keyframes_[i].pose;
+                              const double c = std::cos(p.theta), s = std::sin(p.theta);
+                              transforms_[i] << c, -s, p.x, s, c, p.y;
+                            }
+                          });
+      });
 
   std::vector<Node*> nodes;
   nodes.reserve(nodes_.size());
   for (auto& entry : nodes_) nodes.push_back(&entry.second);
   std::vector<std::vector<std::uint32_t>> split(params_.consistent_adjustment ? nodes.size() : 0);
 
-  tbb::task_arena arena(params_.threads > 0 ? params_.threads : tbb::task_arena::automatic);
   arena.execute(
       [&]
       {
@@ -175,7 +206,8 @@ AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap:
                             }
                           });
       });
-  rebuildIndex();
+  // Every box moved: the index is rebuilt in one go (bulk loading) when next searched.
+  index_stale_ = true;
   if (!params_.consistent_adjustment) return result;
 
   // Split leaves re-enter in their original (chronological) order, through OTM-ILSM.

@@ -18,23 +18,23 @@ CaeRlsm::Box CaeRlsm::paddedBox(const Segment2& s) const
 
 void CaeRlsm::indexInsert(std::uint64_t id, Node& node)
 {
-  if (!params_.spatial_index) return;
+  if (!params_.spatial_index || index_stale_) return;
   node.box = paddedBox(node.segment);
   index_.insert(Entry(node.box, id));
 }
 
 void CaeRlsm::indexRemove(std::uint64_t id, const Node& node)
 {
-  if (!params_.spatial_index) return;
+  if (!params_.spatial_index || index_stale_) return;
   index_.remove(Entry(node.box, id));
 }
 
-void CaeRlsm::findCandidates(const Segment2& scan, std::uint64_t exclude,
-                             std::vector<std::uint64_t>& out) const
+void CaeRlsm::findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out)
 {
   out.clear();
   if (params_.spatial_index)
   {
+    if (index_stale_) rebuildIndex();
     // Every map segment meeting the conditions has a point of `scan` inside its padded box.
     const Box query(Point(std::min(scan.start.x(), scan.end.x()), std::min(scan.start.y(), scan.end.y())),
                     Point(std::max(scan.start.x(), scan.end.x()), std::max(scan.start.y(), scan.end.y())));

@@ -175,3 +175,43 @@ TEST(MpGma, AdjustingBackToTheOldPosesRestoresTheGrouping)
   EXPECT_EQ(total, leaves);
   EXPECT_EQ(merger.leafCount(), leaves);
 }
+
+TEST(MpGma, MergingContinuesAfterAnAdjustmentIndexAndLinearAlike)
+{
+  // OTM-ILSM after MP-GMA searches the rebuilt index: the same map as the linear search.
+  const LoopData d = makeLoop(7);
+  for (bool consistent : {false, true})
+  {
+    CaeParams indexed, linear;
+    indexed.consistent_adjustment = linear.consistent_adjustment = consistent;
+    linear.spatial_index = false;
+    CaeRlsm a(indexed), b(linear);
+    const std::size_t half = d.keyframes.size() / 2;
+    for (std::size_t i = 0; i < half; ++i)
+    {
+      a.addKeyframe(d.keyframes[i]);
+      b.addKeyframe(d.keyframes[i]);
+    }
+    std::vector<std::pair<std::uint64_t, Pose2>> poses;
+    for (std::size_t i = 0; i < half; ++i) poses.emplace_back(i, d.truth[i]);
+    a.adjust(poses);
+    b.adjust(poses);
+    for (std::size_t i = half; i < d.keyframes.size(); ++i)
+    {
+      Keyframe k = d.keyframes[i];
+      k.pose = d.truth[i];
+      a.addKeyframe(k);
+      b.addKeyframe(k);
+    }
+    const auto ma = a.map(), mb = b.map();
+    ASSERT_EQ(ma.size(), mb.size()) << "consistent " << consistent;
+    for (std::size_t i = 0; i < ma.size(); ++i)
+    {
+      EXPECT_EQ(ma[i].id, mb[i].id);
+      EXPECT_EQ(ma[i].merged_count, mb[i].merged_count);
+      EXPECT_EQ(ma[i].segment.start, mb[i].segment.start);
+      EXPECT_EQ(ma[i].segment.end, mb[i].segment.end);
+    }
+    if (consistent) EXPECT_EQ(ma.size(), 8u) << "true poses from the adjustment on: one segment per wall";
+  }
+}

@@ -76,7 +76,7 @@ class CaeRlsm : public Merger
 
   // OTM-ILSM (otm_ilsm.cpp).
   void insertSegment(const Segment2& world, std::uint32_t leaf);
-  void findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out) const;
+  void findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out);
   Box paddedBox(const Segment2& s) const;
   void indexInsert(std::uint64_t id, Node& node);
   void indexRemove(std::uint64_t id, const Node& node);
@@ -96,6 +96,7 @@ class CaeRlsm : public Merger
   std::vector<LeafRecord> leaves_;
   std::unordered_map<std::uint64_t, Node> nodes_;
   RTree index_;
+  bool index_stale_ = false;  // set by adjust(): rebuilt in one go by the next search
   std::uint64_t next_id_ = 0;
   mutable std::vector<std::uint64_t> candidates_;  // scratch
   mutable std::vector<Entry> hits_;                // scratch
