@@ -77,7 +77,7 @@ class EmExtractor : public Extractor
     lines_.clear();
     outlier_weight_ = 1.0;
     mixture_.assign(n, outlier_density_);  // density of each point under the current model
-    double log_likelihood = n * std::log(outlier_density_);
+    log_likelihood_ = n * std::log(outlier_density_);
 
     while (static_cast<int>(lines_.size()) < max_lines_)
     {
@@ -100,12 +100,12 @@ class EmExtractor : public Extractor
           best = c;
         }
       }
-      if (!(best_ll - log_likelihood > line_penalty_) || best.weight * n < runs_.min_points) break;
+      if (!(best_ll - log_likelihood_ > line_penalty_) || best.weight * n < runs_.min_points) break;
 
       for (Component& c : lines_) c.weight *= 1.0 - best.weight;
       outlier_weight_ *= 1.0 - best.weight;
       lines_.push_back(best);
-      log_likelihood = fullEm(scan);
+      log_likelihood_ = fullEm(scan);
     }
 
     // Hard assignment to the most responsible component; runs of each line become segments.
@@ -198,22 +198,25 @@ class EmExtractor : public Extractor
   double fitNewComponent(const PreparedScan& scan, Component& c)
   {
     weights_.resize(n_);
-    double ll = 0.0;
-    for (int it = 0; it <= iterations_; ++it)
+    for (int it = 0;; ++it)
     {
-      ll = 0.0;
       double support = 0.0;
       for (int i = 0; i < n_; ++i)
       {
         const double g = c.weight * density(c, scan.points[begin_ + i]);
-        const double f = (1.0 - c.weight) * mixture_[i] + g;
-        ll += std::log(f);
-        weights_[i] = g / f;
+        weights_[i] = g > 0.0 ? g / ((1.0 - c.weight) * mixture_[i] + g) : 0.0;
         support += weights_[i];
       }
       if (it == iterations_) break;
       c.weight = std::clamp(support / n_, 1e-6, 1.0 - 1e-6);
       weightedFit(scan, weights_, c);
+    }
+    // log f_i = log((1 - w) m_i + g_i): points the new line does not reach (g_i = 0) only
+    // add log(1 - w) to their current log m_i, whose sum is the current log-likelihood.
+    double ll = log_likelihood_ + n_ * std::log(1.0 - c.weight);
+    for (int i = 0; i < n_; ++i)
+    {
+      if (weights_[i] > 0.0) ll -= std::log1p(-weights_[i]);  // log f_i - log((1 - w) m_i) = -log(1 - r_i)
     }
     return ll;
   }
@@ -269,6 +272,7 @@ class EmExtractor : public Extractor
 
   int begin_ = 0, n_ = 0;
   double outlier_weight_ = 1.0;
+  double log_likelihood_ = 0.0;  ///< of the current mixture
   std::vector<Component> lines_;
   std::vector<double> mixture_, weights_, resp_;
   std::vector<int> poor_, assignment_, members_;

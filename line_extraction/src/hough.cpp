@@ -41,13 +41,13 @@ HoughExtractor::HoughExtractor(const linemap::ParamSet& params)
 void HoughExtractor::vote(const Vec2& p, int delta)
 {
   // Locals only, so that the compiler neither reloads members nor fears aliasing.
-  const int bins = angle_bins_, stride = radius_bins_, min_votes = min_votes_;
+  const int bins = angle_bins_, min_votes = min_votes_;
   const double x = p.x(), y = p.y(), offset = max_radius_ / radius_resolution_ + 0.5;  // + 0.5: nearest bin
   const double* __restrict c = cos_.data();
   const double* __restrict s = sin_.data();
   int* __restrict index = bins_.data();
   // Cell indices first (a loop the compiler vectorises), then the scattered increments.
-  for (int a = 0; a < bins; ++a) index[a] = a * stride + static_cast<int>(x * c[a] + y * s[a] + offset);
+  for (int a = 0; a < bins; ++a) index[a] = static_cast<int>(x * c[a] + y * s[a] + offset) * bins + a;
   std::uint16_t* acc = acc_.data();
   if (delta < 0)
   {
@@ -107,8 +107,8 @@ void HoughExtractor::extractRange(const PreparedScan& scan, PointRange range, Ex
     candidates_.resize(kept_candidates);
     if (best_votes < min_votes_) break;
 
-    const double theta = (best_cell / radius_bins_) * angle_resolution_;
-    const double rho = (best_cell % radius_bins_) * radius_resolution_ - max_radius_;
+    const double theta = (best_cell % angle_bins_) * angle_resolution_;
+    const double rho = (best_cell / angle_bins_) * radius_resolution_ - max_radius_;
     Peak peak;
     peak.votes = best_votes;
     peak.radius = std::abs(rho);
@@ -157,8 +157,12 @@ void HoughExtractor::extractRange(const PreparedScan& scan, PointRange range, Ex
     }
     remaining_.resize(kept);
   }
-  // Leave the accumulator all zero for the next call (clearing the span used beats withdrawing votes).
-  std::fill_n(acc_.begin(), cells, std::uint16_t{0});
+  // Leave the accumulator all zero for the next call: withdraw the remaining votes, or
+  // clear the whole span when that is cheaper (a sequential clear is ~16x faster per cell).
+  if (remaining_.size() * static_cast<std::size_t>(angle_bins_) * 16 < cells)
+    for (int idx : remaining_) vote(scan.points[idx], -1);
+  else
+    std::fill_n(acc_.begin(), cells, std::uint16_t{0});
   sortSegmentsByFirstPoint(out, first_segment);
 }
 

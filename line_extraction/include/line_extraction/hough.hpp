@@ -45,8 +45,8 @@ class HoughExtractor : public Extractor
   int angle_bins_ = 0;
   std::vector<double> cos_, sin_;
   std::vector<int> bins_;
-  // Accumulator [angle][radius] over the signed radius [-max_radius_, max_radius_];
-  // all zero between calls (every vote is withdrawn before returning).
+  // Accumulator [radius][angle] over the signed radius [-max_radius_, max_radius_] (one point
+  // votes into neighbouring rows: cache friendly); all zero between calls.
   std::vector<std::uint16_t> acc_;
   int radius_bins_ = 0;
   double max_radius_ = 0.0;
