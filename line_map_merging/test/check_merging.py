@@ -101,6 +101,17 @@ class CheckMerging(unittest.TestCase):
         self.assertAlmostEqual(upper.segment.angle, math.pi / 2, delta=1e-6)  # Hessian normal +y
         self.assertAlmostEqual(upper.segment.radius, 2.0, delta=1e-6)
 
+        # Markers (subscribed, so published): segments, red start points, green end points.
+        deadline = time.time() + 5.0
+        while not self.markers and time.time() < deadline:
+            time.sleep(0.05)
+        self.assertTrue(self.markers, "no line_map_markers although subscribed")
+        by_ns = {mk.ns: mk for mk in self.markers[-1].markers if mk.action == mk.ADD}
+        self.assertEqual(len(by_ns["segments"].points), 4)
+        self.assertEqual((by_ns["start_points"].color.r, by_ns["start_points"].color.g), (1.0, 0.0))
+        self.assertGreater(by_ns["end_points"].color.g, 0.5)
+        self.assertEqual(by_ns["end_points"].color.r, 0.0)
+
         # Loop closure: every base pose 0.5 m further in +y. Every other pose only: the others
         # are corrected by interpolation. One pose matches no keyframe.
         path = Path()
