@@ -74,7 +74,10 @@ void flatten(const YAML::Node& node, const std::string& prefix, linemap::ParamSe
 
 /// Online mergers merge keyframe by keyframe on the trajectory known so far and receive its
 /// corrections as loop closures; the others (cae_offline, o2to, ms, li2023) get the final poses.
-bool isOnline(const std::string& name) { return name == "cae" || name == "oto"; }
+bool isOnline(const std::string& name)
+{
+  return name == "cae" || name == "oto";
+}
 
 double median(std::vector<double> values)
 {
@@ -415,15 +418,19 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
       if (ec) throw std::runtime_error(dir.string() + ": cannot create the directory: " + ec.message());
       const std::string caption =
           dataset.name + " - " + name + " (" + std::to_string(map.size()) + " segments)";
+      const bool figures = (options.figure_formats & kFigureAllFormats) != 0;
       MapFigure figure;
       figure.segments = run.final_map;
       figure.scan_points = scan_points;
       figure.caption = caption;
-      for (auto& f : drawMap(figure, (dir / "map").string(), options.figure_formats)) run.files.push_back(f);
-      for (auto& f : drawLookupTable(table, run.final_map, caption + " over the lookup table",
-                                     (dir / "lookup_table").string(), options.figure_formats))
-        run.files.push_back(f);
-      if (on_odometry)
+      if (figures)
+        for (auto& f : drawMap(figure, (dir / "map").string(), options.figure_formats))
+          run.files.push_back(f);
+      if (figures)
+        for (auto& f : drawLookupTable(table, run.final_map, caption + " over the lookup table",
+                                       (dir / "lookup_table").string(), options.figure_formats))
+          run.files.push_back(f);
+      if (figures && on_odometry)
       {
         MapFigure before;
         before.segments = run.map_before_adjust;

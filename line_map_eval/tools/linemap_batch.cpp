@@ -29,7 +29,7 @@ void usage(std::ostream& out)
 {
   out << "usage: linemap_batch DATASET [--corrected LOG] [--extractor NAME] [--merger NAME]...\n"
          "                     [--param key=value]... [--config FILE]... [--config-dir DIR] [--out DIR]\n"
-         "                     [--every N] [--no-progress] [--help]\n"
+         "                     [--every N] [--no-progress] [--no-figures] [--help]\n"
          "\n"
          "DATASET is a raw CARMEN log (with --corrected: its corrected keyframe log), a corrected or\n"
          "pre-registered CARMEN log alone, a world file (config/worlds/*.yaml, simulated in-process) or a\n"
@@ -50,7 +50,8 @@ void usage(std::ostream& out)
          "  --out DIR         write DIR/report.json, DIR/report.md and DIR/<merger>/ figures and map\n"
          "                    files (default: linemap_batch_out)\n"
          "  --every N         keyframes between trajectory corrections (default 50; 0: only at the end)\n"
-         "  --no-progress     no progress bars\n";
+         "  --no-progress     no progress bars\n"
+         "  --no-figures      write the reports and map files only\n";
 }
 
 bool hasConfig(const fs::path& dir)
@@ -143,6 +144,8 @@ int main(int argc, char** argv)
       }
       else if (arg == "--no-progress")
         options.progress = false;
+      else if (arg == "--no-figures")
+        options.figure_formats = 0;
       else if (!arg.empty() && arg[0] == '-')
         throw std::invalid_argument("unknown option " + arg);
       else if (dataset_path.empty())

@@ -78,7 +78,7 @@ struct BatchOptions
   bool progress = true;
   /// Where figures and map files go (DIR/<merger>/...); empty: nothing is written.
   std::string out_dir;
-  unsigned figure_formats = 7u;  ///< FigureFormat bits
+  unsigned figure_formats = 7u;  ///< FigureFormat bits; 0: no figures (map files and reports only)
 };
 
 struct LengthStatistics
