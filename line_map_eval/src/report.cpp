@@ -304,6 +304,10 @@ std::string toMarkdown(const BatchResult& result)
     }
     md << "\n";
     for (const auto& f : r.files) md << "  - `" << f << "`\n";
+    // The map figure inline, relative to report.md (which sits in the output directory).
+    for (const auto& f : r.files)
+      if (std::filesystem::path(f).filename() == "map.png")
+        md << "\n  ![" << r.name << "](" << r.name << "/map.png)\n";
   }
   md << "\n## Parameters\n\n";
   for (const auto& [k, v] : result.parameters.values()) md << "- `" << k << "`: `" << v << "`\n";

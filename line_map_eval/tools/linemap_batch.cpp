@@ -227,7 +227,8 @@ int main(int argc, char** argv)
               << " ms (table included)\n";
     writeReports(result, out_dir);
     std::cout << "wrote " << (fs::path(out_dir) / "report.json").string() << ", "
-              << (fs::path(out_dir) / "report.md").string() << " and the figures under " << out_dir << "/\n";
+              << (fs::path(out_dir) / "report.md").string() << " and the per-merger files under " << out_dir
+              << "/<merger>/\n";
     return 0;
   }
   catch (const std::exception& e)
