@@ -3,7 +3,8 @@
 //
 // The number of lines is chosen greedily: lines are added one at a time while
 // the log-likelihood gain of the best of `restarts` candidates exceeds
-// `line_penalty` (a BIC-like price per line). Each candidate starts from two
+// `line_penalty` (a BIC-like price per line); the search stops after `patience`
+// consecutive rounds without such a candidate. Each candidate starts from two
 // nearby, poorly explained points and is fitted by a partial EM in which the
 // lines already accepted stay fixed (cheap: one component); the best
 // likelihood wins, and a few full EM iterations then refine every line. Points
@@ -45,6 +46,7 @@ class EmExtractor : public Extractor
         iterations_(params.getInt("em/iterations", 10)),
         full_iterations_(params.getInt("em/full_iterations", 3)),
         max_lines_(params.getInt("em/max_lines", 30)),
+        patience_(params.getInt("em/patience", 3)),
         window_(params.getInt("em/window", 8)),
         seed_(static_cast<std::uint32_t>(params.getInt("em/seed", 1)))
   {
@@ -62,6 +64,7 @@ class EmExtractor : public Extractor
     require(iterations_ >= 1, "em/iterations", ">= 1");
     require(full_iterations_ >= 0, "em/full_iterations", ">= 0");
     require(max_lines_ >= 1, "em/max_lines", ">= 1");
+    require(patience_ >= 1, "em/patience", ">= 1");
     require(window_ >= 1, "em/window", ">= 1");
   }
 
@@ -79,6 +82,7 @@ class EmExtractor : public Extractor
     mixture_.assign(n, outlier_density_);  // density of each point under the current model
     log_likelihood_ = n * std::log(outlier_density_);
 
+    int failures = 0;
     while (static_cast<int>(lines_.size()) < max_lines_)
     {
       // Seeds: points the outlier component explains best.
@@ -100,7 +104,13 @@ class EmExtractor : public Extractor
           best = c;
         }
       }
-      if (!(best_ll - log_likelihood_ > line_penalty_) || best.weight * n < runs_.min_points) break;
+      if (!(best_ll - log_likelihood_ > line_penalty_) || best.weight * n < runs_.min_points)
+      {
+        // Seeds are often spurious points: give up only after `patience` fruitless rounds.
+        if (++failures >= patience_) break;
+        continue;
+      }
+      failures = 0;
 
       for (Component& c : lines_) c.weight *= 1.0 - best.weight;
       outlier_weight_ *= 1.0 - best.weight;
@@ -266,7 +276,7 @@ class EmExtractor : public Extractor
 
   RunSettings runs_;
   double initial_sigma_, min_sigma_, max_sigma_, outlier_density_, line_penalty_;
-  int restarts_, iterations_, full_iterations_, max_lines_, window_;
+  int restarts_, iterations_, full_iterations_, max_lines_, patience_, window_;
   std::uint32_t seed_;
   std::mt19937 rng_;
 
