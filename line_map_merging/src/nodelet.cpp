@@ -20,13 +20,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <pluginlib/class_list_macros.hpp>
 #include <string>
 
+#include "line_extraction/ros/param_loader.hpp"
 #include "line_map_merging/keyframe_gate.hpp"
 #include "line_map_merging/merger.hpp"
 #include "line_map_merging/trajectory_correction.hpp"
@@ -35,36 +35,6 @@ namespace line_map_merging
 {
 namespace
 {
-/// Flattens the private parameter tree into "block/name" keys.
-void flatten(const XmlRpc::XmlRpcValue& value, const std::string& prefix, linemap::ParamSet& out)
-{
-  switch (value.getType())
-  {
-    case XmlRpc::XmlRpcValue::TypeStruct:
-      for (auto it = value.begin(); it != value.end(); ++it)
-        flatten(it->second, prefix.empty() ? it->first : prefix + "/" + it->first, out);
-      break;
-    case XmlRpc::XmlRpcValue::TypeBoolean:
-      out.set(prefix, static_cast<bool>(const_cast<XmlRpc::XmlRpcValue&>(value)) ? "true" : "false");
-      break;
-    case XmlRpc::XmlRpcValue::TypeInt:
-      out.set(prefix, std::to_string(static_cast<int>(const_cast<XmlRpc::XmlRpcValue&>(value))));
-      break;
-    case XmlRpc::XmlRpcValue::TypeDouble:
-    {
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "%.17g", static_cast<double>(const_cast<XmlRpc::XmlRpcValue&>(value)));
-      out.set(prefix, buf);
-      break;
-    }
-    case XmlRpc::XmlRpcValue::TypeString:
-      out.set(prefix, static_cast<std::string>(const_cast<XmlRpc::XmlRpcValue&>(value)));
-      break;
-    default:
-      break;  // lists and binary values are not merger parameters
-  }
-}
-
 /// Yaw of a quaternion, or nothing when it is not finite or not normalised.
 bool yawOf(const geometry_msgs::Quaternion& q, double& yaw)
 {
@@ -105,17 +75,15 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     method_ = pnh.param<std::string>("method", "cae");
-    map_frame_ = pnh.param<std::string>("map_frame", "map");
-    base_frame_ = pnh.param<std::string>("base_frame", "base_link");
+    map_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("map_frame", "map"));
+    base_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("base_frame", "base_link"));
     stamp_tolerance_ = pnh.param("stamp_tolerance", 0.01);
     tf_timeout_ = pnh.param("tf_timeout", 0.5);
     publish_labels_ = pnh.param("publish_labels", false);
     marker_width_ = pnh.param("marker_width", 0.03);
     const int queue_size = std::max(1, pnh.param("queue_size", 100));
 
-    linemap::ParamSet params;
-    XmlRpc::XmlRpcValue tree;
-    if (ros::param::get(pnh.getNamespace(), tree)) flatten(tree, "", params);
+    const linemap::ParamSet params = linemap_ros::loadParamSet(pnh);
     try
     {
       merger_ = makeMerger(method_, params);
@@ -177,11 +145,11 @@ class LineMapMergingNodelet : public nodelet::Nodelet
                             msg->header.stamp.toSec(), tf_timeout_);
       return;
     }
+    const std::string laser_frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
     linemap::Pose2 laser, mount;
     try
     {
-      if (!poseOf(tf_buffer_->lookupTransform(map_frame_, msg->header.frame_id, msg->header.stamp).transform,
-                  laser))
+      if (!poseOf(tf_buffer_->lookupTransform(map_frame_, laser_frame, msg->header.stamp).transform, laser))
       {
         ++dropped_scans_;
         NODELET_WARN_THROTTLE(5.0, "line_map_merging: transform %s -> %s is not a valid pose; scan dropped",
@@ -195,13 +163,12 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       NODELET_WARN_THROTTLE(5.0, "line_map_merging: %s", e.what());
       return;
     }
-    if (!base_frame_.empty() && base_frame_ != msg->header.frame_id)
+    if (!base_frame_.empty() && base_frame_ != laser_frame)
     {
       try
       {
-        if (!poseOf(
-                tf_buffer_->lookupTransform(base_frame_, msg->header.frame_id, msg->header.stamp).transform,
-                mount))
+        if (!poseOf(tf_buffer_->lookupTransform(base_frame_, laser_frame, msg->header.stamp).transform,
+                    mount))
           mount = linemap::Pose2();
       }
       catch (const tf2::TransformException& e)
@@ -263,7 +230,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       NODELET_WARN_THROTTLE(5.0, "line_map_merging: empty optimized_trajectory ignored");
       return;
     }
-    if (!path->header.frame_id.empty() && path->header.frame_id != map_frame_)
+    if (!path->header.frame_id.empty() && linemap_ros::stripLeadingSlash(path->header.frame_id) != map_frame_)
     {
       ++bad_trajectories_;
       NODELET_WARN_THROTTLE(5.0,
