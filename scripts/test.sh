@@ -2,7 +2,7 @@
 # Builds and runs every gtest and rostest, then prints `N passed, N failed[, N skipped]`.
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
-"$(dirname "$0")/build.sh" tests
+"$(dirname "$0")/build.sh" all tests
 results="$BUILD_DIR/build/test_results"
 rm -rf "$results"
 cd "$LINEMAP_ROOT"
