@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "line_extraction/extractor_registry.hpp"
+#include "line_extraction/param_checks.hpp"
 #include "line_extraction/ransac.hpp"
 
 namespace line_extraction
@@ -50,22 +51,18 @@ class EmExtractor : public Extractor
         window_(params.getInt("em/window", 8)),
         seed_(static_cast<std::uint32_t>(params.getInt("em/seed", 1)))
   {
-    auto require = [](bool ok, const char* key, const char* what)
-    {
-      if (!ok) throw linemap::ParameterError(std::string("parameter '") + key + "' must be " + what);
-    };
-    require(min_sigma_ > 0.0, "em/min_sigma", "> 0");
-    require(max_sigma_ >= min_sigma_, "em/max_sigma", ">= em/min_sigma");
-    require(initial_sigma_ >= min_sigma_ && initial_sigma_ <= max_sigma_, "em/initial_sigma",
-            "within [em/min_sigma, em/max_sigma]");
-    require(outlier_density_ > 0.0, "em/outlier_density", "> 0");
-    require(line_penalty_ >= 0.0, "em/line_penalty", ">= 0");
-    require(restarts_ >= 1, "em/restarts", ">= 1");
-    require(iterations_ >= 1, "em/iterations", ">= 1");
-    require(full_iterations_ >= 0, "em/full_iterations", ">= 0");
-    require(max_lines_ >= 1, "em/max_lines", ">= 1");
-    require(patience_ >= 1, "em/patience", ">= 1");
-    require(window_ >= 1, "em/window", ">= 1");
+    requireParam(min_sigma_ > 0.0, "em/min_sigma", "> 0");
+    requireParam(max_sigma_ >= min_sigma_, "em/max_sigma", ">= em/min_sigma");
+    requireParam(initial_sigma_ >= min_sigma_ && initial_sigma_ <= max_sigma_, "em/initial_sigma",
+                 "within [em/min_sigma, em/max_sigma]");
+    requireParam(outlier_density_ > 0.0, "em/outlier_density", "> 0");
+    requireParam(line_penalty_ >= 0.0, "em/line_penalty", ">= 0");
+    requireParam(restarts_ >= 1, "em/restarts", ">= 1");
+    requireParam(iterations_ >= 1, "em/iterations", ">= 1");
+    requireParam(full_iterations_ >= 0, "em/full_iterations", ">= 0");
+    requireParam(max_lines_ >= 1, "em/max_lines", ">= 1");
+    requireParam(patience_ >= 1, "em/patience", ">= 1");
+    requireParam(window_ >= 1, "em/window", ">= 1");
   }
 
   const char* name() const override { return "em"; }

@@ -19,13 +19,6 @@ namespace line_extraction
 {
 namespace
 {
-CollinearMergeParams mergeParams(const linemap::ParamSet& ps)
-{
-  CollinearMergeParams p;
-  p.range_sigma = rangeSigmaParam(ps);
-  return p;
-}
-
 class LineRegression : public Extractor
 {
  public:
@@ -38,7 +31,7 @@ class LineRegression : public Extractor
         max_distance_(positiveParam(ps, "line_regression/max_distance", 0.05)),
         residual_limit_(positiveParam(ps, "line_regression/residual_gate", 15.09) * range_sigma_ *
                         range_sigma_),
-        merger_(mergeParams(ps))
+        merger_(algorithmMergeParams(ps))
   {
   }
 

@@ -16,13 +16,6 @@ namespace line_extraction
 {
 namespace
 {
-CollinearMergeParams mergeParams(const linemap::ParamSet& ps)
-{
-  CollinearMergeParams p;
-  p.range_sigma = rangeSigmaParam(ps);
-  return p;
-}
-
 class Smsm : public Extractor
 {
  public:
@@ -31,7 +24,7 @@ class Smsm : public Extractor
         join_distance_(nonNegativeParam(ps, "smsm/join_distance", 0.1)),
         min_points_(intParamAtLeast(ps, "smsm/min_points", 5, 2)),
         range_sigma_(rangeSigmaParam(ps)),
-        merger_(mergeParams(ps))
+        merger_(algorithmMergeParams(ps))
   {
     breakpoint_.lambda = positiveParam(ps, "smsm/breakpoint_lambda", breakpoint_.lambda);
     if (breakpoint_.lambda >= linemap::kPi / 2)

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "line_extraction/extractor_registry.hpp"
+#include "line_extraction/param_checks.hpp"
 #include "line_extraction/ransac.hpp"
 
 namespace line_extraction
@@ -44,18 +45,14 @@ class WsacGeExtractor : public Extractor
         refine_iterations_(params.getInt("wsac_ge/refine_iterations", 3)),
         seed_(static_cast<std::uint32_t>(params.getInt("wsac_ge/seed", 1)))
   {
-    auto require = [](bool ok, const char* key, const char* what)
-    {
-      if (!ok) throw linemap::ParameterError(std::string("parameter '") + key + "' must be " + what);
-    };
-    require(window_ >= 1, "wsac_ge/window", ">= 1");
-    require(tukey_c_ > 0.0, "wsac_ge/tukey_c", "> 0");
-    require(short_penalty_ >= 0.0, "wsac_ge/short_penalty", ">= 0");
-    require(line_cost_ >= 0.0, "wsac_ge/line_cost", ">= 0");
-    require(max_failures_ >= 1, "wsac_ge/max_failures", ">= 1");
-    require(delete_probability_ >= 0.0 && delete_probability_ < 1.0, "wsac_ge/delete_probability",
-            "in [0, 1)");
-    require(refine_iterations_ >= 0, "wsac_ge/refine_iterations", ">= 0");
+    requireParam(window_ >= 1, "wsac_ge/window", ">= 1");
+    requireParam(tukey_c_ > 0.0, "wsac_ge/tukey_c", "> 0");
+    requireParam(short_penalty_ >= 0.0, "wsac_ge/short_penalty", ">= 0");
+    requireParam(line_cost_ >= 0.0, "wsac_ge/line_cost", ">= 0");
+    requireParam(max_failures_ >= 1, "wsac_ge/max_failures", ">= 1");
+    requireParam(delete_probability_ >= 0.0 && delete_probability_ < 1.0, "wsac_ge/delete_probability",
+                 "in [0, 1)");
+    requireParam(refine_iterations_ >= 0, "wsac_ge/refine_iterations", ">= 0");
   }
 
   const char* name() const override { return "wsac_ge"; }

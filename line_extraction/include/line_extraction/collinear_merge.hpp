@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "line_extraction/line_fit.hpp"
+#include "line_extraction/param_checks.hpp"
 #include "line_extraction/types.hpp"
 
 namespace line_extraction
@@ -16,6 +17,14 @@ struct CollinearMergeParams
   /// Largest distance between the facing endpoints of two merged segments [m].
   double max_gap = std::numeric_limits<double>::infinity();
 };
+
+/// The merge an algorithm runs inside its own steps: default gate and gap, the pipeline's range_sigma.
+inline CollinearMergeParams algorithmMergeParams(const linemap::ParamSet& ps)
+{
+  CollinearMergeParams p;
+  p.range_sigma = rangeSigmaParam(ps);
+  return p;
+}
 
 /// Squared Mahalanobis distance between the lines of a and b with covariance
 /// a.covariance + b.covariance; the (radius, angle) and (-radius, angle + pi)

@@ -8,6 +8,12 @@
 
 namespace line_extraction
 {
+/// Throws ParameterError "parameter '<key>' must be <what>" unless `ok`.
+inline void requireParam(bool ok, const std::string& key, const char* what)
+{
+  if (!ok) throw linemap::ParameterError("parameter '" + key + "' must be " + what);
+}
+
 /// A finite value > 0.
 inline double positiveParam(const linemap::ParamSet& ps, const std::string& key, double fallback)
 {
