@@ -52,13 +52,7 @@ Keyframe extractKeyframe(line_extraction::LineExtractor& extractor, const std::v
                          const line_map_eval::ScanGeometry& g, std::size_t index, double stamp,
                          const linemap::Pose2& laser_pose)
 {
-  line_extraction::ScanInput input;
-  input.ranges = ranges.data();
-  input.count = ranges.size();
-  input.angle_min = g.angle_min;
-  input.angle_increment = g.angle_increment;
-  input.range_min = g.range_min;
-  input.range_max = g.range_max;
+  const line_extraction::ScanInput input = line_map_eval::scanInput(g, ranges);
   Keyframe k;
   k.index = index;
   k.stamp = stamp;

@@ -67,13 +67,7 @@ std::vector<Keyframe> intelKeyframes(const std::string& path)
   {
     const auto& scan = log.scans[i];
     const auto geometry = line_map_eval::carmenBeamGeometry(scan.ranges.size(), 81.83);
-    line_extraction::ScanInput input;
-    input.ranges = scan.ranges.data();
-    input.count = scan.ranges.size();
-    input.angle_min = geometry.angle_min;
-    input.angle_increment = geometry.angle_increment;
-    input.range_min = geometry.range_min;
-    input.range_max = geometry.range_max;
+    const line_extraction::ScanInput input = line_map_eval::scanInput(geometry, scan.ranges);
     const auto& result = extractor.extract(input);
     Keyframe k;
     k.index = i;

@@ -259,19 +259,12 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
   {
     ProgressBar bar("extract " + result.extractor, frames.size(), options.progress);
     const auto start = Clock::now();
-    line_extraction::ScanInput input;
-    input.angle_min = rec.geometry.angle_min;
-    input.angle_increment = rec.geometry.angle_increment;
-    input.range_min = rec.geometry.range_min;
-    input.range_max = rec.geometry.range_max;
     for (std::size_t k = 0; k < frames.size(); ++k)
     {
       const RecordedScan& scan = rec.scans[frames[k].scan];
-      input.ranges = scan.ranges.data();
-      input.count = scan.ranges.size();
       try
       {
-        const auto& extracted = extractor.extract(input);
+        const auto& extracted = extractor.extract(scanInput(rec.geometry, scan.ranges));
         for (const auto& s : extracted.segments) frames[k].segments.emplace_back(s.start, s.end);
       }
       catch (const line_extraction::ScanError& e)

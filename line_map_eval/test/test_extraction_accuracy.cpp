@@ -53,13 +53,7 @@ line_extraction::MatchStatistics evaluate(const std::string& algorithm, bool clu
   const ScanGeometry& g = sim.recording.geometry;
   for (std::size_t k = 0; k < sim.recording.scans.size(); ++k)
   {
-    line_extraction::ScanInput scan;
-    scan.ranges = sim.recording.scans[k].ranges.data();
-    scan.count = sim.recording.scans[k].ranges.size();
-    scan.angle_min = g.angle_min;
-    scan.angle_increment = g.angle_increment;
-    scan.range_min = g.range_min;
-    scan.range_max = g.range_max;
+    const line_extraction::ScanInput scan = line_map_eval::scanInput(g, sim.recording.scans[k].ranges);
     extracted.clear();
     for (const line_extraction::Segment& s : extractor.extract(scan).segments)
       extracted.push_back({s.angle, s.radius});

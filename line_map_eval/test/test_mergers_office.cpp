@@ -128,13 +128,7 @@ const Office& office()
     for (std::size_t i = 0; i < sim.recording.scans.size(); i += kEvery)
     {
       const auto& ranges = sim.recording.scans[i].ranges;
-      line_extraction::ScanInput input;
-      input.ranges = ranges.data();
-      input.count = ranges.size();
-      input.angle_min = g.angle_min;
-      input.angle_increment = g.angle_increment;
-      input.range_min = g.range_min;
-      input.range_max = g.range_max;
+      const line_extraction::ScanInput input = line_map_eval::scanInput(g, ranges);
       Keyframe k;
       k.index = i;
       k.stamp = sim.recording.scans[i].stamp;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "line_extraction/geometry.hpp"
+#include "line_extraction/types.hpp"
 
 namespace line_map_eval
 {
@@ -22,6 +23,19 @@ struct ScanGeometry
   double range_min = 0.0;
   double range_max = 0.0;  ///< readings at or beyond this are "no return"
 };
+
+/// The extractor's view of one scan of this geometry (no copy: `ranges` must outlive it).
+inline line_extraction::ScanInput scanInput(const ScanGeometry& g, const std::vector<float>& ranges)
+{
+  line_extraction::ScanInput input;
+  input.ranges = ranges.data();
+  input.count = ranges.size();
+  input.angle_min = g.angle_min;
+  input.angle_increment = g.angle_increment;
+  input.range_min = g.range_min;
+  input.range_max = g.range_max;
+  return input;
+}
 
 struct RecordedScan
 {
