@@ -3,6 +3,9 @@ SHELL := /bin/bash
 export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 BUILD_DIR ?= .build
 export BUILD_DIR
+# SANITIZE=1: ASan+UBSan build and tests in .build-sanitize (see scripts/build.sh).
+SANITIZE ?= 0
+export SANITIZE
 
 .PHONY: all setup build test demo format clean
 all: build

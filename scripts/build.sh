@@ -2,9 +2,20 @@
 # Builds the catkin workspace (the repository root is the source space) into $BUILD_DIR.
 # PACKAGES="a;b" restricts the build to those packages (catkin whitelist).
 set -euo pipefail
+# SANITIZE=1: ASan+UBSan build in its own directory (.build-sanitize unless BUILD_DIR is set elsewhere).
+if [ "${SANITIZE:-0}" = 1 ]; then
+  case "${BUILD_DIR:-.build}" in .build | */.build) export BUILD_DIR=.build-sanitize ;; esac
+fi
 source "$(dirname "$0")/env.sh"
 cd "$LINEMAP_ROOT"
 mkdir -p "$BUILD_DIR"
+san_args=()
+if [ "${SANITIZE:-0}" = 1 ]; then
+  san="-fsanitize=address,undefined -fno-omit-frame-pointer -g -O1"
+  san_args=("-DCMAKE_CXX_FLAGS=$san" "-DCMAKE_C_FLAGS=$san" "-DCMAKE_CXX_FLAGS_RELEASE=" "-DCMAKE_C_FLAGS_RELEASE="
+    "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined" "-DCMAKE_SHARED_LINKER_FLAGS=-fsanitize=address,undefined"
+    "-DCMAKE_MODULE_LINKER_FLAGS=-fsanitize=address,undefined")
+fi
 catkin_make --source "$LINEMAP_ROOT" --build "$BUILD_DIR/build" \
   -DCATKIN_DEVEL_PREFIX="$BUILD_DIR/devel" -DCMAKE_BUILD_TYPE=Release \
-  -DCATKIN_WHITELIST_PACKAGES="${PACKAGES:-}" ${CMAKE_ARGS:-} -j"${JOBS:-2}" "$@"
+  -DCATKIN_WHITELIST_PACKAGES="${PACKAGES:-}" ${san_args[@]+"${san_args[@]}"} ${CMAKE_ARGS:-} -j"${JOBS:-2}" "$@"

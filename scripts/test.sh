@@ -1,6 +1,13 @@
 #!/usr/bin/env bash
 # Builds and runs every gtest and rostest, then prints `N passed, N failed[, N skipped]`.
 set -euo pipefail
+if [ "${SANITIZE:-0}" = 1 ]; then
+  case "${BUILD_DIR:-.build}" in .build | */.build) export BUILD_DIR=.build-sanitize ;; esac
+  # Nodelets load into the uninstrumented nodelet manager: the ASan runtime then comes late (link order check off);
+  # ROS and Python leak at exit by design, so leak checking stays off.
+  export ASAN_OPTIONS="halt_on_error=1:print_stacktrace=1:detect_leaks=0:verify_asan_link_order=0${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
+  export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
+fi
 source "$(dirname "$0")/env.sh"
 "$(dirname "$0")/build.sh" all tests
 results="$BUILD_DIR/build/test_results"

@@ -1,0 +1,153 @@
+#!/usr/bin/env bash
+# libFuzzer targets of the ROS-free cores, built with clang++ straight from the core sources
+# (ASan + UBSan), outside catkin.
+#   scripts/fuzz.sh build                 builds $BUILD_DIR/fuzz/bin/fuzz_<target>
+#   scripts/fuzz.sh run [target...]       fuzzes each target FUZZ_SECONDS (default 60) on FUZZ_JOBS
+#                                         workers (default 1); corpus in $BUILD_DIR/fuzz/corpus/<target>,
+#                                         crashes in $BUILD_DIR/fuzz/crashes/<target>
+#   scripts/fuzz.sh test <junit_dir>      replays test/fuzz_regressions/<target>/* and fuzzes each target
+#                                         FUZZ_TEST_SECONDS (default 10); one JUnit test case per target
+# Targets: extractors merging map_file carmen.
+set -euo pipefail
+source "$(dirname "$0")/env.sh"
+cd "$LINEMAP_ROOT"
+FUZZ_DIR="$BUILD_DIR/fuzz"
+TARGETS=(extractors merging map_file carmen)
+CXX="${FUZZ_CXX:-clang++}"
+SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
+CXXFLAGS=(-std=c++17 -O1 -g $SAN -I line_extraction/include -I line_map_merging/include
+  -I line_map_eval/include -I /usr/include/eigen3 -DLINEMAP_FUZZING)
+export ASAN_OPTIONS="halt_on_error=1:print_stacktrace=1:detect_leaks=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
+export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
+
+# Core sources of each target (the ROS-free <pkg>_core sources, as the CMake GLOB takes them).
+core_sources() {
+  local pkgs=()
+  case "$1" in
+    extractors) pkgs=(line_extraction) ;;
+    merging | map_file) pkgs=(line_extraction line_map_merging) ;;
+    carmen) echo line_map_eval/src/carmen_log.cpp; return ;;
+  esac
+  for p in "${pkgs[@]}"; do
+    ls "$p"/src/*.cpp | grep -v -E '/(node|nodelet)\.cpp$'
+  done
+}
+target_source() {
+  case "$1" in
+    extractors) echo line_extraction/fuzz/fuzz_extractors.cpp ;;
+    merging) echo line_map_merging/fuzz/fuzz_merging.cpp ;;
+    map_file) echo line_map_merging/fuzz/fuzz_map_file.cpp ;;
+    carmen) echo line_map_eval/fuzz/fuzz_carmen.cpp ;;
+    *) echo "fuzz.sh: unknown target '$1' (known: ${TARGETS[*]})" >&2; return 1 ;;
+  esac
+}
+target_libs() {
+  case "$1" in
+    merging | map_file) echo "-ltbb -lyaml-cpp" ;;
+    carmen) echo "-lboost_iostreams -lz -lbz2" ;;
+  esac
+}
+
+# Compiles one source to an object unless the object is newer than it and than every header.
+compile() {
+  local src="$1" obj="$FUZZ_DIR/obj/${1%.cpp}.o"
+  mkdir -p "$(dirname "$obj")"
+  if [ -f "$obj" ] && [ "$obj" -nt "$src" ] &&
+    [ -z "$(find line_extraction/include line_map_merging/include line_map_eval/include -newer "$obj" -print -quit)" ]; then
+    return 0
+  fi
+  echo "fuzz: compiling $src"
+  # shellcheck disable=SC2086
+  "$CXX" $CXXFLAGS_STR -fsanitize=fuzzer-no-link -c "$src" -o "$obj"
+}
+export -f compile
+export FUZZ_DIR CXX
+export CXXFLAGS_STR="${CXXFLAGS[*]}"
+
+build() {
+  command -v "$CXX" > /dev/null || { echo "fuzz.sh: $CXX not found (scripts/setup.sh installs clang)" >&2; return 1; }
+  local srcs=()
+  for t in "${TARGETS[@]}"; do
+    mapfile -t -O "${#srcs[@]}" srcs < <(core_sources "$t")
+    srcs+=("$(target_source "$t")")
+  done
+  printf '%s\n' "${srcs[@]}" | sort -u |
+    xargs -P "${JOBS:-2}" -I{} bash -c 'compile "$1"' _ {} || return 1
+  mkdir -p "$FUZZ_DIR/bin"
+  for t in "${TARGETS[@]}"; do
+    local objs=()
+    while read -r s; do objs+=("$FUZZ_DIR/obj/${s%.cpp}.o"); done < <(core_sources "$t"; target_source "$t")
+    # shellcheck disable=SC2046
+    "$CXX" "${CXXFLAGS[@]}" -fsanitize=fuzzer "${objs[@]}" $(target_libs "$t") -o "$FUZZ_DIR/bin/fuzz_$t"
+  done
+}
+
+# Fuzzes target $1 for $2 seconds; prints libFuzzer's last status line; fails on a crash.
+fuzz_one() {
+  local t="$1" seconds="$2" corpus="$FUZZ_DIR/corpus/$1" crashes="$FUZZ_DIR/crashes/$1"
+  mkdir -p "$corpus" "$crashes"
+  local log="$FUZZ_DIR/log_$t.txt"
+  local jobs="${FUZZ_JOBS:-1}" extra=()
+  if [ "$jobs" -gt 1 ]; then extra=(-fork="$jobs" -ignore_crashes=0); fi
+  set +e
+  "$FUZZ_DIR/bin/fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=20 -max_len=8192 \
+    -print_final_stats=1 -artifact_prefix="$crashes/" "${extra[@]}" "$corpus" "test/fuzz_regressions/$t" > "$log" 2>&1
+  local rc=$?
+  set -e
+  grep -E '^stat::number_of_executed_units|^stat::average_exec_per_sec|^#[0-9]+.*(DONE|pulse)' "$log" | tail -3 | sed "s/^/fuzz $t: /"
+  if [ $rc -ne 0 ]; then
+    echo "fuzz $t: FAILED (exit $rc), log $log, input in $crashes/" >&2
+    grep -m1 -A25 -E '^==[0-9]+==ERROR|runtime error|deadly signal' "$log" >&2 || tail -30 "$log" >&2
+    return 1
+  fi
+}
+
+# Replays the committed regression inputs (no mutation).
+replay_one() {
+  local t="$1" dir="test/fuzz_regressions/$1"
+  local files=()
+  mapfile -t files < <(find "$dir" -maxdepth 1 -type f ! -name '*.md' 2> /dev/null | sort)
+  [ ${#files[@]} -eq 0 ] && return 0
+  "$FUZZ_DIR/bin/fuzz_$t" -runs=1 "${files[@]}" > "$FUZZ_DIR/replay_$t.txt" 2>&1 ||
+    { tail -40 "$FUZZ_DIR/replay_$t.txt" >&2; return 1; }
+}
+
+xml_escape() { sed -e 's/&/\&amp;/g' -e 's/</\&lt;/g' -e 's/>/\&gt;/g' -e 's/"/\&quot;/g'; }
+
+cmd="${1:-run}"
+shift || true
+case "$cmd" in
+  build) build ;;
+  run)
+    build
+    sel=("$@")
+    [ ${#sel[@]} -eq 0 ] && sel=("${TARGETS[@]}")
+    failed=0
+    for t in "${sel[@]}"; do fuzz_one "$t" "${FUZZ_SECONDS:-60}" || failed=1; done
+    exit $failed
+    ;;
+  test)
+    out="${1:?usage: fuzz.sh test <junit_dir>}"
+    mkdir -p "$out"
+    xml="$out/fuzz.xml"
+    if ! build > "$out/fuzz_build.txt" 2>&1; then
+      msg="$(tail -20 "$out/fuzz_build.txt" | xml_escape)"
+      printf '<testsuite name="fuzz" tests="1" failures="1"><testcase classname="fuzz" name="build"><failure message="fuzz targets do not build">%s</failure></testcase></testsuite>\n' "$msg" > "$xml"
+      echo "fuzz: build failed, see $out/fuzz_build.txt" >&2
+      exit 0
+    fi
+    cases="" failures=0
+    for t in "${TARGETS[@]}"; do
+      if err="$( { replay_one "$t" && fuzz_one "$t" "${FUZZ_TEST_SECONDS:-10}"; } 2>&1)"; then
+        echo "$err"
+        cases+="<testcase classname=\"fuzz\" name=\"fuzz_$t\"/>"
+      else
+        echo "$err" >&2
+        failures=$((failures + 1))
+        cases+="<testcase classname=\"fuzz\" name=\"fuzz_$t\"><failure message=\"fuzz_$t crashed\">$(echo "$err" | tail -40 | xml_escape)</failure></testcase>"
+      fi
+    done
+    printf '<testsuite name="fuzz" tests="%d" failures="%d">%s</testsuite>\n' "${#TARGETS[@]}" "$failures" "$cases" > "$xml"
+    ;;
+  *) echo "usage: fuzz.sh build | run [target...] | test <junit_dir>" >&2; exit 2 ;;
+esac
