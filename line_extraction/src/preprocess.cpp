@@ -19,6 +19,10 @@ void validateScan(const ScanInput& scan)
     throw ScanError("scan fields 'range_min' (" + std::to_string(scan.range_min) + ") and 'range_max' (" +
                     std::to_string(scan.range_max) + "): range_min must not exceed range_max");
   if (scan.count > 0 && scan.ranges == nullptr) throw ScanError("scan field 'ranges' is missing");
+  // A huge increment can overflow the later beam angles (cos(inf) = NaN points).
+  if (scan.count > 0 &&
+      !std::isfinite(scan.angle_min + static_cast<double>(scan.count - 1) * scan.angle_increment))
+    throw ScanError("scan fields 'angle_min' and 'angle_increment': the last beam angle is not finite");
   if (scan.intensity_count > 0 && scan.intensity_count != scan.count)
     throw ScanError("scan field 'intensities' has " + std::to_string(scan.intensity_count) +
                     " values but 'ranges' has " + std::to_string(scan.count));

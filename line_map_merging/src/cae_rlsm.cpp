@@ -48,14 +48,16 @@ AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
   AddResult result;
   for (const Segment2& local : keyframe.segments)
   {
-    if (!isValidSegment(local))
+    // A finite segment under a huge (finite) pose can still overflow in the map frame.
+    const Segment2 global = local.transformed(p);
+    if (!isValidSegment(local) || !isValidSegment(global))
     {
       ++result.rejected;
       continue;
     }
     const auto leaf = static_cast<std::uint32_t>(leaves_.size());
     leaves_.push_back({slot, local});
-    insertSegment(local.transformed(p), leaf);
+    insertSegment(global, leaf);
     ++result.merged;
   }
   return result;

@@ -62,6 +62,9 @@ std::string where(const std::string& path, const YAML::Node& node, const std::st
 
 const YAML::Node require(const std::string& path, const YAML::Node& parent, const std::string& field)
 {
+  // Indexing a scalar or a sequence by name throws a YAML exception, not a MapFileError.
+  if (!parent.IsMap())
+    throw MapFileError(where(path, parent, field) + " is missing (its parent is not a mapping)");
   const YAML::Node n = parent[field];
   if (!n) throw MapFileError(where(path, parent, field) + " is missing");
   return n;

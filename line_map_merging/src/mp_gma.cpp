@@ -56,6 +56,9 @@ std::vector<std::uint32_t> CaeRlsm::splitInconsistentLeaves(Node& node) const
   // Removing leaves moves the fused segment, which can expose more outliers: repeat until stable.
   for (;;)
   {
+    // A lone leaf is its own group; with a non-finite world leaf it would fail the test against
+    // itself and be split off and re-kept forever.
+    if (node.leaves.size() <= 1) return split;
     std::vector<std::uint32_t> keep;
     std::size_t first_split = split.size();
     for (std::uint32_t l : node.leaves)
