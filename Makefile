@@ -7,7 +7,7 @@ export BUILD_DIR
 SANITIZE ?= 0
 export SANITIZE
 
-.PHONY: all setup build test demo format clean
+.PHONY: all setup build test demo format clean fuzz
 all: build
 
 setup:
@@ -21,6 +21,10 @@ test: setup
 
 demo: setup
 	@bash scripts/demo.sh
+
+# libFuzzer targets, FUZZ_SECONDS (default 60) each; see scripts/fuzz.sh.
+fuzz: setup
+	@bash scripts/fuzz.sh run
 
 format:
 	@git ls-files '*.cpp' '*.hpp' | xargs clang-format -i

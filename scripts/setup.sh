@@ -13,6 +13,7 @@ PACKAGES=(
   libeigen3-dev libboost-dev libboost-iostreams-dev libtbb-dev libyaml-cpp-dev libcairo2-dev
   libbenchmark-dev libbz2-dev zlib1g-dev tf2-tools
   rviz xvfb xauth imagemagick libgl1-mesa-dri
+  clang libclang-rt-14-dev
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

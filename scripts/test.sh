@@ -16,4 +16,9 @@ cd "$LINEMAP_ROOT"
 # catkin's run_tests exits 0 even when tests fail: the verdict comes from the result files.
 catkin_make --source "$LINEMAP_ROOT" --build "$BUILD_DIR/build" -DCATKIN_DEVEL_PREFIX="$BUILD_DIR/devel" \
   -DCATKIN_WHITELIST_PACKAGES="${PACKAGES:-}" run_tests -j1 ${TEST_TARGET_ARGS:-} || true
+# libFuzzer targets (full runs only; FUZZ_TEST=0 skips): replay test/fuzz_regressions, then fuzz each
+# target FUZZ_TEST_SECONDS (default 10); one JUnit case per target in the results.
+if [ -z "${PACKAGES:-}" ] && [ "${FUZZ_TEST:-1}" != 0 ]; then
+  bash "$LINEMAP_ROOT/scripts/fuzz.sh" test "$results/fuzz" || true
+fi
 python3 "$LINEMAP_ROOT/scripts/test_summary.py" "$results"
