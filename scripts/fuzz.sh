@@ -89,6 +89,12 @@ fuzz_one() {
   local log="$FUZZ_DIR/log_$t.txt"
   local jobs="${FUZZ_JOBS:-1}" extra=()
   if [ "$jobs" -gt 1 ]; then extra=(-fork="$jobs" -ignore_crashes=0); fi
+  if [ "${3:-}" = test ]; then
+    # make test: a fixed seed from the committed inputs only, so that a run is repeatable.
+    corpus="$FUZZ_DIR/test_corpus/$t"
+    rm -rf "$corpus" && mkdir -p "$corpus"
+    extra+=(-seed=1)
+  fi
   set +e
   "$FUZZ_DIR/bin/fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=20 -max_len=8192 \
     -print_final_stats=1 -artifact_prefix="$crashes/" "${extra[@]}" "$corpus" "test/fuzz_regressions/$t" > "$log" 2>&1
@@ -138,7 +144,7 @@ case "$cmd" in
     fi
     cases="" failures=0
     for t in "${TARGETS[@]}"; do
-      if err="$( { replay_one "$t" && fuzz_one "$t" "${FUZZ_TEST_SECONDS:-10}"; } 2>&1)"; then
+      if err="$( { replay_one "$t" && fuzz_one "$t" "${FUZZ_TEST_SECONDS:-10}" test; } 2>&1)"; then
         echo "$err"
         cases+="<testcase classname=\"fuzz\" name=\"fuzz_$t\"/>"
       else
