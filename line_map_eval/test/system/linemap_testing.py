@@ -185,3 +185,52 @@ def coverage(wall, intervals, segments, distance=0.05, max_angle=math.radians(10
 
 def map_segments(line_map):
     return [(s.segment.start.x, s.segment.start.y, s.segment.end.x, s.segment.end.y) for s in line_map.segments]
+
+
+# ---- the loop closure driven by the checker ----
+
+SENSOR_TOPICS = ("/scan", "/tf", "/tf_static")
+
+
+def bag_trajectories(bag):
+    """The optimized_trajectory messages of a bag, in order."""
+    import rosbag
+    with rosbag.Bag(bag) as b:
+        return [m for _, m, _ in b.read_messages(topics=["/optimized_trajectory", "optimized_trajectory"])]
+
+
+def evaluate(timeout=10.0):
+    """Calls /line_map_eval/evaluate; returns line_map_msgs/MapQuality."""
+    from line_map_msgs.srv import Evaluate
+    rospy.wait_for_service("/line_map_eval/evaluate", timeout=timeout)
+    res = rospy.ServiceProxy("/line_map_eval/evaluate", Evaluate)()
+    if not res.success:
+        raise RuntimeError("evaluate failed: " + res.message)
+    return res.quality
+
+
+def wait_for_new_map(maps, count, timeout=20.0, settle=1.0):
+    """Waits for a line_map beyond the first `count` messages, then until none came for `settle` s."""
+    if not wait_for(lambda: len(maps.messages) > count, timeout):
+        return False
+    while True:
+        n = len(maps.messages)
+        time.sleep(settle)
+        if len(maps.messages) == n:
+            return True
+
+
+def precision(truth, segments, distance=0.1):
+    """Fraction of the map's segment length lying within `distance` of a true wall of similar
+    direction: drifted, doubled walls lower it."""
+    total = near = 0.0
+    for s in segments:
+        length = math.hypot(s[2] - s[0], s[3] - s[1])
+        if length == 0.0:
+            continue
+        best = 0.0
+        c = coverage(list(s), [[0.0, length]], truth["walls"], distance)
+        best = max(best, c)
+        total += length
+        near += best * length
+    return near / total if total else 0.0

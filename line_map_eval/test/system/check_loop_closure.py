@@ -1,0 +1,57 @@
+#!/usr/bin/python3
+"""Rostest checker (test/loop_closure.test): on the simulated loop world (odometry drift of
+metres) the optimized_trajectory must improve the map: the share of the map lying on true walls
+(python oracle from OUT.truth.yaml) and the evaluator's error against the bands recorded in
+test/regression_bands.yaml. The evaluator's correlation quality is recorded too: it does NOT rise
+with the loop closure here (see test/README.md). The checker plays the sensor topics, evaluates
+(~evaluate), publishes the bag's trajectory itself, waits for the adjusted map and evaluates
+again, so both figures belong to a settled map."""
+import os
+import sys
+import time
+import unittest
+
+import rospy
+import rostest
+from line_map_msgs.msg import LineMap
+from nav_msgs.msg import Path
+
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+import linemap_testing as lt  # noqa: E402
+
+
+class CheckLoopClosure(unittest.TestCase):
+    def test_quality_rises_with_the_loop_closure(self):
+        band = lt.bands()["loop_closure"]
+        bag, truth_path, log = lt.simulate("loop", band["seed"], band["scans"], "loop_closure_")
+        trajectory = lt.bag_trajectories(bag)[-1]
+        maps = lt.Collector("line_map", LineMap)
+        pub = rospy.Publisher("optimized_trajectory", Path, queue_size=1, latch=True)
+        time.sleep(1.0)
+        lt.play(bag, band["rate"], topics=lt.SENSOR_TOPICS)
+        self.assertTrue(lt.wait_for_new_map(maps, 0), "no line_map from the bag")
+        before = lt.evaluate()
+        map_before = maps.messages[-1][1]
+        n = len(maps.messages)
+        pub.publish(trajectory)
+        self.assertTrue(lt.wait_for_new_map(maps, n), "no line_map after the optimized_trajectory")
+        after = lt.evaluate()
+        truth = lt.load_truth(truth_path)
+        p_before = lt.precision(truth, lt.map_segments(map_before))
+        p_after = lt.precision(truth, lt.map_segments(maps.messages[-1][1]))
+        print("loop: map length on true walls before %.1f %%, after %.1f %%" % (100 * p_before, 100 * p_after))
+        print("loop: quality before %.2f %% (%d segments, error %.2f mm), after %.2f %% (%d segments, error "
+              "%.2f mm)\n%s" % (before.quality, before.segment_count, 1e3 * before.error, after.quality,
+                                after.segment_count, 1e3 * after.error, log))
+        self.assertLessEqual(p_before, band["max_on_walls_before"])
+        self.assertGreaterEqual(p_after, band["min_on_walls_after"])
+        self.assertGreaterEqual(p_after - p_before, band["min_on_walls_gain"])
+        self.assertGreaterEqual(before.error, band["min_error_before_m"])
+        self.assertLessEqual(after.error, band["max_error_after_m"])
+        self.assertLess(after.segment_count, before.segment_count, "the closed loop must merge doubled walls")
+        self.assertGreaterEqual(after.quality, band["min_quality_after_pct"])
+
+
+if __name__ == "__main__":
+    rospy.init_node("check_loop_closure")
+    rostest.rosrun("line_map_eval", "check_loop_closure", CheckLoopClosure)
