@@ -41,20 +41,23 @@ else
   batch_input=("$bag")
 fi
 
-# 1. The nodelet pipeline on the bag, as a user would run it.
-echo "demo: playing $(basename "$bag") through launch/replay.launch at ${rate}x"
+# 1. The nodelet pipeline on the bag, as a user would run it (launch/demo.launch, headless).
+echo "demo: playing $(basename "$bag") through launch/demo.launch at ${rate}x"
 log="$out/roslaunch.log"
-roslaunch "$LINEMAP_ROOT/launch/replay.launch" bag:="$bag" rate:="$rate" output:=log >"$log" 2>&1 &
+roslaunch "$LINEMAP_ROOT/launch/demo.launch" bag:="$bag" rate:="$rate" output:=log >"$log" 2>&1 &
 launch_pid=$!
 stop_ros() {
-  kill -TERM "$launch_pid" 2>/dev/null || true
+  kill -INT "$launch_pid" 2>/dev/null || true
   wait "$launch_pid" 2>/dev/null || true
 }
 trap stop_ros EXIT
-# Wait for the player to start and then to finish the bag.
-for _ in $(seq 1 120); do rosnode list 2>/dev/null | grep -q '^/player$' && break; sleep 0.5; done
-while rosnode list 2>/dev/null | grep -q '^/player$'; do sleep 1; done
-sleep 2
+# roslaunch reports when the player has played the whole bag.
+for _ in $(seq 1 2400); do
+  grep -q 'player-[0-9]*\] process has finished' "$log" && break
+  kill -0 "$launch_pid" 2>/dev/null || { echo "demo: roslaunch stopped early, see $log" >&2; exit 1; }
+  sleep 0.5
+done
+sleep 3  # the last keyframes and the final trajectory reach the map
 map_file="$out/map.yaml"
 if rosservice call /line_map_merging/save_map "path: '$map_file'" >"$out/save_map.log" 2>&1; then
   echo "demo: saved the nodelet's map to ${map_file#$LINEMAP_ROOT/}"
