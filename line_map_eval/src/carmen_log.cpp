@@ -77,6 +77,15 @@ class Fields
     return static_cast<std::size_t>(v);
   }
 
+  /// An integer code (laser type, remission mode); a larger value would overflow the int.
+  int integer(const char* what)
+  {
+    const double v = number(what);
+    if (v != std::floor(v) || std::abs(v) > 1e9)
+      fail(std::string(what) + " is not an integer: '" + std::string(tokens_[pos_ - 1]) + "'");
+    return static_cast<int>(v);
+  }
+
   std::string_view word(const char* what)
   {
     if (pos_ >= tokens_.size()) fail(std::string("missing ") + what);
@@ -152,13 +161,13 @@ void parseFlaser(Fields& f, CarmenScan& s)
 void parseRobotLaser1(Fields& f, CarmenScan& s)
 {
   s.type = CarmenScanType::RobotLaser1;
-  s.laser_type = static_cast<int>(f.number("laser_type"));
+  s.laser_type = f.integer("laser_type");
   s.start_angle = f.number("start_angle");
   s.field_of_view = f.number("field_of_view");
   s.angular_resolution = f.number("angular_resolution");
   s.max_range = f.number("maximum_range");
   s.accuracy = f.number("accuracy");
-  s.remission_mode = static_cast<int>(f.number("remission_mode"));
+  s.remission_mode = f.integer("remission_mode");
   const std::size_t n = f.count("num_readings", kMaxBeams);
   readValues(f, n, 1 + 14, "ranges", s.ranges);
   const std::size_t m = f.count("num_remissions", kMaxBeams);
