@@ -1,0 +1,47 @@
+#!/usr/bin/python3
+"""Rostest checker (test/batch_intel.test): runs linemap_batch on the Intel corrected keyframes
+for every merger and compares report.json with the bands of test/regression_bands.yaml."""
+import json
+import os
+import sys
+import tempfile
+import unittest
+
+import rospy
+import rostest
+
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+import linemap_testing as lt  # noqa: E402
+
+
+class CheckBatchIntel(unittest.TestCase):
+    def test_every_merger_within_its_band(self):
+        band = lt.bands()["batch_intel"]
+        dataset = os.path.join(lt.datasets_dir(), band["dataset"])
+        if not os.path.exists(dataset):
+            self.skipTest("dataset missing: " + dataset)
+        out = tempfile.mkdtemp(prefix="batch_intel_")
+        cmd = ["rosrun", "line_map_eval", "linemap_batch", dataset, "--out", out, "--no-progress", "--no-figures"]
+        for name in band["mergers"]:
+            cmd += ["--merger", name]
+        rc, log = lt.run(cmd, 240)
+        self.assertEqual(rc, 0, log)
+        print(log)
+        with open(os.path.join(out, "report.json")) as f:
+            report = json.load(f)
+        problems = []
+        for name, b in band["mergers"].items():
+            self.assertIn(name, report["mergers"], "merger missing from report.json")
+            r = report["mergers"][name]
+            if not b["map_segments"][0] <= r["map_segments"] <= b["map_segments"][1]:
+                problems.append("%s: %d map segments outside %s" % (name, r["map_segments"], b["map_segments"]))
+            if r["quality_pct"] < b["min_quality_pct"]:
+                problems.append("%s: quality %.2f %% < %.2f %%" % (name, r["quality_pct"], b["min_quality_pct"]))
+            if r["error_mm"] > b["max_error_mm"]:
+                problems.append("%s: error %.2f mm > %.2f mm" % (name, r["error_mm"], b["max_error_mm"]))
+        self.assertFalse(problems, "\n".join(problems))
+
+
+if __name__ == "__main__":
+    rospy.init_node("check_batch_intel", disable_signals=True)
+    rostest.rosrun("line_map_eval", "check_batch_intel", CheckBatchIntel)
