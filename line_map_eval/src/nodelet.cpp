@@ -45,6 +45,14 @@ linemap::Vec2 toVec2(const geometry_msgs::Point& p)
 {
   return {p.x, p.y};
 }
+
+std::vector<linemap::Segment2> toSegments(const line_map_msgs::LineMap& map)
+{
+  std::vector<linemap::Segment2> out;
+  out.reserve(map.segments.size());
+  for (const auto& s : map.segments) out.emplace_back(toVec2(s.segment.start), toVec2(s.segment.end));
+  return out;
+}
 }  // namespace
 
 class LineMapEvalNodelet : public nodelet::Nodelet
@@ -215,17 +223,34 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   void onMap(const line_map_msgs::LineMap::ConstPtr& map)
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    map_.clear();
-    for (const auto& s : map->segments) map_.emplace_back(toVec2(s.segment.start), toVec2(s.segment.end));
+    map_ = toSegments(*map);
     map_stamp_ = map->header.stamp;
     have_map_ = true;
     dirty_ = true;
     publish(false);
   }
 
-  bool onEvaluate(line_map_msgs::Evaluate::Request&, line_map_msgs::Evaluate::Response& res)
+  bool onEvaluate(line_map_msgs::Evaluate::Request& req, line_map_msgs::Evaluate::Response& res)
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (req.use_given_map)
+    {
+      const std::vector<linemap::Segment2> given = toSegments(req.map);
+      try
+      {
+        res.quality = toMessage(evaluator_->evaluate(given), req.map.header.stamp);
+      }
+      catch (const std::exception& e)
+      {
+        res.success = false;
+        res.message = std::string("cannot evaluate the given map: ") + e.what();
+        return true;
+      }
+      res.success = true;
+      res.message = "evaluated the given map (" + std::to_string(given.size()) + " segments) against " +
+                    std::to_string(evaluator_->scanCount()) + " keyframe scans";
+      return true;
+    }
     if (!have_map_)
     {
       res.success = false;
@@ -253,11 +278,17 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   line_map_msgs::MapQuality evaluateNow()
   {
     const auto start = ros::WallTime::now();
-    const MapMetrics m = evaluator_->evaluate(map_);
+    const line_map_msgs::MapQuality q = toMessage(evaluator_->evaluate(map_), map_stamp_);
     last_eval_ms_ = (ros::WallTime::now() - start).toSec() * 1e3;
     dirty_ = false;
+    last_quality_ = q.quality;
+    return q;
+  }
+
+  line_map_msgs::MapQuality toMessage(const MapMetrics& m, const ros::Time& stamp) const
+  {
     line_map_msgs::MapQuality q;
-    q.header.stamp = map_stamp_;
+    q.header.stamp = stamp;
     q.header.frame_id = map_frame_;
     q.quality = m.quality.quality;
     q.error = m.error.mean_error;
@@ -266,7 +297,6 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     q.longest_length = m.statistics.longest_length;
     q.mean_length = m.statistics.mean_length;
     q.redundant_pixels = static_cast<uint32_t>(m.quality.redundant_pixels);
-    last_quality_ = q.quality;
     return q;
   }
 

@@ -10,7 +10,7 @@ import unittest
 import rospkg
 import rospy
 import rostest
-from line_map_msgs.msg import MapQuality
+from line_map_msgs.msg import LineMap, MapQuality
 from line_map_msgs.srv import Evaluate
 from nav_msgs.msg import OccupancyGrid, Path
 
@@ -25,7 +25,8 @@ class CheckEval(unittest.TestCase):
                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=120)
         self.assertEqual(sim.returncode, 0, sim.stdout.decode(errors="replace"))
 
-        qualities, grids, paths = [], [], []
+        qualities, grids, paths, maps = [], [], [], []
+        rospy.Subscriber("line_map", LineMap, maps.append)
         rospy.Subscriber("map_quality", MapQuality, lambda m: qualities.append((len(paths), m)))
         rospy.Subscriber("lookup_table", OccupancyGrid, grids.append)
         rospy.Subscriber("optimized_trajectory", Path, paths.append)
@@ -62,9 +63,23 @@ class CheckEval(unittest.TestCase):
         self.assertGreaterEqual(min(grid.data), 0)
 
         rospy.wait_for_service("line_map_eval/evaluate", timeout=10.0)
-        res = rospy.ServiceProxy("line_map_eval/evaluate", Evaluate)()
+        evaluate = rospy.ServiceProxy("line_map_eval/evaluate", Evaluate)
+        res = evaluate()
         self.assertTrue(res.success, res.message)
         self.assertAlmostEqual(res.quality.quality, final.quality, delta=1e-6)
+        # A given map is scored against the same scans: the latest map scores the same, and the map
+        # from before the loop closure scores lower against the corrected scans.
+        self.assertTrue(maps, "no line_map received")
+        given = evaluate(use_given_map=True, map=maps[-1])
+        self.assertTrue(given.success, given.message)
+        self.assertAlmostEqual(given.quality.quality, final.quality, delta=1e-6)
+        before_closure = [m for m in maps if m.header.stamp < paths[-1].header.stamp]
+        if before_closure:
+            old = evaluate(use_given_map=True, map=before_closure[-1])
+            self.assertTrue(old.success, old.message)
+            rospy.loginfo("map before the loop closure against the corrected scans: %.2f %%", old.quality.quality)
+            self.assertGreater(final.quality, old.quality.quality + 20.0,
+                               "the loop closure must make the map fit the corrected scans far better")
 
 
 if __name__ == "__main__":
