@@ -199,11 +199,14 @@ def bag_trajectories(bag):
         return [m for _, m, _ in b.read_messages(topics=["/optimized_trajectory", "optimized_trajectory"])]
 
 
-def evaluate(timeout=10.0):
-    """Calls /line_map_eval/evaluate; returns line_map_msgs/MapQuality."""
+def evaluate(given_map=None, timeout=10.0):
+    """Calls /line_map_eval/evaluate; returns line_map_msgs/MapQuality. With `given_map` (a
+    line_map_msgs/LineMap) that map is scored against the evaluator's current (registered) scans
+    instead of the latest line_map."""
     from line_map_msgs.srv import Evaluate
     rospy.wait_for_service("/line_map_eval/evaluate", timeout=timeout)
-    res = rospy.ServiceProxy("/line_map_eval/evaluate", Evaluate)()
+    proxy = rospy.ServiceProxy("/line_map_eval/evaluate", Evaluate)
+    res = proxy() if given_map is None else proxy(use_given_map=True, map=given_map)
     if not res.success:
         raise RuntimeError("evaluate failed: " + res.message)
     return res.quality
