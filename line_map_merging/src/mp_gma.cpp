@@ -95,11 +95,31 @@ void CaeRlsm::rebuildIndex()
   index_ = RTree(entries);  // bulk loading (packing) is much faster than inserting one by one
 }
 
-std::size_t CaeRlsm::mergeConsistentSegments()
+std::size_t CaeRlsm::mergeConsistentSegments(tbb::task_arena& arena)
 {
   std::size_t merged = 0;
+  if (params_.spatial_index && index_stale_) rebuildIndex();
+  // Most segments have no partner: finding those that do is read-only and runs in parallel. Skipping
+  // the others changes nothing: a segment gains partners only through a merge near it, and every
+  // merge below re-queues the segments near its result.
+  std::vector<std::pair<std::uint64_t, const Node*>> all;
+  all.reserve(nodes_.size());
+  for (const auto& entry : nodes_) all.emplace_back(entry.first, &entry.second);
+  std::vector<char> has_partner(all.size(), 0);
+  arena.execute(
+      [&]
+      {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, all.size(), 256),
+                          [&](const tbb::blocked_range<std::size_t>& r)
+                          {
+                            std::vector<Entry> hits;
+                            for (std::size_t i = r.begin(); i != r.end(); ++i)
+                              has_partner[i] = hasCandidate(all[i].second->segment, all[i].first, hits);
+                          });
+      });
   std::set<std::uint64_t> pending;
-  for (const auto& entry : nodes_) pending.insert(entry.first);
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (has_partner[i]) pending.insert(all[i].first);
   std::vector<std::uint64_t> candidates;
   while (!pending.empty())
   {
@@ -219,7 +239,7 @@ AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap:
   std::sort(orphans.begin(), orphans.end());
   result.split = orphans.size();
   for (std::uint32_t l : orphans) insertSegment(worldLeaf(l), l);
-  result.merged = mergeConsistentSegments();
+  result.merged = mergeConsistentSegments(arena);
   return result;
 }
 

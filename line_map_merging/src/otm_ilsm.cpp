@@ -53,6 +53,24 @@ void CaeRlsm::findCandidates(const Segment2& scan, std::uint64_t exclude, std::v
   std::sort(out.begin(), out.end());
 }
 
+bool CaeRlsm::hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vector<Entry>& hits) const
+{
+  if (!params_.spatial_index)
+  {
+    for (const auto& [id, node] : nodes_)
+      if (id != exclude && meetsFusionConditions(node.segment, scan, params_.fusion)) return true;
+    return false;
+  }
+  const Box query(Point(std::min(scan.start.x(), scan.end.x()), std::min(scan.start.y(), scan.end.y())),
+                  Point(std::max(scan.start.x(), scan.end.x()), std::max(scan.start.y(), scan.end.y())));
+  hits.clear();
+  index_.query(bgi::intersects(query), std::back_inserter(hits));
+  for (const Entry& e : hits)
+    if (e.second != exclude && meetsFusionConditions(nodes_.at(e.second).segment, scan, params_.fusion))
+      return true;
+  return false;
+}
+
 void CaeRlsm::insertSegment(const Segment2& world, std::uint32_t leaf)
 {
   std::vector<std::uint64_t>& candidates = candidates_;

@@ -7,6 +7,8 @@
 // rebuilt from them under new keyframe poses.
 #pragma once
 
+#include <tbb/task_arena.h>
+
 #include <Eigen/Core>
 #include <boost/geometry.hpp>
 #include <boost/geometry/index/rtree.hpp>
@@ -77,6 +79,9 @@ class CaeRlsm : public Merger
   // OTM-ILSM (otm_ilsm.cpp).
   void insertSegment(const Segment2& world, std::uint32_t leaf);
   void findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out);
+  /// Read-only, thread-safe: whether any map segment but `exclude` meets the fusion conditions with
+  /// `scan`. Needs a fresh index (or the linear search); `hits` is the caller's scratch.
+  bool hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vector<Entry>& hits) const;
   Box paddedBox(const Segment2& s) const;
   void indexInsert(std::uint64_t id, Node& node);
   void indexRemove(std::uint64_t id, const Node& node);
@@ -86,7 +91,7 @@ class CaeRlsm : public Merger
   void updateTransforms();
   void refuse(Node& node) const;
   std::vector<std::uint32_t> splitInconsistentLeaves(Node& node) const;
-  std::size_t mergeConsistentSegments();
+  std::size_t mergeConsistentSegments(tbb::task_arena& arena);
   void rebuildIndex();
 
   CaeParams params_;
