@@ -220,7 +220,14 @@ void resolveOverlaps(const PreparedScan& scan, std::vector<PointRange>& segments
     {
       for (int i = cb; i < ce; ++i)
       {
-        if (right.distance(scan.points[i]) < left.distance(scan.points[i]))
+        // A point of the overlap goes to the nearer line. A point that only one segment owns
+        // (touching segments) leaves it only when clearly (0.1 mm, above float range rounding)
+        // nearer the other line: on a tie (collinear neighbours, e.g. one wall split at a gap)
+        // it must not move across the gap.
+        constexpr double kMargin = 1e-4;
+        const double dr = right.distance(scan.points[i]), dl = left.distance(scan.points[i]);
+        const bool to_b = i < b.begin ? dr < dl - kMargin : i >= a.end ? dl >= dr - kMargin : dr < dl;
+        if (to_b)
         {
           split = i;
           break;
