@@ -16,20 +16,23 @@ int main()
   auto merger = line_map_merging::makeMerger("cae", params);
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0.0, 0.01);
-  const int keyframes = 200, per_keyframe = 50;  // 10^4 leaves
+  // 100 keyframes x 100 segments = 10^4 leaves on ~10^3 walls (each wall seen by 10 keyframes).
+  const int keyframes = 100, per_keyframe = 100;
   for (int k = 0; k < keyframes; ++k)
   {
     line_map_merging::Keyframe kf;
     kf.index = static_cast<std::uint64_t>(k);
     kf.stamp = 0.1 * k;
-    kf.pose = linemap::Pose2(0.05 * k, 0.0, 0.0);
+    kf.pose = linemap::Pose2(0.0, 0.0, 0.0);
+    const int block = k / 10;
     for (int j = 0; j < per_keyframe; ++j)
     {
-      // Walls on a 2 m grid, each 1.5 m long, alternating horizontal and vertical.
-      const double gx = 2.0 * (j % 10) - 0.05 * k, gy = 2.0 * (j / 10);
+      // Walls on a 3 m grid, 1.5 m long, alternating horizontal and vertical; each group of ten
+      // keyframes sees its own block of the grid.
+      const double gx = 3.0 * (j % 10) + 40.0 * block, gy = 3.0 * (j / 10);
       const linemap::Vec2 a(gx + noise(rng), gy + noise(rng));
       const linemap::Vec2 b =
-          (j % 2) ? linemap::Vec2(gx + 1.5, gy + noise(rng)) : linemap::Vec2(gx + noise(rng), gy + 1.5);
+          (j % 2) ? linemap::Vec2(gx + 1.5, a.y() + noise(rng)) : linemap::Vec2(a.x() + noise(rng), gy + 1.5);
       kf.segments.emplace_back(a, b);
     }
     merger->addKeyframe(kf);

@@ -11,12 +11,46 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "line_map_merging/cae_rlsm.hpp"
 
 namespace line_map_merging
 {
 namespace bgi = boost::geometry::index;
+
+namespace
+{
+/// body(i) for every i in [0, n), in parallel on `arena`.
+template <class Body>
+void parallelFor(tbb::task_arena& arena, std::size_t n, std::size_t grain, const Body& body)
+{
+#ifdef LINEMAP_TSAN
+  // ThreadSanitizer cannot see TBB's synchronisation (libtbb is not instrumented), so the TSan
+  // check (scripts/sanitize.sh tsan) runs the same bodies on plain threads, interleaved chunks.
+  (void)grain;
+  const std::size_t workers = std::max(2, arena.max_concurrency());
+  std::vector<std::thread> threads;
+  for (std::size_t w = 0; w < workers; ++w)
+    threads.emplace_back(
+        [&, w]
+        {
+          for (std::size_t i = w; i < n; i += workers) body(i);
+        });
+  for (std::thread& t : threads) t.join();
+#else
+  arena.execute(
+      [&]
+      {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
+                          [&](const tbb::blocked_range<std::size_t>& r)
+                          {
+                            for (std::size_t i = r.begin(); i != r.end(); ++i) body(i);
+                          });
+      });
+#endif
+}
+}  // namespace
 
 Segment2 CaeRlsm::worldLeaf(std::uint32_t leaf) const
 {
@@ -106,17 +140,12 @@ std::size_t CaeRlsm::mergeConsistentSegments(tbb::task_arena& arena)
   all.reserve(nodes_.size());
   for (const auto& entry : nodes_) all.emplace_back(entry.first, &entry.second);
   std::vector<char> has_partner(all.size(), 0);
-  arena.execute(
-      [&]
-      {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, all.size(), 256),
-                          [&](const tbb::blocked_range<std::size_t>& r)
-                          {
-                            std::vector<Entry> hits;
-                            for (std::size_t i = r.begin(); i != r.end(); ++i)
-                              has_partner[i] = hasCandidate(all[i].second->segment, all[i].first, hits);
-                          });
-      });
+  parallelFor(arena, all.size(), 256,
+              [&](std::size_t i)
+              {
+                thread_local std::vector<Entry> hits;
+                has_partner[i] = hasCandidate(all[i].second->segment, all[i].first, hits);
+              });
   std::set<std::uint64_t> pending;
   for (std::size_t i = 0; i < all.size(); ++i)
     if (has_partner[i]) pending.insert(all[i].first);
@@ -170,19 +199,12 @@ AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap:
   // Hash lookups and sines are a good part of the work for 1e5+ keyframes: done in parallel too.
   constexpr std::uint32_t kUnknown = UINT32_MAX;
   std::vector<std::uint32_t> slots(poses.size());
-  arena.execute(
-      [&]
-      {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, poses.size(), 1024),
-                          [&](const tbb::blocked_range<std::size_t>& r)
-                          {
-                            for (std::size_t i = r.begin(); i != r.end(); ++i)
-                            {
-                              auto it = slot_of_.find(poses[i].first);
-                              slots[i] = it == slot_of_.end() ? kUnknown : it->second;
-                            }
-                          });
-      });
+  parallelFor(arena, poses.size(), 1024,
+              [&](std::size_t i)
+              {
+                auto it = slot_of_.find(poses[i].first);
+                slots[i] = it == slot_of_.end() ? kUnknown : it->second;
+              });
   for (std::size_t i = 0; i < poses.size(); ++i)
   {
     if (slots[i] == kUnknown)
@@ -195,40 +217,25 @@ AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap:
     ++result.moved;
   }
   if (result.moved == 0) return result;
-  arena.execute(
-      [&]
-      {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keyframes_.size(), 1024),
-                          [&](const tbb::blocked_range<std::size_t>& r)
-                          {
-                            for (std::size_t i = r.begin(); i != r.end(); ++i)
-                            {
-                              const linemap::Pose2& p = keyframes_[i].pose;
-                              const double c = std::cos(p.theta), s = std::sin(p.theta);
-                              transforms_[i] << c, -s, p.x, s, c, p.y;
-                            }
-                          });
-      });
+  parallelFor(arena, keyframes_.size(), 1024,
+              [&](std::size_t i)
+              {
+                const linemap::Pose2& p = keyframes_[i].pose;
+                const double c = std::cos(p.theta), s = std::sin(p.theta);
+                transforms_[i] << c, -s, p.x, s, c, p.y;
+              });
 
   std::vector<Node*> nodes;
   nodes.reserve(nodes_.size());
   for (auto& entry : nodes_) nodes.push_back(&entry.second);
   std::vector<std::vector<std::uint32_t>> split(params_.consistent_adjustment ? nodes.size() : 0);
 
-  arena.execute(
-      [&]
-      {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nodes.size(), 64),
-                          [&](const tbb::blocked_range<std::size_t>& r)
-                          {
-                            for (std::size_t i = r.begin(); i != r.end(); ++i)
-                            {
-                              refuse(*nodes[i]);
-                              if (params_.consistent_adjustment)
-                                split[i] = splitInconsistentLeaves(*nodes[i]);
-                            }
-                          });
-      });
+  parallelFor(arena, nodes.size(), 64,
+              [&](std::size_t i)
+              {
+                refuse(*nodes[i]);
+                if (params_.consistent_adjustment) split[i] = splitInconsistentLeaves(*nodes[i]);
+              });
   // Every box moved: the index is rebuilt in one go (bulk loading) when next searched.
   index_stale_ = true;
   if (!params_.consistent_adjustment) return result;
