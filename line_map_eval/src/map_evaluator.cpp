@@ -24,19 +24,21 @@ MapEvaluator::MapEvaluator(const EvaluatorParams& params)
 {
 }
 
-bool MapEvaluator::addScan(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Vec2> points)
+bool MapEvaluator::addScan(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Vec2> points,
+                           const std::optional<linemap::Pose2>& odom_pose)
 {
   if (!scan_gate_.accept(laser_pose)) return false;
-  scans_.push_back({stamp, laser_pose, std::move(points), {}});
+  scans_.push_back({stamp, laser_pose, odom_pose, std::move(points), {}});
   table_dirty_ = true;
   return true;
 }
 
 bool MapEvaluator::addSegments(double stamp, const linemap::Pose2& laser_pose,
-                               std::vector<linemap::Segment2> segments)
+                               std::vector<linemap::Segment2> segments,
+                               const std::optional<linemap::Pose2>& odom_pose)
 {
   if (!segment_gate_.accept(laser_pose)) return false;
-  segments_.push_back({stamp, laser_pose, {}, std::move(segments)});
+  segments_.push_back({stamp, laser_pose, odom_pose, {}, std::move(segments)});
   return true;
 }
 
@@ -46,7 +48,12 @@ std::size_t MapEvaluator::reregister(std::vector<Frame>& frames,
 {
   // Frames are appended in arrival order; stamps may repeat after a bag restart, so sort a view.
   std::vector<line_map_merging::KeyframeInfo> infos(frames.size());
-  for (std::size_t i = 0; i < frames.size(); ++i) infos[i] = {i, frames[i].stamp, frames[i].pose, {}};
+  std::map<std::uint64_t, linemap::Pose2> odom;
+  for (std::size_t i = 0; i < frames.size(); ++i)
+  {
+    infos[i] = {i, frames[i].stamp, frames[i].pose, {}};
+    if (frames[i].odom) odom[i] = *frames[i].odom;
+  }
   std::stable_sort(infos.begin(), infos.end(),
                    [](const auto& a, const auto& b) { return a.stamp < b.stamp; });
   std::map<std::uint64_t, linemap::Pose2> matched;
@@ -59,7 +66,7 @@ std::size_t MapEvaluator::reregister(std::vector<Frame>& frames,
     else
       ++unmatched;
   }
-  for (const auto& [index, pose] : line_map_merging::correctKeyframes(infos, matched))
+  for (const auto& [index, pose] : line_map_merging::correctKeyframes(infos, matched, odom))
     frames[index].pose = pose;
   return unmatched;
 }

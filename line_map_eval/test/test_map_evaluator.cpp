@@ -85,3 +85,36 @@ TEST(MapEvaluator, UnmatchedKeyframeTakesInterpolatedCorrection)
   EXPECT_NEAR(m.error.mean_error, 0.0, 1e-9);
   EXPECT_EQ(m.error.assigned, 3u);
 }
+
+TEST(MapEvaluator, OdometryPosesKeepCorrectionsApartAcrossAMapToOdomJump)
+{
+  // Odometry drifted from the truth by `d`. The first two keyframes were registered on raw
+  // odometry (map->odom = identity); then the back end's map->odom jumped to `d`, so the later ones
+  // were registered on the truth. The trajectory holds keyframes 0 and 2 only: keyframe 1 must get
+  // keyframe 0's correction, not a blend with keyframe 2's identity.
+  const Pose2 d(0.3, -0.2, 3.0 * linemap::kPi / 180.0);
+  const std::vector<Pose2> truth{Pose2(-1.0, 0.0, 0.0), Pose2(-0.5, 0.3, 0.4), Pose2(0.0, 0.0, 0.8),
+                                 Pose2(0.5, -0.3, 1.2)};
+  for (const bool with_odometry : {true, false})
+  {
+    MapEvaluator eval(EvaluatorParams{});
+    for (int i = 0; i < 4; ++i)
+    {
+      const Pose2 odom = d.inverse() * truth[i];
+      const Pose2 registered = i < 2 ? odom : truth[i];
+      const std::optional<Pose2> odom_pose = with_odometry ? std::optional<Pose2>(odom) : std::nullopt;
+      ASSERT_TRUE(eval.addScan(i, registered, wallPointsInLaserFrame(truth[i]), odom_pose));
+      ASSERT_TRUE(eval.addSegments(i, registered, wallsInLaserFrame(truth[i]), odom_pose));
+    }
+    EXPECT_EQ(eval.applyTrajectory({{0.0, truth[0]}, {2.0, truth[2]}}), 0u);
+    const auto m = eval.evaluate(kWalls);
+    if (with_odometry)
+    {
+      EXPECT_NEAR(m.quality.quality, 100.0, 1e-9);
+      EXPECT_NEAR(m.error.mean_error, 0.0, 1e-9);
+      EXPECT_EQ(m.error.assigned, 16u);
+    }
+    else  // the map-frame interpolation misplaces keyframe 1: its four originals leave their walls
+      EXPECT_EQ(m.error.assigned, 12u);
+  }
+}

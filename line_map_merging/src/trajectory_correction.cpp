@@ -29,18 +29,54 @@ std::optional<std::size_t> matchByStamp(const std::vector<KeyframeInfo>& keyfram
 std::vector<std::pair<std::uint64_t, linemap::Pose2>> correctKeyframes(
     const std::vector<KeyframeInfo>& keyframes, const std::map<std::uint64_t, linemap::Pose2>& matched)
 {
+  return correctKeyframes(keyframes, matched, {});
+}
+
+std::vector<std::pair<std::uint64_t, linemap::Pose2>> correctKeyframes(
+    const std::vector<KeyframeInfo>& keyframes, const std::map<std::uint64_t, linemap::Pose2>& matched,
+    const std::map<std::uint64_t, linemap::Pose2>& odom)
+{
   std::vector<std::pair<std::uint64_t, linemap::Pose2>> out;
-  // Corrections of the matched keyframes, in stamp order.
-  std::vector<std::pair<double, linemap::Pose2>> corrections;
-  for (const KeyframeInfo& k : keyframes)
+  // Each keyframe's pose in the continuous frame: its odometry pose, or its map pose moved by the
+  // map->odom of the nearest keyframe with an odometry pose (before it, else after it), or, without
+  // any odometry pose, its map pose.
+  std::vector<linemap::Pose2> continuous(keyframes.size());
   {
-    auto it = matched.find(k.index);
-    if (it != matched.end()) corrections.emplace_back(k.stamp, it->second * k.pose.inverse());
+    std::optional<linemap::Pose2> map_to_odom;
+    std::optional<std::size_t> first_with_odom;
+    for (std::size_t i = 0; i < keyframes.size(); ++i)
+    {
+      auto it = odom.find(keyframes[i].index);
+      if (it != odom.end())
+      {
+        continuous[i] = it->second;
+        map_to_odom = keyframes[i].pose * it->second.inverse();
+        if (!first_with_odom) first_with_odom = i;
+      }
+      else
+        continuous[i] = map_to_odom ? map_to_odom->inverse() * keyframes[i].pose : keyframes[i].pose;
+    }
+    if (first_with_odom)
+    {
+      const KeyframeInfo& k = keyframes[*first_with_odom];
+      const linemap::Pose2 first_map_to_odom = k.pose * odom.at(k.index).inverse();
+      for (std::size_t i = 0; i < *first_with_odom; ++i)
+        continuous[i] = first_map_to_odom.inverse() * keyframes[i].pose;
+    }
+  }
+  // Corrections (new pose * continuous pose^-1) of the matched keyframes, in stamp order.
+  std::vector<std::pair<double, linemap::Pose2>> corrections;
+  for (std::size_t i = 0; i < keyframes.size(); ++i)
+  {
+    auto it = matched.find(keyframes[i].index);
+    if (it != matched.end())
+      corrections.emplace_back(keyframes[i].stamp, it->second * continuous[i].inverse());
   }
   if (corrections.empty()) return out;
   out.reserve(keyframes.size());
-  for (const KeyframeInfo& k : keyframes)
+  for (std::size_t i = 0; i < keyframes.size(); ++i)
   {
+    const KeyframeInfo& k = keyframes[i];
     auto it = matched.find(k.index);
     if (it != matched.end())
     {
@@ -61,7 +97,7 @@ std::vector<std::pair<std::uint64_t, linemap::Pose2>> correctKeyframes(
       const double t = span > 0.0 ? (k.stamp - before.first) / span : 0.0;
       correction = linemap::interpolate(before.second, after->second, t);
     }
-    out.emplace_back(k.index, correction * k.pose);
+    out.emplace_back(k.index, correction * continuous[i]);
   }
   return out;
 }

@@ -67,3 +67,82 @@ TEST(TrajectoryCorrection, RotationCorrectionIsInterpolatedAboutTheMapOrigin)
   // Before the first match: clamped to its correction (identity here).
   EXPECT_TRUE(correctKeyframes(k, {}).empty());
 }
+
+namespace
+{
+// Six keyframes driving along x in the odometry frame; the back end's map->odom was the identity
+// until keyframe 3, where it jumped to the corrected map->odom `d` (as carmen_to_bag's bags do at
+// each trajectory emission): the keyframes before the jump were registered on raw odometry.
+struct JumpCase
+{
+  Pose2 d{0.5, -0.2, 0.1};
+  Pose2 jump_map_to_odom{12.0, 5.0, 2.1};
+  std::vector<KeyframeInfo> keyframes;
+  std::map<std::uint64_t, Pose2> odom;
+  std::map<std::uint64_t, Pose2> matched;
+
+  JumpCase()
+  {
+    for (int i = 0; i < 6; ++i)
+    {
+      KeyframeInfo k;
+      k.index = 20 + i;
+      k.stamp = 50.0 + i;
+      const Pose2 o(i, 0.1 * i, 0.05 * i);
+      k.pose = (i < 3 ? Pose2() : jump_map_to_odom) * o;
+      keyframes.push_back(k);
+      odom[k.index] = o;
+    }
+    // The trajectory (the truth d * odom) holds keyframes 0, 3 and 5.
+    for (int i : {0, 3, 5}) matched[20 + i] = d * odom.at(20 + i);
+  }
+};
+
+double poseError(const Pose2& a, const Pose2& b)
+{
+  return std::hypot(a.x - b.x, a.y - b.y) + std::abs(linemap::normalizeAngle(a.theta - b.theta));
+}
+}  // namespace
+
+TEST(TrajectoryCorrection, OdometryPosesCarryTheCorrectionAcrossAMapToOdomJump)
+{
+  const JumpCase c;
+  const auto out = correctKeyframes(c.keyframes, c.matched, c.odom);
+  ASSERT_EQ(out.size(), 6u);
+  for (int i = 0; i < 6; ++i)
+  {
+    EXPECT_EQ(out[i].first, 20u + i);
+    EXPECT_LT(poseError(out[i].second, c.d * c.odom.at(20 + i)), 1e-9) << "keyframe " << i;
+  }
+  // In the map frame the correction jumps at keyframe 3: keyframes 1 and 2, registered before the
+  // jump, are moved by a blend of the two corrections, metres off (what the nodelets did on Intel).
+  const auto map_frame = correctKeyframes(c.keyframes, c.matched);
+  EXPECT_GT(poseError(map_frame[2].second, c.d * c.odom.at(22)), 1.0);
+}
+
+TEST(TrajectoryCorrection, KeyframesWithoutOdometryTakeTheirNeighboursMapToOdom)
+{
+  JumpCase c;
+  // Keyframe 1 (before the jump) and 4 (after it) lack odometry; keyframe 0's too, so it takes the
+  // map->odom of the first keyframe with one (keyframe 1 is missing, so keyframe 2: identity).
+  for (int i : {0, 1, 4}) c.odom.erase(20 + i);
+  const JumpCase truth;
+  const auto out = correctKeyframes(c.keyframes, c.matched, c.odom);
+  ASSERT_EQ(out.size(), 6u);
+  for (int i = 0; i < 6; ++i)
+    EXPECT_LT(poseError(out[i].second, truth.d * truth.odom.at(20 + i)), 1e-9) << "keyframe " << i;
+}
+
+TEST(TrajectoryCorrection, WithoutOdometryPosesTheCorrectionIsInterpolatedInTheMapFrame)
+{
+  const JumpCase c;
+  const auto a = correctKeyframes(c.keyframes, c.matched);
+  const auto b = correctKeyframes(c.keyframes, c.matched, {});
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i)
+  {
+    EXPECT_EQ(a[i].first, b[i].first);
+    EXPECT_LT(poseError(a[i].second, b[i].second), 1e-12);
+  }
+  EXPECT_TRUE(correctKeyframes(c.keyframes, {}, c.odom).empty());
+}

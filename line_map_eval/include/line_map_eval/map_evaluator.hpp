@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -43,10 +44,14 @@ class MapEvaluator
   explicit MapEvaluator(const EvaluatorParams& params);
 
   /// Stores a scan's valid points (laser frame) taken at `laser_pose` (laser in map) when the
-  /// keyframe gate admits it; returns whether it was stored.
-  bool addScan(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Vec2> points);
+  /// keyframe gate admits it; returns whether it was stored. `odom_pose` is the laser in the
+  /// odometry frame at the same stamp, when known: re-registration then interpolates corrections
+  /// in the odometry frame, across the jumps of map->odom (line_map_merging::correctKeyframes).
+  bool addScan(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Vec2> points,
+               const std::optional<linemap::Pose2>& odom_pose = std::nullopt);
   /// Stores the original segments (laser frame) of a scan, gated like the scans.
-  bool addSegments(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Segment2> segments);
+  bool addSegments(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Segment2> segments,
+                   const std::optional<linemap::Pose2>& odom_pose = std::nullopt);
 
   /// Re-registers every stored frame: `laser_poses` are (stamp, new laser pose) pairs; frames
   /// matched by stamp take their pose, the others the interpolated correction of their matched
@@ -67,6 +72,7 @@ class MapEvaluator
   {
     double stamp = 0.0;
     linemap::Pose2 pose;
+    std::optional<linemap::Pose2> odom;  ///< laser in the odometry frame, when known
     std::vector<linemap::Vec2> points;
     std::vector<linemap::Segment2> segments;
   };
