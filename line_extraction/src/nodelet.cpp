@@ -1,13 +1,17 @@
 // ROS wrapper of the extraction pipeline: sensor_msgs/LaserScan on `scan` ->
 // line_map_msgs/LineSegmentArray on `line_segments` (+ RViz markers), in the
 // scan's frame and with its stamp. All the work is in the ROS-free core.
+#include <diagnostic_updater/diagnostic_updater.h>
 #include <line_map_msgs/LineSegmentArray.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <chrono>
+#include <cmath>
 #include <memory>
+#include <mutex>
 #include <pluginlib/class_list_macros.hpp>
 #include <string>
 
@@ -50,6 +54,11 @@ class LineExtractionRos
     segments_pub_ = nh.advertise<line_map_msgs::LineSegmentArray>("line_segments", 10);
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_segments_markers", 1);
     scan_sub_ = nh.subscribe("scan", 10, &LineExtractionRos::scanCallback, this);
+    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, private_nh);
+    diagnostics_->setHardwareID("none");
+    diagnostics_->add("line extraction", this, &LineExtractionRos::produceDiagnostics);
+    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0),
+                                     [this](const ros::WallTimerEvent&) { diagnostics_->update(); });
     ROS_INFO("line_extraction: algorithm '%s'%s", extractor_->params().algorithm.c_str(),
              extractor_->params().clustering ? " with breakpoint clustering" : "");
   }
@@ -60,6 +69,9 @@ class LineExtractionRos
     const bool want_segments = segments_pub_.getNumSubscribers() > 0;
     const bool want_markers = markers_pub_.getNumSubscribers() > 0;
     if (!want_segments && !want_markers) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++scans_;
+    checkGeometry(*msg);
     ScanInput scan;
     scan.ranges = msg->ranges.data();
     scan.count = msg->ranges.size();
@@ -70,18 +82,68 @@ class LineExtractionRos
     scan.intensities = msg->intensities.data();
     scan.intensity_count = msg->intensities.size();
     const ExtractionResult* result = nullptr;
+    const auto t0 = std::chrono::steady_clock::now();
     try
     {
       result = &extractor_->extract(scan);
     }
     catch (const ScanError& e)
     {
-      ROS_WARN_THROTTLE(5.0, "line_extraction: scan from frame '%s' skipped: %s",
-                        msg->header.frame_id.c_str(), e.what());
+      ++rejected_scans_;
+      ROS_WARN_THROTTLE(5.0, "line_extraction: scan from frame '%s' skipped (%zu so far): %s",
+                        msg->header.frame_id.c_str(), rejected_scans_, e.what());
       return;
     }
+    last_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    segments_ += result->segments.size();
     if (want_segments) publishSegments(msg->header, *result);
     if (want_markers) publishMarkers(msg->header, *result);
+  }
+
+  /// Counts what the core does not judge: angle_max disagreeing with angle_min + (n - 1) *
+  /// angle_increment (the beams are placed by angle_min and angle_increment, as REP-117 readers
+  /// do; drivers writing n * increment are tolerated), and changes of the beam geometry.
+  void checkGeometry(const sensor_msgs::LaserScan& msg)
+  {
+    const std::size_t n = msg.ranges.size();
+    if (n > 1 && std::isfinite(msg.angle_increment) && msg.angle_increment > 0.0f)
+    {
+      const double expected = msg.angle_min + static_cast<double>(n - 1) * msg.angle_increment;
+      if (!(std::abs(msg.angle_max - expected) <= 1.01 * msg.angle_increment))
+      {
+        ++inconsistent_angle_max_;
+        ROS_WARN_THROTTLE(5.0,
+                          "line_extraction: scan from frame '%s': angle_max %.6f differs from angle_min + "
+                          "(n - 1) * angle_increment = %.6f; beams placed by angle_min and angle_increment",
+                          msg.header.frame_id.c_str(), msg.angle_max, expected);
+      }
+    }
+    if (scans_ > 1 &&
+        (msg.angle_min != last_angle_min_ || msg.angle_increment != last_increment_ || n != last_count_))
+    {
+      ++geometry_changes_;
+      ROS_INFO_THROTTLE(5.0,
+                        "line_extraction: the scan geometry changed (%zu beams from %.4f rad by %.6f rad)", n,
+                        msg.angle_min, msg.angle_increment);
+    }
+    last_angle_min_ = msg.angle_min;
+    last_increment_ = msg.angle_increment;
+    last_count_ = n;
+  }
+
+  void produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& stat)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stat.summary(
+        rejected_scans_ > 0 ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
+        rejected_scans_ > 0 ? "unusable scans skipped" : "extracting");
+    stat.add("algorithm", extractor_->params().algorithm);
+    stat.add("scans", scans_);
+    stat.add("rejected scans", rejected_scans_);
+    stat.add("inconsistent angle_max", inconsistent_angle_max_);
+    stat.add("geometry changes", geometry_changes_);
+    stat.add("segments", segments_);
+    stat.add("last extraction time [ms]", last_ms_);
   }
 
   void publishSegments(const std_msgs::Header& header, const ExtractionResult& result)
@@ -135,9 +197,17 @@ class LineExtractionRos
     markers_pub_.publish(out);
   }
 
+  std::mutex mutex_;  // the scan callback and the diagnostics timer
   std::unique_ptr<LineExtractor> extractor_;
   ros::Publisher segments_pub_, markers_pub_;
   ros::Subscriber scan_sub_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::WallTimer diag_timer_;
+  std::size_t scans_ = 0, rejected_scans_ = 0, inconsistent_angle_max_ = 0, geometry_changes_ = 0,
+              segments_ = 0;
+  double last_ms_ = 0.0;
+  float last_angle_min_ = 0.0f, last_increment_ = 0.0f;
+  std::size_t last_count_ = 0;
 };
 
 class LineExtractionNodelet : public nodelet::Nodelet
