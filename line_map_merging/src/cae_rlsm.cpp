@@ -28,11 +28,15 @@ CaeRlsm::CaeRlsm(const CaeParams& params) : params_(params)
 AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
 {
   const linemap::Pose2& p = keyframe.pose;
-  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta)))
-    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) + ": pose is not finite");
+  if (!(std::abs(p.x) <= kMaxCoordinate && std::abs(p.y) <= kMaxCoordinate && std::isfinite(p.theta)))
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) +
+                                ": pose is not finite or lies beyond " + std::to_string(kMaxCoordinate) +
+                                " m");
   const linemap::Pose2& m = keyframe.mount;
-  if (!(std::isfinite(m.x) && std::isfinite(m.y) && std::isfinite(m.theta)))
-    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) + ": mount is not finite");
+  if (!(std::abs(m.x) <= kMaxCoordinate && std::abs(m.y) <= kMaxCoordinate && std::isfinite(m.theta)))
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) +
+                                ": mount is not finite or lies beyond " + std::to_string(kMaxCoordinate) +
+                                " m");
   if (!std::isfinite(keyframe.stamp))
     throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) + ": stamp is not finite");
   if (slot_of_.count(keyframe.index))

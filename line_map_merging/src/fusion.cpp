@@ -124,7 +124,9 @@ Segment2 fuse(const std::vector<WeightedSegment>& segments)
 
 bool isValidSegment(const Segment2& s)
 {
-  return s.start.allFinite() && s.end.allFinite() && (s.end - s.start).squaredNorm() > 0.0;
+  const auto inRange = [](const Vec2& p)
+  { return std::abs(p.x()) <= kMaxCoordinate && std::abs(p.y()) <= kMaxCoordinate; };  // false for NaN
+  return inRange(s.start) && inRange(s.end) && (s.end - s.start).squaredNorm() > 0.0;
 }
 
 }  // namespace line_map_merging

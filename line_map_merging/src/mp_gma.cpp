@@ -192,8 +192,10 @@ AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap:
 {
   AdjustResult result;
   for (const auto& [index, pose] : poses)
-    if (!(std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.theta)))
-      throw std::invalid_argument("adjust: pose of keyframe " + std::to_string(index) + " is not finite");
+    if (!(std::abs(pose.x) <= kMaxCoordinate && std::abs(pose.y) <= kMaxCoordinate &&
+          std::isfinite(pose.theta)))
+      throw std::invalid_argument("adjust: pose of keyframe " + std::to_string(index) +
+                                  " is not finite or lies beyond " + std::to_string(kMaxCoordinate) + " m");
   tbb::task_arena arena(params_.threads > 0 ? params_.threads : tbb::task_arena::automatic);
 
   // Hash lookups and sines are a good part of the work for 1e5+ keyframes: done in parallel too.

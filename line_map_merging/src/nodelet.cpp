@@ -7,7 +7,6 @@
 #include <line_map_msgs/LoadMap.h>
 #include <line_map_msgs/ResetMap.h>
 #include <line_map_msgs/SaveMap.h>
-#include <message_filters/subscriber.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -64,7 +63,14 @@ class LineMapMergingNodelet : public nodelet::Nodelet
  public:
   ~LineMapMergingNodelet() override
   {
+    autosave_timer_.stop();
     if (filter_) filter_->clear();
+    // The last changes since the previous autosave (shutdown of the manager, or unload).
+    if (merger_)
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      autosave();
+    }
   }
 
  private:
@@ -82,6 +88,9 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     publish_labels_ = pnh.param("publish_labels", false);
     marker_width_ = pnh.param("marker_width", 0.03);
     const int queue_size = std::max(1, pnh.param("queue_size", 100));
+    autosave_period_ = pnh.param("autosave_period", 0.0);
+    autosave_path_ = pnh.param<std::string>("autosave_path", "");
+    time_jump_tolerance_ = std::max(0.0, pnh.param("time_jump_tolerance", 1.0));
 
     const linemap::ParamSet params = linemap_ros::loadParamSet(pnh);
     try
@@ -100,15 +109,32 @@ class LineMapMergingNodelet : public nodelet::Nodelet
 
     map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
-    segments_sub_.subscribe(nh, "line_segments", queue_size);
-    filter_ = std::make_unique<SegmentsFilter>(segments_sub_, *tf_buffer_, map_frame_, queue_size, nh);
+    filter_ = std::make_unique<SegmentsFilter>(*tf_buffer_, map_frame_, queue_size, nh);
     filter_->registerCallback(boost::bind(&LineMapMergingNodelet::onSegments, this, boost::placeholders::_1));
     filter_->registerFailureCallback(boost::bind(&LineMapMergingNodelet::onTfFailure, this,
                                                  boost::placeholders::_1, boost::placeholders::_2));
+    segments_sub_ = nh.subscribe<line_map_msgs::LineSegmentArray>(
+        "line_segments", queue_size,
+        boost::function<void(const ros::MessageEvent<const line_map_msgs::LineSegmentArray>&)>(
+            [this](const ros::MessageEvent<const line_map_msgs::LineSegmentArray>& e) { onRawSegments(e); }));
     trajectory_sub_ = nh.subscribe("optimized_trajectory", 2, &LineMapMergingNodelet::onTrajectory, this);
     save_srv_ = pnh.advertiseService("save_map", &LineMapMergingNodelet::onSave, this);
     load_srv_ = pnh.advertiseService("load_map", &LineMapMergingNodelet::onLoad, this);
     reset_srv_ = pnh.advertiseService("reset_map", &LineMapMergingNodelet::onReset, this);
+
+    if (autosave_period_ > 0.0 && !autosave_path_.empty())
+    {
+      autosave_timer_ = nh.createWallTimer(ros::WallDuration(autosave_period_),
+                                           [this](const ros::WallTimerEvent&)
+                                           {
+                                             std::lock_guard<std::mutex> lock(mutex_);
+                                             autosave();
+                                           });
+      NODELET_INFO("line_map_merging: autosaving to '%s' every %.1f s", autosave_path_.c_str(),
+                   autosave_period_);
+    }
+    else if (autosave_period_ > 0.0 || !autosave_path_.empty())
+      NODELET_WARN("line_map_merging: autosave needs both ~autosave_period > 0 and ~autosave_path; off");
 
     diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
     diagnostics_->setHardwareID("none");
@@ -117,11 +143,76 @@ class LineMapMergingNodelet : public nodelet::Nodelet
                                      [this](const ros::WallTimerEvent&)
                                      {
                                        std::lock_guard<std::mutex> lock(mutex_);
+                                       checkTimeJump(ros::Time());  // the clock also jumps without scans
                                        diagnostics_->update();
                                      });
     NODELET_INFO("line_map_merging: method '%s' in frame '%s', keyframe gate %.2f m / %.1f deg",
                  method_.c_str(), map_frame_.c_str(), gate_.params().distance,
                  gate_.params().angle * 180.0 / linemap::kPi);
+  }
+
+  /// Drops (and counts) segments stamped zero before they reach the tf filter, which would take them
+  /// as "latest transform" and pose them wherever the robot is now.
+  void onRawSegments(const ros::MessageEvent<const line_map_msgs::LineSegmentArray>& event)
+  {
+    const auto& msg = event.getConstMessage();
+    if (msg->header.stamp.isZero())
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++zero_stamps_;
+      NODELET_WARN_THROTTLE(5.0, "line_map_merging: line_segments stamped zero dropped (%zu so far)",
+                            zero_stamps_);
+      return;
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      checkTimeJump(msg->header.stamp);
+    }
+    filter_->add(event);  // keeps the receipt time (add(msg) would stamp it with wall time)
+  }
+
+  /// Time going backwards (a `rosbag play --loop` restart under use_sim_time): the tf buffer holds
+  /// the future of the new time line, which would pose the replayed scans, and the gate reference
+  /// is the pose at the end of the previous pass. Both are reset; the map is kept.
+  /// Called with mutex_ held.
+  void checkTimeJump(const ros::Time& stamp)
+  {
+    const ros::Time now = ros::Time::now();
+    const bool clock_back = !last_now_.isZero() && (last_now_ - now).toSec() > time_jump_tolerance_;
+    const bool stamp_back =
+        !last_stamp_.isZero() && !stamp.isZero() && (last_stamp_ - stamp).toSec() > time_jump_tolerance_;
+    if (clock_back || stamp_back)
+    {
+      ++time_jumps_;
+      NODELET_WARN_THROTTLE(5.0,
+                            "line_map_merging: time jumped backwards (%s %.3f -> %.3f); tf buffer cleared, "
+                            "keyframe gate reset, map kept (%zu jumps so far)",
+                            clock_back ? "clock" : "stamp", clock_back ? last_now_.toSec() : last_stamp_.toSec(),
+                            clock_back ? now.toSec() : stamp.toSec(), time_jumps_);
+      tf_buffer_->clear();
+      gate_.reset();
+      last_stamp_ = ros::Time();
+    }
+    last_now_ = now;
+    if (!stamp.isZero()) last_stamp_ = std::max(last_stamp_, stamp);
+  }
+
+  /// Saves the map when it changed since the last save. Called with mutex_ held.
+  void autosave()
+  {
+    if (autosave_path_.empty() || autosave_period_ <= 0.0 || saved_revision_ == revision_) return;
+    try
+    {
+      merger_->save(autosave_path_);
+      saved_revision_ = revision_;
+      ++autosaves_;
+    }
+    catch (const std::exception& e)
+    {
+      ++autosave_failures_;
+      NODELET_WARN_THROTTLE(30.0, "line_map_merging: autosave failed (%zu so far): %s", autosave_failures_,
+                            e.what());
+    }
   }
 
   void onTfFailure(const line_map_msgs::LineSegmentArray::ConstPtr& msg, tf2_ros::FilterFailureReason reason)
@@ -210,6 +301,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     }
     last_otm_ms_ = msSince(t0);
     ++next_index_;
+    ++revision_;
     gate_.accept(base);
     if (result.rejected > 0)
     {
@@ -295,6 +387,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       return;
     }
     ++adjustments_;
+    ++revision_;
     publish(path->header.stamp.isZero() ? ros::Time::now() : path->header.stamp);
   }
 
@@ -331,6 +424,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     next_index_ = 0;
     for (const KeyframeInfo& k : merger_->keyframes()) next_index_ = std::max(next_index_, k.index + 1);
     gate_.reset();
+    ++revision_;
     res.success = true;
     res.message = "loaded " + std::to_string(merger_->segmentCount()) + " segments, " +
                   std::to_string(merger_->keyframeCount()) + " keyframes from " + req.path;
@@ -342,6 +436,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   {
     std::lock_guard<std::mutex> lock(mutex_);
     merger_->reset();
+    ++revision_;
     next_index_ = 0;
     gate_.reset();
     res.success = true;
@@ -454,6 +549,10 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     stat.add("bad trajectory poses", bad_poses_);
     stat.add("unmatched trajectory poses", unmatched_poses_);
     stat.add("ignored trajectories", bad_trajectories_);
+    stat.add("zero-stamp segments", zero_stamps_);
+    stat.add("time jumps", time_jumps_);
+    stat.add("autosaves", autosaves_);
+    stat.add("autosave failures", autosave_failures_);
   }
 
   std::mutex mutex_;
@@ -466,13 +565,23 @@ class LineMapMergingNodelet : public nodelet::Nodelet
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  message_filters::Subscriber<line_map_msgs::LineSegmentArray> segments_sub_;
   std::unique_ptr<SegmentsFilter> filter_;
-  ros::Subscriber trajectory_sub_;
+  ros::Subscriber segments_sub_, trajectory_sub_;
   ros::Publisher map_pub_, marker_pub_;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  ros::WallTimer diag_timer_;
+  ros::WallTimer diag_timer_, autosave_timer_;
+
+  // Autosave: revision_ counts map changes, saved_revision_ is the one on disk.
+  double autosave_period_ = 0.0;
+  std::string autosave_path_;
+  std::uint64_t revision_ = 0, saved_revision_ = 0;
+  std::size_t autosaves_ = 0, autosave_failures_ = 0;
+
+  // Time jumps: the latest clock reading and segments stamp seen.
+  double time_jump_tolerance_ = 1.0;
+  ros::Time last_now_, last_stamp_;
+  std::size_t time_jumps_ = 0, zero_stamps_ = 0;
 
   std::uint64_t next_index_ = 0;
   double last_otm_ms_ = 0.0, last_gma_ms_ = 0.0;

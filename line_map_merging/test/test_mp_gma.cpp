@@ -157,6 +157,31 @@ TEST(MpGma, UnknownKeyframesAreCountedAndThreadCountDoesNotMatter)
   std::vector<std::pair<std::uint64_t, Pose2>> bad{{0, Pose2(std::nan(""), 0, 0)}};
   EXPECT_THROW(a.adjust(bad), std::invalid_argument);
   EXPECT_EQ(a.map().size(), ma.size());
+  // Finite but absurd (the fuzzer's 1.35e308): the fused sums of squares would overflow to NaN.
+  const std::uint64_t first = d.keyframes.front().index;
+  bad = {{first, Pose2(1.35e308, 0, 0)}, {first, Pose2(0, 2e7, 0)}};
+  for (const auto& pose : bad)
+    EXPECT_THROW(a.adjust({pose}), std::invalid_argument) << pose.second.x << " " << pose.second.y;
+  const auto after = a.map();
+  ASSERT_EQ(after.size(), ma.size());
+  for (std::size_t i = 0; i < after.size(); ++i) EXPECT_EQ(after[i].segment.start, ma[i].segment.start);
+}
+
+TEST(MpGma, SegmentsAndPosesBeyondTheMapExtentAreRefused)
+{
+  CaeRlsm merger;
+  Keyframe k;
+  k.index = 1;
+  k.segments = {
+      {Vec2(0, 0), Vec2(1, 0)}, {Vec2(4.65, 5.18e286), Vec2(-0.5, -8.7)}, {Vec2(2e7, 0), Vec2(2e7, 1)}};
+  const line_map_merging::AddResult r = merger.addKeyframe(k);
+  EXPECT_EQ(r.merged, 1u);
+  EXPECT_EQ(r.rejected, 2u);
+  k.index = 2;
+  k.pose = Pose2(-1.1e7, 0, 0);
+  EXPECT_THROW(merger.addKeyframe(k), std::invalid_argument);
+  EXPECT_EQ(merger.keyframeCount(), 1u);
+  EXPECT_EQ(merger.leafCount(), 1u);
 }
 
 TEST(MpGma, AdjustingBackToTheOldPosesRestoresTheGrouping)

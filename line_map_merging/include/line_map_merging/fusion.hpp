@@ -88,7 +88,11 @@ class FusedLine
 /// fused line. Throws std::invalid_argument for an empty set or a non-positive total weight.
 Segment2 fuse(const std::vector<WeightedSegment>& segments);
 
-/// True when both endpoints are finite and distinct.
+/// Largest coordinate [m] a segment or keyframe position may have (10,000 km). Beyond it the sums
+/// of squares that fusion keeps overflow, so such input is refused like non-finite input.
+constexpr double kMaxCoordinate = 1e7;
+
+/// True when both endpoints are finite, within kMaxCoordinate and distinct.
 bool isValidSegment(const Segment2& s);
 
 }  // namespace line_map_merging
