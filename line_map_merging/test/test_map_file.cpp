@@ -1,8 +1,12 @@
-// Map files: round trip, load then adjust, and every kind of bad file leaving the map untouched.
+// Map files: round trip, load then adjust, every kind of bad file leaving the map untouched, and the
+// stored file of each format version (test/map_files/).
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -181,5 +185,161 @@ TEST(MapFile, BadFilesLeaveTheMapUntouched)
   merger.load(good);
   expectSameMap(merger.map(), source.map(), 0.0);
   std::remove(good.c_str());
+  std::remove(bad.c_str());
+}
+
+// ---- Stored files of every format version (test/map_files/map_v<N>.yaml) ----
+namespace
+{
+const std::string kMapFiles = std::string(LINEMAP_SOURCE_DIR) + "/test/map_files/";
+
+/// The tiny map stored as test/map_files/map_v1.yaml: keyframes 0, 1 and 5 (indices need not be
+/// contiguous); the walls x = 1 and y = 1.5 seen from keyframes 0 and 1 fuse, two pieces stay alone.
+std::vector<Keyframe> handBuiltKeyframes()
+{
+  std::vector<Keyframe> k(3);
+  k[0].index = 0;
+  k[0].stamp = 10.0;
+  k[0].pose = Pose2(0.0, 0.0, 0.0);
+  k[0].segments = {{linemap::Vec2(1, -2), linemap::Vec2(1, 2)},
+                   {linemap::Vec2(-2, 1.5), linemap::Vec2(3, 1.5)}};
+  k[1].index = 1;
+  k[1].stamp = 11.0;
+  k[1].pose = Pose2(0.5, 0.0, 0.0);
+  k[1].segments = {{linemap::Vec2(0.5, -1.5), linemap::Vec2(0.5, 1.8)},
+                   {linemap::Vec2(-2, 1.5), linemap::Vec2(2, 1.5)},
+                   {linemap::Vec2(2, -1), linemap::Vec2(3, -1)}};
+  k[2].index = 5;
+  k[2].stamp = 12.5;
+  k[2].pose = Pose2(0.0, 3.0, 0.0);
+  k[2].segments = {{linemap::Vec2(4, 0), linemap::Vec2(4, 1)}};
+  for (auto& f : k) f.mount = Pose2(0.1, 0.0, 0.0);
+  return k;
+}
+
+CaeRlsm handBuiltMap()
+{
+  CaeRlsm m;
+  for (const Keyframe& k : handBuiltKeyframes()) m.addKeyframe(k);
+  return m;
+}
+
+/// The first line of a file saved by this build, "format_version: N".
+int currentFormatVersion()
+{
+  const std::string path = tempPath("version.yaml");
+  handBuiltMap().save(path);
+  const std::string text = slurp(path);
+  std::remove(path.c_str());
+  return std::stoi(text.substr(text.find(':') + 1));
+}
+
+std::vector<std::string> keysOf(const YAML::Node& map)
+{
+  std::vector<std::string> keys;
+  for (const auto& kv : map) keys.push_back(kv.first.as<std::string>());
+  return keys;
+}
+}  // namespace
+
+// Set LINEMAP_WRITE_MAP_FILE=1 to (re)write the stored file of the current version from the
+// hand-built map; only do so when bumping the format version, never to make this test pass.
+TEST(MapFileVersions, StoredFileOfTheCurrentVersionMatchesWhatThisBuildWrites)
+{
+  const int version = currentFormatVersion();
+  const std::string stored = kMapFiles + "map_v" + std::to_string(version) + ".yaml";
+  if (std::getenv("LINEMAP_WRITE_MAP_FILE")) handBuiltMap().save(stored);
+  ASSERT_TRUE(std::ifstream(stored).good())
+      << "format version " << version << " has no stored file " << stored
+      << ": keep one map file of each version (see the comment above this test)";
+  // Same layout as a fresh save: a change of the format without a version bump shows here.
+  const std::string fresh = tempPath("fresh.yaml");
+  handBuiltMap().save(fresh);
+  const YAML::Node a = YAML::LoadFile(stored), b = YAML::LoadFile(fresh);
+  EXPECT_EQ(keysOf(a), keysOf(b));
+  EXPECT_EQ(keysOf(a["parameters"]), keysOf(b["parameters"]));
+  ASSERT_EQ(a["segments"].size(), b["segments"].size());
+  for (std::size_t i = 0; i < a["segments"].size(); ++i)
+  {
+    EXPECT_EQ(keysOf(a["segments"][i]), keysOf(b["segments"][i]));
+    EXPECT_EQ(YAML::Dump(a["segments"][i]["leaves"]), YAML::Dump(b["segments"][i]["leaves"]));
+  }
+  EXPECT_EQ(YAML::Dump(a["keyframes"]), YAML::Dump(b["keyframes"]));
+  std::remove(fresh.c_str());
+}
+
+TEST(MapFileVersions, Version1FileLoadsWithTheHandBuiltContent)
+{
+  CaeRlsm m;
+  m.load(kMapFiles + "map_v1.yaml");
+  // Values of the hand-built map, not of a re-run of the merger.
+  ASSERT_EQ(m.segmentCount(), 4u);
+  EXPECT_EQ(m.leafCount(), 6u);
+  EXPECT_EQ(m.nextId(), 4u);
+  const auto map = m.map();
+  const std::vector<std::uint64_t> ids{0, 1, 2, 3};
+  const std::vector<std::uint32_t> counts{2, 2, 1, 1};
+  const std::vector<std::array<double, 4>> ends{
+      {1, -2, 1, 2}, {-2, 1.5, 3, 1.5}, {2.5, -1, 3.5, -1}, {4, 3, 4, 4}};
+  for (std::size_t i = 0; i < map.size(); ++i)
+  {
+    EXPECT_EQ(map[i].id, ids[i]);
+    EXPECT_EQ(map[i].merged_count, counts[i]) << "segment " << i;
+    EXPECT_NEAR(map[i].segment.start.x(), ends[i][0], 1e-9) << "segment " << i;
+    EXPECT_NEAR(map[i].segment.start.y(), ends[i][1], 1e-9) << "segment " << i;
+    EXPECT_NEAR(map[i].segment.end.x(), ends[i][2], 1e-9) << "segment " << i;
+    EXPECT_NEAR(map[i].segment.end.y(), ends[i][3], 1e-9) << "segment " << i;
+  }
+  const auto built = handBuiltKeyframes();
+  const auto kf = m.keyframes();
+  ASSERT_EQ(kf.size(), built.size());
+  for (std::size_t i = 0; i < kf.size(); ++i)
+  {
+    EXPECT_EQ(kf[i].index, built[i].index);
+    EXPECT_EQ(kf[i].stamp, built[i].stamp);
+    EXPECT_EQ(kf[i].pose.x, built[i].pose.x);
+    EXPECT_EQ(kf[i].pose.y, built[i].pose.y);
+    EXPECT_EQ(kf[i].pose.theta, built[i].pose.theta);
+    EXPECT_EQ(kf[i].mount.x, 0.1);
+  }
+  // Provenance: the wall y = 1.5 holds the original segments of keyframes 0 and 1, as extracted.
+  const auto leaves = m.leaves(1);
+  ASSERT_EQ(leaves.size(), 2u);
+  EXPECT_EQ(leaves[0].keyframe, 0u);
+  EXPECT_EQ(leaves[0].segment.end.x(), 3.0);
+  EXPECT_EQ(leaves[1].keyframe, 1u);
+  EXPECT_EQ(leaves[1].segment.start.x(), -2.0);
+}
+
+TEST(MapFileVersions, UnknownVersionAndDamagedCopiesNameTheFileAndKeepTheMap)
+{
+  const std::string text = slurp(kMapFiles + "map_v1.yaml");
+  ASSERT_EQ(text.rfind("format_version: 1\n", 0), 0u);
+  CaeRlsm merger = handBuiltMap();
+  Keyframe extra;  // makes the current map differ from the file's
+  extra.index = 9;
+  extra.segments = {{linemap::Vec2(-5, -5), linemap::Vec2(-5, -4)}};
+  merger.addKeyframe(extra);
+  const auto before = merger.map();
+  const std::string bad = tempPath("v99.yaml");
+  auto expectRejected = [&](const std::string& content, const std::string& needle)
+  {
+    spit(bad, content);
+    try
+    {
+      merger.load(bad);
+      ADD_FAILURE() << needle << ": accepted";
+    }
+    catch (const MapFileError& e)
+    {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+    expectSameMap(merger.map(), before, 0.0);
+    EXPECT_EQ(merger.leafCount(), 7u);
+    EXPECT_EQ(merger.keyframeCount(), 4u);
+  };
+  expectRejected("format_version: 99\n" + text.substr(text.find('\n') + 1), "format_version 99");
+  expectRejected(text.substr(0, text.size() * 2 / 3), "");
   std::remove(bad.c_str());
 }
