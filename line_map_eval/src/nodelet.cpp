@@ -83,6 +83,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     base_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("base_frame", "base_link"));
     min_period_ = pnh.param("min_period", 1.0);
     const double tf_timeout = pnh.param("tf_timeout", 0.5);
+    time_jump_tolerance_ = std::max(0.0, pnh.param("time_jump_tolerance", 1.0));
 
     tf_buffer_ = std::make_shared<tf2_ros::Buffer>(ros::Duration(600.0));
     tf_listener_ = std::make_shared<tf2_ros::TransformListener>(*tf_buffer_);
@@ -117,8 +118,10 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
     diagnostics_->setHardwareID("line_map_eval");
     diagnostics_->add("evaluator", this, &LineMapEvalNodelet::diagnose);
-    diagnostics_timer_ =
-        nh.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+    // Wall time and force_update(): update() waits for the next period in ROS time, which never comes
+    // after the clock jumped back (rosbag play --loop).
+    diagnostics_timer_ = nh.createWallTimer(
+        ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_->force_update(); });
     // A map that arrived within min_period of the last publication is published by this timer.
     publish_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.05, min_period_)),
                                         [this](const ros::WallTimerEvent&)
@@ -128,8 +131,33 @@ class LineMapEvalNodelet : public nodelet::Nodelet
                                         });
   }
 
-  bool lookupLaserPose(const std::string& frame, const ros::Time& stamp, linemap::Pose2& pose)
+  /// Time going backwards (a `rosbag play --loop` restart under use_sim_time): the tf buffer holds
+  /// the previous pass, whose transforms would pose the replayed scans; it is cleared. The stored
+  /// scans and segments are kept (the gates compare with the last stored pose, which only decides
+  /// whether the first scan of the new pass is stored).
+  /// `source` 0 = scans, 1 = segments: each stream is monotonic, but segments lag their scans.
+  void checkTimeJump(const ros::Time& stamp, int source)
   {
+    ros::Time& last_stamp = last_stamp_[source];
+    std::lock_guard<std::mutex> lock(mutex_);
+    const ros::Time now = ros::Time::now();
+    const bool clock_back = !last_now_.isZero() && (last_now_ - now).toSec() > time_jump_tolerance_;
+    const bool stamp_back = !last_stamp.isZero() && (last_stamp - stamp).toSec() > time_jump_tolerance_;
+    if (clock_back || stamp_back)
+    {
+      ++time_jumps_;
+      NODELET_WARN_THROTTLE(10.0, "line_map_eval: time jumped backwards (%s); tf buffer cleared (%zu jumps)",
+                            clock_back ? "clock" : "stamp", time_jumps_);
+      tf_buffer_->clear();
+      last_stamp_[0] = last_stamp_[1] = ros::Time();
+    }
+    last_now_ = now;
+    last_stamp = std::max(last_stamp, stamp);
+  }
+
+  bool lookupLaserPose(const std::string& frame, const ros::Time& stamp, linemap::Pose2& pose, int source)
+  {
+    checkTimeJump(stamp, source);
     try
     {
       pose = toPose2(
@@ -153,7 +181,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
       return;
     }
     linemap::Pose2 pose;
-    if (!lookupLaserPose(scan->header.frame_id, scan->header.stamp, pose)) return;
+    if (!lookupLaserPose(scan->header.frame_id, scan->header.stamp, pose, 0)) return;
     laser_frame_ = linemap_ros::stripLeadingSlash(scan->header.frame_id);
     std::vector<linemap::Vec2> points;
     points.reserve(scan->ranges.size());
@@ -171,7 +199,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   void onSegments(const line_map_msgs::LineSegmentArray::ConstPtr& msg)
   {
     linemap::Pose2 pose;
-    if (!lookupLaserPose(msg->header.frame_id, msg->header.stamp, pose)) return;
+    if (!lookupLaserPose(msg->header.frame_id, msg->header.stamp, pose, 1)) return;
     std::vector<linemap::Segment2> segments;
     segments.reserve(msg->segments.size());
     for (const auto& s : msg->segments) segments.emplace_back(toVec2(s.start), toVec2(s.end));
@@ -330,6 +358,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     status.add("rejected scans", rejected_scans_);
     status.add("rejected trajectory poses", rejected_poses_);
     status.add("unmatched trajectory poses", unmatched_poses_);
+    status.add("time jumps", time_jumps_);
     status.add("last quality [%]", last_quality_);
     status.add("last evaluation [ms]", last_eval_ms_);
   }
@@ -347,8 +376,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   ros::Publisher quality_pub_, grid_pub_;
   ros::ServiceServer evaluate_srv_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  ros::Timer diagnostics_timer_;
-  ros::WallTimer publish_timer_;
+  ros::WallTimer diagnostics_timer_, publish_timer_;
 
   std::mutex mutex_;
   std::vector<linemap::Segment2> map_;
@@ -358,6 +386,9 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   ros::WallTime last_publish_;
   double last_quality_ = 0.0, last_eval_ms_ = 0.0;
   std::size_t dropped_scans_ = 0, rejected_scans_ = 0, rejected_poses_ = 0, unmatched_poses_ = 0;
+  double time_jump_tolerance_ = 1.0;
+  ros::Time last_now_, last_stamp_[2];  // latest clock reading and scan / segments stamps seen
+  std::size_t time_jumps_ = 0;
 };
 
 }  // namespace line_map_eval

@@ -144,7 +144,9 @@ class LineMapMergingNodelet : public nodelet::Nodelet
                                      {
                                        std::lock_guard<std::mutex> lock(mutex_);
                                        checkTimeJump(ros::Time());  // the clock also jumps without scans
-                                       diagnostics_->update();
+                                       // update() waits for the next period in ROS time, which never
+                                       // comes after the clock jumped back; this timer runs on wall time.
+                                       diagnostics_->force_update();
                                      });
     NODELET_INFO("line_map_merging: method '%s' in frame '%s', keyframe gate %.2f m / %.1f deg",
                  method_.c_str(), map_frame_.c_str(), gate_.params().distance,
@@ -187,7 +189,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       NODELET_WARN_THROTTLE(5.0,
                             "line_map_merging: time jumped backwards (%s %.3f -> %.3f); tf buffer cleared, "
                             "keyframe gate reset, map kept (%zu jumps so far)",
-                            clock_back ? "clock" : "stamp", clock_back ? last_now_.toSec() : last_stamp_.toSec(),
+                            clock_back ? "clock" : "stamp",
+                            clock_back ? last_now_.toSec() : last_stamp_.toSec(),
                             clock_back ? now.toSec() : stamp.toSec(), time_jumps_);
       tf_buffer_->clear();
       gate_.reset();
