@@ -1,0 +1,193 @@
+#!/usr/bin/python3
+"""Rostest checker (test/soak.test): a prefix of the Intel raw log played three times in a row through
+linemap.launch under use_sim_time; each replay restarts the clock at the bag's start, as
+`rosbag play --loop` does, so time jumps backwards twice. Asserts that the nodelet manager stays
+alive, the merger drops (almost) no scans, every pass adds about as many keyframes as the first
+(the keyframe gate is reset at the jump), the manager's resident memory after pass 3 is within the
+band of pass 1, every line_map has finite coordinates and unique ids, and the autosave file is a
+complete map. Prints the sustained rate and the scan -> map latency."""
+import math
+import os
+import sys
+import tempfile
+import time
+import unittest
+import xmlrpc.client
+
+import rosbag
+import rosgraph
+import rospy
+import rostest
+import yaml
+from diagnostic_msgs.msg import DiagnosticArray
+from line_map_msgs.msg import LineMap
+from sensor_msgs.msg import LaserScan
+
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+import linemap_testing as lt  # noqa: E402
+
+MANAGER = "/linemap_manager"
+
+
+def manager_pid():
+    try:
+        api = rosgraph.Master(rospy.get_name()).lookupNode(MANAGER)
+    except (rosgraph.MasterError, OSError):
+        return None
+    code, _, pid = xmlrpc.client.ServerProxy(api).getPid(rospy.get_name())
+    return pid if code == 1 else None
+
+
+def rss_kb(pid):
+    with open("/proc/%d/status" % pid) as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+    raise RuntimeError("no VmRSS for pid %d" % pid)
+
+
+def percentile(values, p):
+    v = sorted(values)
+    return v[min(len(v) - 1, int(math.ceil(p / 100.0 * len(v))) - 1)] if v else float("nan")
+
+
+class Monitor:
+    """Checks every line_map as it arrives and measures scan -> map latency.
+
+    Latency is measured in wall time, both ends observed by this process: receipt of a line_map
+    minus receipt of the scan with the same stamp (the merger stamps a map with its keyframe's
+    scan). Sim time would scale the processing time by the replay rate, and the scan stamp is
+    ahead of the last /clock tick by up to one clock period, so neither measures what a user waits.
+    Stamps repeat across passes: the scan table is cleared at each pass."""
+
+    def __init__(self):
+        self.scan_wall = {}
+        self.latencies = []
+        self.maps = 0
+        self.bad_coordinates = 0
+        self.duplicate_ids = 0
+        self.last_map = None
+        self.merging = {}
+        self.evaluator = {}
+        self.sub_scan = rospy.Subscriber("scan", LaserScan, self._scan, queue_size=1000)
+        self.sub_map = rospy.Subscriber("line_map", LineMap, self._map, queue_size=100)
+        self.sub_diag = rospy.Subscriber("/diagnostics", DiagnosticArray, self._diag, queue_size=10)
+
+    def _scan(self, msg):
+        self.scan_wall[msg.header.stamp.to_nsec()] = time.time()
+
+    def _map(self, msg):
+        now = time.time()
+        self.maps += 1
+        self.last_map = msg
+        ids = [s.id for s in msg.segments]
+        if len(set(ids)) != len(ids):
+            self.duplicate_ids += 1
+        for s in msg.segments:
+            if not all(math.isfinite(v) for v in (s.segment.start.x, s.segment.start.y, s.segment.end.x,
+                                                  s.segment.end.y)):
+                self.bad_coordinates += 1
+                break
+        t = self.scan_wall.get(msg.header.stamp.to_nsec())
+        if t is not None:
+            self.latencies.append(now - t)
+
+    def _diag(self, msg):
+        for status in msg.status:
+            if "line map merging" in status.name:
+                self.merging = {kv.key: kv.value for kv in status.values}
+            elif "evaluator" in status.name:
+                self.evaluator = {kv.key: kv.value for kv in status.values}
+
+    def counter(self, key, status=None):
+        return int((self.merging if status is None else status).get(key, "-1"))
+
+
+class CheckSoak(unittest.TestCase):
+    def test_three_replays(self):
+        band = lt.bands()["soak"]
+        raw = os.path.join(lt.datasets_dir(), "intel.clf.bz2")
+        if not os.path.exists(raw):
+            self.skipTest("Intel dataset missing under " + lt.datasets_dir())
+        t_start = time.time()
+        bag = os.path.join(tempfile.mkdtemp(prefix="soak_"), "intel.bag")
+        rc, log = lt.run(["rosrun", "line_map_eval", "carmen_to_bag", raw, bag, "--no-progress",
+                          "--max-scans", str(band["max_scans"])], 60)
+        self.assertEqual(rc, 0, log)
+        with rosbag.Bag(bag) as b:
+            bag_s = b.get_end_time() - b.get_start_time()
+            scans = b.get_message_count(topic_filters=["/scan"])
+        mon = Monitor()
+        self.assertTrue(lt.wait_for(lambda: manager_pid() is not None, 30.0), "no nodelet manager")
+        pid = manager_pid()
+        time.sleep(1.0)
+        rss, keyframes, play_wall = [], [], 0.0
+        for p in range(3):
+            mon.scan_wall.clear()
+            before = mon.last_map.keyframes if mon.last_map else 0
+            t0 = time.time()
+            lt.play(bag, band["rate"], timeout=120, topics=lt.SENSOR_TOPICS)
+            play_wall += time.time() - t0
+            self.assertTrue(self._settle(mon),
+                            "no line_map in pass %d" % (p + 1))
+            self.assertEqual(manager_pid(), pid, "the nodelet manager died or restarted in pass %d" % (p + 1))
+            self.assertTrue(os.path.exists("/proc/%d" % pid), "the nodelet manager process is gone")
+            # The smallest of 2 s of samples: the evaluator's lookup table and the autosave text come and
+            # go in blocks of megabytes; what stays is the floor.
+            samples = []
+            for _ in range(10):
+                samples.append(rss_kb(pid))
+                time.sleep(0.2)
+            rss.append(min(samples))
+            keyframes.append(mon.last_map.keyframes - before)
+        time.sleep(1.5)  # one more diagnostics period
+        dropped, jumps = mon.counter("dropped scans"), mon.counter("time jumps")
+        eval_jumps = mon.counter("time jumps", mon.evaluator)
+        lat = sorted(mon.latencies)
+        print("soak: %d scans (%.0f s of log) x 3 at rate %s: sustained %.1f x real time; latency scan -> "
+              "line_map median %.1f ms, p99 %.1f ms (%d maps); keyframes per pass %s; dropped scans %d; time "
+              "jumps %d (evaluator %d); autosaves %d (failures %d); VmRSS after each pass %s kB (pass 3 / pass 1 = %.3f); "
+              "test %.0f s wall" % (scans, bag_s, band["rate"], 3 * bag_s / play_wall, 1e3 * percentile(lat, 50),
+                                    1e3 * percentile(lat, 99), mon.maps, keyframes, dropped, jumps, eval_jumps,
+                                    mon.counter("autosaves"), mon.counter("autosave failures"), rss,
+                                    rss[2] / float(rss[0]), time.time() - t_start))
+        self.assertEqual(mon.bad_coordinates, 0, "line_map with non-finite coordinates")
+        self.assertEqual(mon.duplicate_ids, 0, "line_map with repeated segment ids")
+        self.assertGreaterEqual(dropped, 0, "no diagnostics from the merger")
+        self.assertLessEqual(dropped, band["max_dropped_scans"])
+        # Two restarts of the clock; the evaluator may see a restart twice (scans and segments lag
+        # differently), never less than once each.
+        self.assertEqual(jumps, 2, "the merger must detect each restart of the clock once")
+        self.assertGreaterEqual(eval_jumps, 2, "the evaluator must detect the restarts of the clock")
+        for k in keyframes[1:]:
+            self.assertGreaterEqual(k, band["min_keyframe_ratio"] * keyframes[0],
+                                    "a replay added far fewer keyframes than the first pass: %s" % keyframes)
+        self.assertLessEqual(rss[2], (1.0 + band["max_rss_growth"]) * rss[0],
+                             "resident memory grew from pass 1 to pass 3: %s kB" % rss)
+        self.assertLessEqual(percentile(lat, 99), band["max_latency_p99_s"])
+        # Autosave (soak.test sets a short period): a complete map file, and no failures.
+        self.assertGreaterEqual(mon.counter("autosaves"), 1)
+        self.assertEqual(mon.counter("autosave failures"), 0)
+        path = rospy.get_param("/line_map_merging/autosave_path")
+        with open(path) as f:
+            saved = yaml.safe_load(f)
+        self.assertTrue(saved["end_of_map"])
+        self.assertEqual(len(saved["segments"]), saved["segment_count"])
+        self.assertGreater(saved["keyframe_count"], keyframes[0])
+        os.remove(path)
+
+    @staticmethod
+    def _settle(mon, settle=1.5, timeout=30.0):
+        """Waits until no line_map came for `settle` s (the pipeline has caught up)."""
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            n = mon.maps
+            time.sleep(settle)
+            if mon.maps == n:
+                return mon.last_map is not None
+        return False
+
+
+if __name__ == "__main__":
+    rospy.init_node("check_soak")
+    rostest.rosrun("line_map_eval", "check_soak", CheckSoak)
