@@ -22,6 +22,7 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "line_extraction/ros/param_loader.hpp"
@@ -81,6 +82,9 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     }
     map_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("map_frame", "map"));
     base_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("base_frame", "base_link"));
+    // Frames also keep their pose in the odometry frame: trajectory corrections are interpolated
+    // there, across the jumps of map -> odom (empty: in the map frame).
+    odom_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("odom_frame", "odom"));
     min_period_ = pnh.param("min_period", 1.0);
     const double tf_timeout = pnh.param("tf_timeout", 0.5);
     time_jump_tolerance_ = std::max(0.0, pnh.param("time_jump_tolerance", 1.0));
@@ -171,6 +175,21 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     }
   }
 
+  /// The laser pose in odom_frame_ at `stamp`, when that frame exists.
+  std::optional<linemap::Pose2> lookupOdomPose(const std::string& frame, const ros::Time& stamp)
+  {
+    if (odom_frame_.empty() || odom_frame_ == map_frame_) return std::nullopt;
+    try
+    {
+      return toPose2(
+          tf_buffer_->lookupTransform(odom_frame_, linemap_ros::stripLeadingSlash(frame), stamp).transform);
+    }
+    catch (const tf2::TransformException&)
+    {
+      return std::nullopt;
+    }
+  }
+
   void onScan(const sensor_msgs::LaserScan::ConstPtr& scan)
   {
     if (!std::isfinite(scan->angle_increment) || scan->angle_increment == 0.0f)
@@ -192,8 +211,9 @@ class LineMapEvalNodelet : public nodelet::Nodelet
       const double a = scan->angle_min + static_cast<double>(i) * scan->angle_increment;
       points.emplace_back(r * std::cos(a), r * std::sin(a));
     }
+    const auto odom = lookupOdomPose(scan->header.frame_id, scan->header.stamp);
     std::lock_guard<std::mutex> lock(mutex_);
-    if (evaluator_->addScan(scan->header.stamp.toSec(), pose, std::move(points))) dirty_ = true;
+    if (evaluator_->addScan(scan->header.stamp.toSec(), pose, std::move(points), odom)) dirty_ = true;
   }
 
   void onSegments(const line_map_msgs::LineSegmentArray::ConstPtr& msg)
@@ -203,8 +223,9 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     std::vector<linemap::Segment2> segments;
     segments.reserve(msg->segments.size());
     for (const auto& s : msg->segments) segments.emplace_back(toVec2(s.start), toVec2(s.end));
+    const auto odom = lookupOdomPose(msg->header.frame_id, msg->header.stamp);
     std::lock_guard<std::mutex> lock(mutex_);
-    evaluator_->addSegments(msg->header.stamp.toSec(), pose, std::move(segments));
+    evaluator_->addSegments(msg->header.stamp.toSec(), pose, std::move(segments), odom);
   }
 
   void onTrajectory(const nav_msgs::Path::ConstPtr& path)
@@ -364,7 +385,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   }
 
   std::unique_ptr<MapEvaluator> evaluator_;
-  std::string map_frame_, base_frame_, laser_frame_;
+  std::string map_frame_, base_frame_, odom_frame_, laser_frame_;
   double min_period_ = 1.0;
   std::shared_ptr<tf2_ros::Buffer> tf_buffer_;
   std::shared_ptr<tf2_ros::TransformListener> tf_listener_;

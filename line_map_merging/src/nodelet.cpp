@@ -22,6 +22,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <pluginlib/class_list_macros.hpp>
 #include <string>
 
@@ -83,6 +84,9 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     method_ = pnh.param<std::string>("method", "cae");
     map_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("map_frame", "map"));
     base_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("base_frame", "base_link"));
+    // Keyframe poses in the odometry frame: trajectory corrections are interpolated there, across
+    // the jumps of map -> odom (empty: in the map frame).
+    odom_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("odom_frame", "odom"));
     stamp_tolerance_ = pnh.param("stamp_tolerance", 0.01);
     tf_timeout_ = pnh.param("tf_timeout", 0.5);
     publish_labels_ = pnh.param("publish_labels", false);
@@ -281,6 +285,20 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       ++gated_scans_;
       return;
     }
+    std::optional<linemap::Pose2> odom_laser;
+    if (!odom_frame_.empty() && odom_frame_ != map_frame_)
+    {
+      try
+      {
+        linemap::Pose2 p;
+        if (poseOf(tf_buffer_->lookupTransform(odom_frame_, laser_frame, msg->header.stamp).transform, p))
+          odom_laser = p;
+      }
+      catch (const tf2::TransformException&)
+      {
+        // No odometry frame: the correction is interpolated in the map frame.
+      }
+    }
 
     Keyframe keyframe;
     keyframe.index = next_index_;
@@ -303,6 +321,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       return;
     }
     last_otm_ms_ = msSince(t0);
+    if (odom_laser) odom_poses_[keyframe.index] = *odom_laser;
     ++next_index_;
     ++revision_;
     gate_.accept(base);
@@ -368,7 +387,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       NODELET_INFO_THROTTLE(
           5.0, "line_map_merging: %zu of %zu trajectory poses match no keyframe (tolerance %.3f s)",
           unmatched, path->poses.size(), stamp_tolerance_);
-    const auto poses = correctKeyframes(keyframes, matched);
+    const auto poses = correctKeyframes(keyframes, matched, odom_poses_);
     if (poses.empty()) return;
     const auto t0 = std::chrono::steady_clock::now();
     try
@@ -425,6 +444,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       return true;
     }
     next_index_ = 0;
+    odom_poses_.clear();
     for (const KeyframeInfo& k : merger_->keyframes()) next_index_ = std::max(next_index_, k.index + 1);
     gate_.reset();
     ++revision_;
@@ -441,6 +461,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     merger_->reset();
     ++revision_;
     next_index_ = 0;
+    odom_poses_.clear();
     gate_.reset();
     res.success = true;
     res.message = "map cleared";
@@ -560,7 +581,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
 
   std::mutex mutex_;
   std::unique_ptr<Merger> merger_;
-  std::string method_, map_frame_, base_frame_;
+  std::string method_, map_frame_, base_frame_, odom_frame_;
+  std::map<std::uint64_t, linemap::Pose2> odom_poses_;  ///< keyframe index -> laser pose in odom_frame_
   double stamp_tolerance_ = 0.01, tf_timeout_ = 0.5;
   KeyframeGate gate_;
   bool publish_labels_ = false;
