@@ -27,7 +27,14 @@ MapEvaluator::MapEvaluator(const EvaluatorParams& params)
 bool MapEvaluator::addScan(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Vec2> points,
                            const std::optional<linemap::Pose2>& odom_pose)
 {
+  // A replayed scan is not stored again; the gate moves on from it as from a stored one.
+  if (scan_stamps_.count(stamp))
+  {
+    scan_gate_.setReference(laser_pose);
+    return false;
+  }
   if (!scan_gate_.accept(laser_pose)) return false;
+  scan_stamps_.insert(stamp);
   scans_.push_back({stamp, laser_pose, odom_pose, std::move(points), {}});
   table_dirty_ = true;
   return true;
@@ -37,7 +44,13 @@ bool MapEvaluator::addSegments(double stamp, const linemap::Pose2& laser_pose,
                                std::vector<linemap::Segment2> segments,
                                const std::optional<linemap::Pose2>& odom_pose)
 {
+  if (segment_stamps_.count(stamp))
+  {
+    segment_gate_.setReference(laser_pose);
+    return false;
+  }
   if (!segment_gate_.accept(laser_pose)) return false;
+  segment_stamps_.insert(stamp);
   segments_.push_back({stamp, laser_pose, odom_pose, {}, std::move(segments)});
   return true;
 }
@@ -112,6 +125,8 @@ void MapEvaluator::reset()
 {
   scans_.clear();
   segments_.clear();
+  scan_stamps_.clear();
+  segment_stamps_.clear();
   scan_gate_ = line_map_merging::KeyframeGate(params_.gate);
   segment_gate_ = line_map_merging::KeyframeGate(params_.gate);
   table_ = LookupTable();

@@ -46,6 +46,23 @@ TEST(MapEvaluator, GateKeepsOnlyKeyframes)
   EXPECT_EQ(eval.scanCount(), 2u);
 }
 
+// A bag replayed with --loop sends the same scans (same stamps) again, from anywhere in the gate's
+// eyes: they are not stored twice, so memory stays flat over replays.
+TEST(MapEvaluator, ReplayedStampsAreStoredOnce)
+{
+  MapEvaluator eval(EvaluatorParams{});
+  const std::vector<linemap::Segment2> segs{{linemap::Vec2(1, 0), linemap::Vec2(1, 1)}};
+  EXPECT_TRUE(eval.addScan(5.0, Pose2(0, 0, 0), wallPointsInLaserFrame(Pose2(0, 0, 0))));
+  EXPECT_TRUE(eval.addSegments(5.0, Pose2(0, 0, 0), segs));
+  EXPECT_TRUE(eval.addScan(6.0, Pose2(3, 0, 0), {}));
+  EXPECT_FALSE(eval.addScan(5.0, Pose2(10, 0, 0), {}));  // the gate alone would admit it
+  EXPECT_FALSE(eval.addSegments(5.0, Pose2(10, 0, 0), segs));
+  EXPECT_EQ(eval.scanCount(), 2u);
+  EXPECT_EQ(eval.originalCount(), 1u);
+  eval.reset();
+  EXPECT_TRUE(eval.addScan(5.0, Pose2(0, 0, 0), {}));
+}
+
 TEST(MapEvaluator, TrajectoryReRegistersScansAndSegments)
 {
   // Two keyframes whose recorded poses drifted by 0.3 m / 3 degrees from the truth.

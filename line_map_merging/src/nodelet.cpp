@@ -25,6 +25,7 @@
 #include <optional>
 #include <pluginlib/class_list_macros.hpp>
 #include <string>
+#include <unordered_set>
 
 #include "line_extraction/ros/param_loader.hpp"
 #include "line_map_merging/keyframe_gate.hpp"
@@ -278,8 +279,17 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       }
     }
 
-    // Keyframe gate on the robot (base) pose.
     const linemap::Pose2 base = laser * mount.inverse();
+    // A scan with the stamp of a keyframe is that keyframe again (a bag replayed with --loop):
+    // merging it twice would only add duplicate leaves and make stamp matching ambiguous. The gate
+    // moves on from it as from a keyframe, so a replay takes no keyframes in between.
+    if (keyframe_stamps_.count(msg->header.stamp.toSec()))
+    {
+      ++replayed_scans_;
+      gate_.setReference(base);
+      return;
+    }
+    // Keyframe gate on the robot (base) pose.
     if (!gate_.wouldAccept(base))
     {
       ++gated_scans_;
@@ -323,6 +333,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     last_otm_ms_ = msSince(t0);
     if (odom_laser) odom_poses_[keyframe.index] = *odom_laser;
     ++next_index_;
+    keyframe_stamps_.insert(keyframe.stamp);
     ++revision_;
     gate_.accept(base);
     if (result.rejected > 0)
@@ -445,7 +456,12 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     }
     next_index_ = 0;
     odom_poses_.clear();
-    for (const KeyframeInfo& k : merger_->keyframes()) next_index_ = std::max(next_index_, k.index + 1);
+    keyframe_stamps_.clear();
+    for (const KeyframeInfo& k : merger_->keyframes())
+    {
+      next_index_ = std::max(next_index_, k.index + 1);
+      keyframe_stamps_.insert(k.stamp);
+    }
     gate_.reset();
     ++revision_;
     res.success = true;
@@ -461,6 +477,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     merger_->reset();
     ++revision_;
     next_index_ = 0;
+    keyframe_stamps_.clear();
     odom_poses_.clear();
     gate_.reset();
     res.success = true;
@@ -574,6 +591,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     stat.add("unmatched trajectory poses", unmatched_poses_);
     stat.add("ignored trajectories", bad_trajectories_);
     stat.add("zero-stamp segments", zero_stamps_);
+    stat.add("replayed scans skipped", replayed_scans_);
     stat.add("time jumps", time_jumps_);
     stat.add("autosaves", autosaves_);
     stat.add("autosave failures", autosave_failures_);
@@ -606,7 +624,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   // Time jumps: the latest clock reading and segments stamp seen.
   double time_jump_tolerance_ = 1.0;
   ros::Time last_now_, last_stamp_;
-  std::size_t time_jumps_ = 0, zero_stamps_ = 0;
+  std::size_t time_jumps_ = 0, zero_stamps_ = 0, replayed_scans_ = 0;
+  std::unordered_set<double> keyframe_stamps_;  ///< of the merged keyframes, in seconds
 
   std::uint64_t next_index_ = 0;
   double last_otm_ms_ = 0.0, last_gma_ms_ = 0.0;

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <optional>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -44,12 +45,14 @@ class MapEvaluator
   explicit MapEvaluator(const EvaluatorParams& params);
 
   /// Stores a scan's valid points (laser frame) taken at `laser_pose` (laser in map) when the
-  /// keyframe gate admits it; returns whether it was stored. `odom_pose` is the laser in the
+  /// keyframe gate admits it and no stored scan has the same stamp (a bag replayed with --loop
+  /// sends the same scans again: keeping them twice would only grow memory); returns whether it
+  /// was stored. `odom_pose` is the laser in the
   /// odometry frame at the same stamp, when known: re-registration then interpolates corrections
   /// in the odometry frame, across the jumps of map->odom (line_map_merging::correctKeyframes).
   bool addScan(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Vec2> points,
                const std::optional<linemap::Pose2>& odom_pose = std::nullopt);
-  /// Stores the original segments (laser frame) of a scan, gated like the scans.
+  /// Stores the original segments (laser frame) of a scan, gated and deduplicated like the scans.
   bool addSegments(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Segment2> segments,
                    const std::optional<linemap::Pose2>& odom_pose = std::nullopt);
 
@@ -85,6 +88,7 @@ class MapEvaluator
   line_map_merging::KeyframeGate segment_gate_;
   std::vector<Frame> scans_;
   std::vector<Frame> segments_;
+  std::unordered_set<double> scan_stamps_, segment_stamps_;  // of the stored frames
   LookupTable table_;
   bool table_dirty_ = true;
 };

@@ -146,9 +146,10 @@ class CheckSoak(unittest.TestCase):
         lat = sorted(mon.latencies)
         print("soak: %d scans (%.0f s of log) x 3 at rate %s: sustained %.1f x real time; latency scan -> "
               "line_map median %.1f ms, p99 %.1f ms (%d maps); keyframes per pass %s; dropped scans %d; time "
-              "jumps %d (evaluator %d); autosaves %d (failures %d); VmRSS after each pass %s kB (pass 3 / pass 1 = %.3f); "
+              "jumps %d (evaluator %d); replayed scans skipped %d; autosaves %d (failures %d); VmRSS after each pass %s kB (pass 3 / pass 1 = %.3f); "
               "test %.0f s wall" % (scans, bag_s, band["rate"], 3 * bag_s / play_wall, 1e3 * percentile(lat, 50),
                                     1e3 * percentile(lat, 99), mon.maps, keyframes, dropped, jumps, eval_jumps,
+                                    mon.counter("replayed scans skipped"),
                                     mon.counter("autosaves"), mon.counter("autosave failures"), rss,
                                     rss[2] / float(rss[0]), time.time() - t_start))
         self.assertEqual(mon.bad_coordinates, 0, "line_map with non-finite coordinates")
@@ -157,12 +158,22 @@ class CheckSoak(unittest.TestCase):
         self.assertLessEqual(dropped, band["max_dropped_scans"])
         # Two restarts of the clock; the evaluator may see a restart twice (scans and segments lag
         # differently), never less than once each.
-        self.assertEqual(jumps, 2, "the merger must detect each restart of the clock once")
+        # A restart may be seen twice (the clock, then a segments message stamped before it).
+        self.assertGreaterEqual(jumps, 2, "the merger must detect each restart of the clock")
+        self.assertLessEqual(jumps, 4, "the merger counted far more clock restarts than there were")
         self.assertGreaterEqual(eval_jumps, 2, "the evaluator must detect the restarts of the clock")
+        # The first pass merges what the gate admits; the replays send the same scans (same stamps),
+        # which the merger skips as replayed, so memory stays flat.
+        # A scan dropped in pass 1 (no tf yet at the very start) may become a keyframe in a replay.
+        self.assertGreater(keyframes[0], 0)
         for k in keyframes[1:]:
-            self.assertGreaterEqual(k, band["min_keyframe_ratio"] * keyframes[0],
-                                    "a replay added far fewer keyframes than the first pass: %s" % keyframes)
-        self.assertLessEqual(rss[2], (1.0 + band["max_rss_growth"]) * rss[0],
+            self.assertLessEqual(k, band["max_dropped_scans"], "a replay added keyframes: %s" % keyframes)
+        self.assertGreaterEqual(mon.counter("replayed scans skipped"), 2 * (keyframes[0] - band["max_dropped_scans"]))
+        # Flat once the first replay has warmed up (tf buffer refilled after the clear, allocator
+        # pools): pass 3 against pass 2 within max_rss_growth; against pass 1 a looser bound.
+        self.assertLessEqual(rss[2], (1.0 + band["max_rss_growth"]) * rss[1],
+                             "resident memory grew from pass 2 to pass 3: %s kB" % rss)
+        self.assertLessEqual(rss[2], (1.0 + band["max_rss_growth_from_pass_1"]) * rss[0],
                              "resident memory grew from pass 1 to pass 3: %s kB" % rss)
         self.assertLessEqual(percentile(lat, 99), band["max_latency_p99_s"])
         # Autosave (soak.test sets a short period): a complete map file, and no failures.
@@ -173,7 +184,7 @@ class CheckSoak(unittest.TestCase):
             saved = yaml.safe_load(f)
         self.assertTrue(saved["end_of_map"])
         self.assertEqual(len(saved["segments"]), saved["segment_count"])
-        self.assertGreater(saved["keyframe_count"], keyframes[0])
+        self.assertEqual(saved["keyframe_count"], sum(keyframes))
         os.remove(path)
 
     @staticmethod
