@@ -174,6 +174,17 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     {
       std::lock_guard<std::mutex> lock(mutex_);
       checkTimeJump(msg->header.stamp);
+      // A frame that tf has never heard of would wait in the filter until its queue overflows,
+      // unreported: drop and count it now (a frame that exists but is not yet connected still waits).
+      const std::string frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
+      if (frame.empty() || !tf_buffer_->_frameExists(frame))
+      {
+        ++dropped_scans_;
+        NODELET_WARN_THROTTLE(5.0,
+                              "line_map_merging: segments in frame '%s', unknown to tf, dropped (%zu so far)",
+                              msg->header.frame_id.c_str(), dropped_scans_);
+        return;
+      }
     }
     filter_->add(event);  // keeps the receipt time (add(msg) would stamp it with wall time)
   }
