@@ -169,10 +169,11 @@ class CheckSoak(unittest.TestCase):
         for k in keyframes[1:]:
             self.assertLessEqual(k, band["max_dropped_scans"], "a replay added keyframes: %s" % keyframes)
         self.assertGreaterEqual(mon.counter("replayed scans skipped"), 2 * (keyframes[0] - band["max_dropped_scans"]))
-        # Flat once the first replay has warmed up (tf buffer refilled after the clear, allocator
-        # pools): pass 3 against pass 2 within max_rss_growth; against pass 1 a looser bound.
-        self.assertLessEqual(rss[2], (1.0 + band["max_rss_growth"]) * rss[1],
-                             "resident memory grew from pass 2 to pass 3: %s kB" % rss)
+        # Flat after the first pass: the last pass no higher than the passes before it (within
+        # max_rss_growth; the lookup table and the autosave text come and go in blocks of megabytes,
+        # so a single pass can read a few MB low), and within a looser bound of pass 1 alone.
+        self.assertLessEqual(rss[2], (1.0 + band["max_rss_growth"]) * max(rss[0], rss[1]),
+                             "resident memory grew over the replays: %s kB" % rss)
         self.assertLessEqual(rss[2], (1.0 + band["max_rss_growth_from_pass_1"]) * rss[0],
                              "resident memory grew from pass 1 to pass 3: %s kB" % rss)
         self.assertLessEqual(percentile(lat, 99), band["max_latency_p99_s"])
