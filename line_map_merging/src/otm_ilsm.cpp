@@ -9,11 +9,15 @@ namespace line_map_merging
 {
 namespace bgi = boost::geometry::index;
 
-CaeRlsm::Box CaeRlsm::paddedBox(const Segment2& s) const
+CaeRlsm::Box CaeRlsm::boundingBox(const Segment2& s, double pad)
 {
-  const double pad = params_.fusion.searchPadding();
   return Box(Point(std::min(s.start.x(), s.end.x()) - pad, std::min(s.start.y(), s.end.y()) - pad),
              Point(std::max(s.start.x(), s.end.x()) + pad, std::max(s.start.y(), s.end.y()) + pad));
+}
+
+CaeRlsm::Box CaeRlsm::paddedBox(const Segment2& s) const
+{
+  return boundingBox(s, params_.fusion.searchPadding());
 }
 
 void CaeRlsm::indexInsert(std::uint64_t id, Node& node)
@@ -36,8 +40,7 @@ void CaeRlsm::findCandidates(const Segment2& scan, std::uint64_t exclude, std::v
   {
     if (index_stale_) rebuildIndex();
     // Every map segment meeting the conditions has a point of `scan` inside its padded box.
-    const Box query(Point(std::min(scan.start.x(), scan.end.x()), std::min(scan.start.y(), scan.end.y())),
-                    Point(std::max(scan.start.x(), scan.end.x()), std::max(scan.start.y(), scan.end.y())));
+    const Box query = boundingBox(scan);
     hits_.clear();
     index_.query(bgi::intersects(query), std::back_inserter(hits_));
     for (const Entry& e : hits_)
@@ -61,8 +64,7 @@ bool CaeRlsm::hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vec
       if (id != exclude && meetsFusionConditions(node.segment, scan, params_.fusion)) return true;
     return false;
   }
-  const Box query(Point(std::min(scan.start.x(), scan.end.x()), std::min(scan.start.y(), scan.end.y())),
-                  Point(std::max(scan.start.x(), scan.end.x()), std::max(scan.start.y(), scan.end.y())));
+  const Box query = boundingBox(scan);
   hits.clear();
   index_.query(bgi::intersects(query), std::back_inserter(hits));
   for (const Entry& e : hits)

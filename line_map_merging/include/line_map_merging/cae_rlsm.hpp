@@ -82,7 +82,8 @@ class CaeRlsm : public Merger
   /// Read-only, thread-safe: whether any map segment but `exclude` meets the fusion conditions with
   /// `scan`. Needs a fresh index (or the linear search); `hits` is the caller's scratch.
   bool hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vector<Entry>& hits) const;
-  Box paddedBox(const Segment2& s) const;
+  Box paddedBox(const Segment2& s) const;  // padded by the fusion conditions' reach
+  static Box boundingBox(const Segment2& s, double pad = 0.0);
   void indexInsert(std::uint64_t id, Node& node);
   void indexRemove(std::uint64_t id, const Node& node);
 
