@@ -8,14 +8,13 @@ import unittest
 
 import rospy
 import rostest
-import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
-from line_map_msgs.msg import LineMap, LineSegmentArray
+from line_map_msgs.msg import LineMap
 from nav_msgs.msg import Path
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from check_merging import MOUNT_X, STEP, segments_seen_from, transform  # noqa: E402
+from check_merging import STEP, connect_to_merger, segments_seen_from, transform  # noqa: E402
 
 
 def pose(stamp, x, y=0.0, w=1.0):
@@ -33,15 +32,7 @@ class CheckBadInput(unittest.TestCase):
         self.maps, self.diagnostics = [], []
         rospy.Subscriber("line_map", LineMap, self.maps.append)
         rospy.Subscriber("/diagnostics", DiagnosticArray, self.diagnostics.append)
-        self.tf = tf2_ros.TransformBroadcaster()
-        self.static_tf = tf2_ros.StaticTransformBroadcaster()
-        self.static_tf.sendTransform(transform("base_link", "laser", rospy.Time(0), MOUNT_X, 0.0, 0.0))
-        self.pub = rospy.Publisher("line_segments", LineSegmentArray, queue_size=50)
-        self.path_pub = rospy.Publisher("optimized_trajectory", Path, queue_size=5)
-        deadline = time.time() + 10.0
-        while self.pub.get_num_connections() == 0 or self.path_pub.get_num_connections() == 0:
-            self.assertLess(time.time(), deadline, "the merging nodelet does not subscribe")
-            time.sleep(0.1)
+        connect_to_merger(self)
 
     def counters(self, wait_for=None, timeout=8.0):
         """The latest merger diagnostics as a dict; waits until `wait_for(dict)` holds."""

@@ -51,21 +51,27 @@ def segments_seen_from(x, stamp):
     return msg
 
 
+def connect_to_merger(test):
+    """tf broadcasters (with the static base_link -> laser), the line_segments and
+    optimized_trajectory publishers on `test`, once the merging nodelet subscribes to both."""
+    test.tf = tf2_ros.TransformBroadcaster()
+    test.static_tf = tf2_ros.StaticTransformBroadcaster()
+    test.static_tf.sendTransform(transform("base_link", "laser", rospy.Time(0), MOUNT_X, 0.0, 0.0))
+    test.pub = rospy.Publisher("line_segments", LineSegmentArray, queue_size=50)
+    test.path_pub = rospy.Publisher("optimized_trajectory", Path, queue_size=5)
+    deadline = time.time() + 10.0
+    while test.pub.get_num_connections() == 0 or test.path_pub.get_num_connections() == 0:
+        test.assertLess(time.time(), deadline, "the merging nodelet does not subscribe")
+        time.sleep(0.1)
+
+
 class CheckMerging(unittest.TestCase):
     def setUp(self):
         self.maps = []
         rospy.Subscriber("line_map", LineMap, self.maps.append)
         self.markers = []
         rospy.Subscriber("line_map_markers", MarkerArray, self.markers.append)
-        self.tf = tf2_ros.TransformBroadcaster()
-        self.static_tf = tf2_ros.StaticTransformBroadcaster()
-        self.static_tf.sendTransform(transform("base_link", "laser", rospy.Time(0), MOUNT_X, 0.0, 0.0))
-        self.pub = rospy.Publisher("line_segments", LineSegmentArray, queue_size=50)
-        self.path_pub = rospy.Publisher("optimized_trajectory", Path, queue_size=2)
-        deadline = time.time() + 10.0
-        while self.pub.get_num_connections() == 0 or self.path_pub.get_num_connections() == 0:
-            self.assertLess(time.time(), deadline, "the merging nodelet does not subscribe")
-            time.sleep(0.1)
+        connect_to_merger(self)
 
     def wait_for(self, predicate, what, timeout=10.0):
         deadline = time.time() + timeout
