@@ -9,7 +9,9 @@
 // transformed into the laser frame with the scan's true laser pose. A piece is
 // required (counts for TruePos) when at least --truth-min-beams beams hit it and it is
 // at least --truth-min-length long; a shorter piece may still absorb an extracted line,
-// which is then no false positive.
+// which is then no false positive. Lines are matched on (radius, angle); among the pairs
+// within the gate, a true piece that the extracted segment overlaps is preferred
+// (matchSegments), so that collinear pieces of one wall are told apart.
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/LaserScan.h>
@@ -39,7 +41,7 @@ using line_extraction::ScanInput;
 
 struct TrueLine
 {
-  linemap::HessianLine line;
+  line_extraction::LinePiece piece;  ///< laser frame
   bool counted = true;
 };
 
@@ -178,7 +180,8 @@ void loadTruth(Dataset& d, const Options& o)
                                  ": 'segment' needs 4 values");
       const linemap::Segment2 piece({seg[0], seg[1]}, {seg[2], seg[3]});
       TrueLine t;
-      t.line = line_extraction::lineInLaserFrame(laser_pose, piece);
+      t.piece.line = line_extraction::lineInLaserFrame(laser_pose, piece);
+      t.piece.extent = line_extraction::pieceInLaserFrame(laser_pose, piece);
       t.counted = o.truth_rule.counts(field<std::size_t>(v, "beams", file), piece.length());
       d.truth[i].push_back(t);
     }
@@ -194,24 +197,25 @@ struct Accuracy
 Accuracy measureAccuracy(LineExtractor& extractor, const Dataset& d)
 {
   Accuracy a;
-  std::vector<linemap::HessianLine> extracted, truth;
+  std::vector<line_extraction::LinePiece> extracted, truth;
   std::vector<bool> counted;
   std::size_t lines = 0;
   for (std::size_t i = 0; i < d.ranges.size(); ++i)
   {
     const ExtractionResult& r = extractor.extract(d.input(i));
     extracted.clear();
-    for (const line_extraction::Segment& s : r.segments) extracted.push_back({s.angle, s.radius});
+    for (const line_extraction::Segment& s : r.segments)
+      extracted.push_back({{s.angle, s.radius}, {s.start, s.end}});
     lines += r.segments.size();
     if (!d.with_truth) continue;
     truth.clear();
     counted.clear();
     for (const TrueLine& t : d.truth[i])
     {
-      truth.push_back(t.line);
+      truth.push_back(t.piece);
       counted.push_back(t.counted);
     }
-    a.stats.add(extracted.size(), truth.size(), line_extraction::matchLines(extracted, truth), counted);
+    a.stats.add(extracted.size(), truth.size(), line_extraction::matchSegments(extracted, truth), counted);
   }
   a.lines_per_scan = static_cast<double>(lines) / d.ranges.size();
   return a;

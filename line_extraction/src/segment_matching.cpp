@@ -25,11 +25,16 @@ LineMatch compareLines(const linemap::HessianLine& extracted, const linemap::Hes
   return flipped.distance2 < same.distance2 ? flipped : same;
 }
 
-std::vector<LineMatch> matchLines(const std::vector<linemap::HessianLine>& extracted,
-                                  const std::vector<linemap::HessianLine>& truth,
-                                  const MatchingOptions& options)
+namespace
 {
-  std::vector<LineMatch> candidates;
+// Greedy one-to-one matching of the gated pairs: pairs of a better rank first (0
+// before 1), then by distance, then by index. rank(e, t) gives the rank of a pair.
+template <typename Rank>
+std::vector<LineMatch> greedyMatches(const std::vector<linemap::HessianLine>& extracted,
+                                     const std::vector<linemap::HessianLine>& truth,
+                                     const MatchingOptions& options, Rank rank)
+{
+  std::vector<std::pair<int, LineMatch>> candidates;
   for (std::size_t e = 0; e < extracted.size(); ++e)
   {
     for (std::size_t t = 0; t < truth.size(); ++t)
@@ -38,28 +43,73 @@ std::vector<LineMatch> matchLines(const std::vector<linemap::HessianLine>& extra
       if (m.distance2 > options.gate) continue;
       m.extracted = static_cast<int>(e);
       m.truth = static_cast<int>(t);
-      candidates.push_back(m);
+      candidates.emplace_back(rank(e, t), m);
     }
   }
-  std::sort(
-      candidates.begin(), candidates.end(),
-      [](const LineMatch& a, const LineMatch& b)
-      { return std::tie(a.distance2, a.extracted, a.truth) < std::tie(b.distance2, b.extracted, b.truth); });
+  std::sort(candidates.begin(), candidates.end(),
+            [](const std::pair<int, LineMatch>& a, const std::pair<int, LineMatch>& b)
+            {
+              return std::tie(a.first, a.second.distance2, a.second.extracted, a.second.truth) <
+                     std::tie(b.first, b.second.distance2, b.second.extracted, b.second.truth);
+            });
   std::vector<char> used_e(extracted.size(), 0), used_t(truth.size(), 0);
   std::vector<LineMatch> matches;
-  for (const LineMatch& m : candidates)
+  for (const auto& c : candidates)
   {
+    const LineMatch& m = c.second;
     if (used_e[m.extracted] || used_t[m.truth]) continue;
     used_e[m.extracted] = used_t[m.truth] = 1;
     matches.push_back(m);
   }
+  // Reported by distance, whatever the rank that chose them.
+  std::stable_sort(matches.begin(), matches.end(),
+                   [](const LineMatch& a, const LineMatch& b) { return a.distance2 < b.distance2; });
   return matches;
+}
+
+std::vector<linemap::HessianLine> linesOf(const std::vector<LinePiece>& pieces)
+{
+  std::vector<linemap::HessianLine> lines;
+  lines.reserve(pieces.size());
+  for (const LinePiece& p : pieces) lines.push_back(p.line);
+  return lines;
+}
+}  // namespace
+
+std::vector<LineMatch> matchLines(const std::vector<linemap::HessianLine>& extracted,
+                                  const std::vector<linemap::HessianLine>& truth,
+                                  const MatchingOptions& options)
+{
+  return greedyMatches(extracted, truth, options, [](std::size_t, std::size_t) { return 0; });
+}
+
+double overlapAlong(const linemap::Segment2& a, const linemap::Segment2& b)
+{
+  const linemap::Vec2 d = b.end - b.start;
+  const double length = d.norm();
+  if (!(length > 0.0)) return 0.0;
+  const linemap::Vec2 u = d / length;
+  const double s0 = (a.start - b.start).dot(u), s1 = (a.end - b.start).dot(u);
+  return std::max(0.0, std::min(std::max(s0, s1), length) - std::max(std::min(s0, s1), 0.0));
+}
+
+std::vector<LineMatch> matchSegments(const std::vector<LinePiece>& extracted,
+                                     const std::vector<LinePiece>& truth, const MatchingOptions& options)
+{
+  return greedyMatches(linesOf(extracted), linesOf(truth), options,
+                       [&](std::size_t e, std::size_t t)
+                       { return overlapAlong(extracted[e].extent, truth[t].extent) > 0.0 ? 0 : 1; });
 }
 
 linemap::HessianLine lineInLaserFrame(const linemap::Pose2& laser_pose, const linemap::Segment2& piece)
 {
-  const linemap::Segment2 local = piece.transformed(laser_pose.inverse());
+  const linemap::Segment2 local = pieceInLaserFrame(laser_pose, piece);
   return linemap::hessianFromPoints(local.start, local.end);
+}
+
+linemap::Segment2 pieceInLaserFrame(const linemap::Pose2& laser_pose, const linemap::Segment2& piece)
+{
+  return piece.transformed(laser_pose.inverse());
 }
 
 void MatchStatistics::add(std::size_t extracted_count, std::size_t truth_count,

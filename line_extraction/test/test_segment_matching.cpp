@@ -119,3 +119,40 @@ TEST(SegmentMatching, TrueLineInTheLaserFrame)
   EXPECT_FALSE(rule.counts(9, 5.0));
   EXPECT_FALSE(rule.counts(50, 0.59));
 }
+
+TEST(SegmentMatching, OverlapIsMeasuredAlongTheSecondSegment)
+{
+  using linemap::Segment2;
+  const Segment2 wall({0.0, 1.0}, {4.0, 1.0});
+  EXPECT_NEAR(overlapAlong(Segment2({1.0, 1.02}, {2.5, 0.98}), wall), 1.5, 1e-12);
+  EXPECT_NEAR(overlapAlong(Segment2({5.0, 1.0}, {3.0, 1.0}), wall), 1.0, 1e-12);   // reversed, sticking out
+  EXPECT_NEAR(overlapAlong(Segment2({-1.0, 1.0}, {6.0, 1.0}), wall), 4.0, 1e-12);  // covering it
+  EXPECT_EQ(overlapAlong(Segment2({4.5, 1.0}, {6.0, 1.0}), wall), 0.0);            // beyond its end
+  EXPECT_EQ(overlapAlong(wall, Segment2({1.0, 1.0}, {1.0, 1.0})), 0.0);            // no length
+}
+
+TEST(SegmentMatching, CollinearTruePiecesGoToTheSegmentOnThem)
+{
+  using linemap::Segment2;
+  // One wall y = 1 with a door between x = 2 and 3: two true pieces with the same
+  // line. matchLines (lines only) gives the single extracted segment to the first
+  // piece by index, although it lies on the second.
+  const HessianLine wall_line = line(1.0, kPi / 2.0);
+  const std::vector<LinePiece> truth{{wall_line, Segment2({0.0, 1.0}, {2.0, 1.0})},
+                                     {wall_line, Segment2({3.0, 1.0}, {6.0, 1.0})}};
+  const std::vector<LinePiece> extracted{{line(1.01, kPi / 2.0), Segment2({3.1, 1.01}, {5.8, 1.01})}};
+  std::vector<LineMatch> m = matchLines({extracted[0].line}, {truth[0].line, truth[1].line});
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_EQ(m[0].truth, 0);
+  m = matchSegments(extracted, truth);
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_EQ(m[0].truth, 1);
+  EXPECT_NEAR(m[0].radius_error, 0.01, 1e-12);
+
+  // Overlap only ranks the pairs: a segment on no piece still matches within the gate,
+  // and one outside the gate does not match whatever it overlaps.
+  m = matchSegments({{line(1.0, kPi / 2.0), Segment2({7.0, 1.0}, {8.0, 1.0})}}, truth);
+  ASSERT_EQ(m.size(), 1u);
+  m = matchSegments({{line(1.2, kPi / 2.0), Segment2({3.0, 1.2}, {6.0, 1.2})}}, truth);
+  EXPECT_TRUE(m.empty());
+}

@@ -39,8 +39,32 @@ std::vector<LineMatch> matchLines(const std::vector<linemap::HessianLine>& extra
                                   const std::vector<linemap::HessianLine>& truth,
                                   const MatchingOptions& options = MatchingOptions());
 
+/// A line with the extent of the segment on it.
+struct LinePiece
+{
+  linemap::HessianLine line;
+  linemap::Segment2 extent;
+};
+
+/// One-to-one matches of segments within the gate on their lines, as matchLines,
+/// except that a pair whose segments overlap (along the true piece) is preferred
+/// to a pair whose segments do not: a wall with a door has two collinear true
+/// pieces with the same (radius, angle), and an extracted segment is credited to
+/// the piece it lies on rather than to the first of the two. Overlap does not
+/// change which pairs pass the gate.
+std::vector<LineMatch> matchSegments(const std::vector<LinePiece>& extracted,
+                                     const std::vector<LinePiece>& truth,
+                                     const MatchingOptions& options = MatchingOptions());
+
+/// Length of the overlap of segment a with segment b, measured along b (0 when
+/// their projections onto b's direction are disjoint, or b has no length).
+double overlapAlong(const linemap::Segment2& a, const linemap::Segment2& b);
+
 /// The line of a map-frame wall piece as a laser at `laser_pose` (map frame) sees it.
 linemap::HessianLine lineInLaserFrame(const linemap::Pose2& laser_pose, const linemap::Segment2& piece);
+
+/// A map-frame wall piece in the frame of a laser at `laser_pose` (map frame).
+linemap::Segment2 pieceInLaserFrame(const linemap::Pose2& laser_pose, const linemap::Segment2& piece);
 
 /// Which true wall pieces an extractor is required to find: those hit by at least
 /// min_beams beams and at least min_length long (the strictest output minimum of
