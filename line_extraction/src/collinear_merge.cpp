@@ -54,7 +54,7 @@ void CollinearMerger::refit(const PreparedScan& scan, ExtractionResult& out)
   seg.angle = fit.angle;
   seg.radius = fit.radius;
   seg.covariance = fit.covariance;
-  const Vec2 n(std::cos(fit.angle), std::sin(fit.angle));
+  const Vec2& n = fit.normal;
   const Vec2& first = scan.points[out.point_indices[seg.index_begin]];
   const Vec2& last = scan.points[out.point_indices[seg.index_end - 1]];
   seg.start = first - (first.dot(n) - fit.radius) * n;

@@ -4,7 +4,8 @@
 // squared distances to the line with normal angle a is
 //   J(a) = (Sxx + Syy)/2 + (Sxx - Syy)/2 cos 2a + Sxy sin 2a,
 // which is smallest for (cos 2a, sin 2a) proportional to (Syy - Sxx, -2 Sxy), i.e.
-// a = atan2(-2 Sxy, Syy - Sxx) / 2, with minimum ((Sxx + Syy) - h)/2, h = |(Syy - Sxx, -2 Sxy)|.
+// a = atan2(-2 Sxy, Syy - Sxx) / 2, with minimum ((Sxx + Syy) - h)/2, h = |(Syy - Sxx, -2 Sxy)|;
+// n(a) is the eigenvector of the scatter matrix for its smaller eigenvalue (fitNormal).
 // The line passes through the centroid: radius = mean . n(a), flipped to be >= 0.
 //
 // Covariance: let each point carry isotropic noise of standard deviation s, so its
@@ -20,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace line_extraction
 {
@@ -52,26 +54,21 @@ Vec2 project(const Vec2& p, double nx, double ny, double radius)
 LineFit fitLine(const LineSums& sums, double range_sigma)
 {
   LineFit fit;
-  if (sums.n < 2.0) return fit;
+  // The normal and radius as fitNormal finds them (an eigenvector, no trigonometry);
+  // the angle from the normal is then the only transcendental call.
+  LineNormal line;
+  if (!fitNormal(sums, line)) return fit;
   const Moments m = centred(sums);
-  const double a = m.cyy - m.cxx, b = -2.0 * m.cxy;
-  const double h = std::hypot(a, b);
+  const double dxy = m.cxx - m.cyy;
+  const double h = std::sqrt(dxy * dxy + 4.0 * m.cxy * m.cxy);
   const double trace = m.cxx + m.cyy;
   const double along = 0.5 * (trace + h);  // scatter along the line
   if (!(along > 0.0)) return fit;          // coincident points: no direction
 
-  double angle = 0.5 * std::atan2(b, a);
-  double c = std::cos(angle), s = std::sin(angle);
-  double radius = m.mx * c + m.my * s;
-  if (radius < 0.0)
-  {
-    radius = -radius;
-    angle += linemap::kPi;
-    c = -c;
-    s = -s;
-  }
-  fit.angle = linemap::normalizeAngle(angle);
-  fit.radius = radius;
+  const double c = line.nx, s = line.ny;
+  fit.angle = std::atan2(s, c);
+  fit.radius = line.radius;
+  fit.normal = Vec2(c, s);
   fit.sum_squared_residuals = std::max(0.0, 0.5 * (trace - h));
 
   const double var_noise = range_sigma * range_sigma;
@@ -144,7 +141,7 @@ void appendSegment(const PreparedScan& scan, const LineFit& fit, const int* memb
                    ExtractionResult& out)
 {
   if (count <= 0) return;
-  const double c = std::cos(fit.angle), s = std::sin(fit.angle);
+  const double c = fit.normal.x(), s = fit.normal.y();
   Segment seg;
   seg.start = project(scan.points[members[0]], c, s, fit.radius);
   seg.end = project(scan.points[members[count - 1]], c, s, fit.radius);
@@ -161,7 +158,7 @@ void appendSegment(const PreparedScan& scan, const LineFit& fit, const int* memb
 void appendSegment(const PreparedScan& scan, const LineFit& fit, PointRange members, ExtractionResult& out)
 {
   if (members.size() <= 0) return;
-  const double c = std::cos(fit.angle), s = std::sin(fit.angle);
+  const double c = fit.normal.x(), s = fit.normal.y();
   Segment seg;
   seg.start = project(scan.points[members.begin], c, s, fit.radius);
   seg.end = project(scan.points[members.end - 1], c, s, fit.radius);
@@ -170,7 +167,8 @@ void appendSegment(const PreparedScan& scan, const LineFit& fit, PointRange memb
   seg.covariance = fit.covariance;
   seg.num_points = members.size();
   seg.index_begin = static_cast<int>(out.point_indices.size());
-  for (int i = members.begin; i < members.end; ++i) out.point_indices.push_back(i);
+  out.point_indices.resize(out.point_indices.size() + members.size());
+  std::iota(out.point_indices.begin() + seg.index_begin, out.point_indices.end(), members.begin);
   seg.index_end = static_cast<int>(out.point_indices.size());
   out.segments.push_back(seg);
 }

@@ -92,7 +92,7 @@ class SeededRegionGrowing : public Extractor
       const LineFit fit = fitLine(prefix_.sums(s.begin, s.end), range_sigma_);
       if (!fit.valid) continue;
       // Length between the projections of the end points onto the line.
-      const Vec2 u(-std::sin(fit.angle), std::cos(fit.angle));
+      const Vec2 u(-fit.normal.y(), fit.normal.x());
       if (std::abs((pts[s.end - 1] - pts[s.begin]).dot(u)) < min_length_) continue;
       appendSegment(scan, fit, s, out);
     }

@@ -72,13 +72,11 @@ struct LineFit
   double radius = 0.0;                                   ///< >= 0
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  ///< of (radius, angle)
   double sum_squared_residuals = 0.0;
-  bool valid = false;  ///< false for fewer than 2 points or all points coincident
+  bool valid = false;            ///< false for fewer than 2 points or all points coincident
+  Vec2 normal = Vec2(1.0, 0.0);  ///< (cos angle, sin angle), kept to spare callers the trigonometry
 
   /// Signed distance of p from the line.
-  double signedDistance(const Vec2& p) const
-  {
-    return p.x() * std::cos(angle) + p.y() * std::sin(angle) - radius;
-  }
+  double signedDistance(const Vec2& p) const { return p.dot(normal) - radius; }
 };
 
 /// Total-least-squares fit of the points summarised by `sums`. The covariance
