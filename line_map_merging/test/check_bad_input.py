@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Rostest checker (bad_input.test): bad input to the merging nodelet, each case counted in
-/diagnostics while the nodelet keeps merging the good input around it."""
+/diagnostics while the nodelet keeps merging the good input around it; then a burst of
+trajectories, of which the last decides the map."""
 import os
 import sys
 import time
@@ -116,6 +117,32 @@ class CheckBadInput(unittest.TestCase):
         c = self.counters(lambda c: int(c.get("bad trajectory poses", 0)) >= 1)
         self.assertEqual(int(c.get("bad trajectory poses", -1)), 1, c)
         self.assertEqual(int(c.get("unmatched trajectory poses", -1)), 2, c)
+        self.assertEqual(int(c.get("keyframes", -1)), 3, c)
+
+        # 6. Trajectories back to back, each arriving while the previous one may still be adjusting
+        # (the subscriber keeps 2, the nodelet adjusts one at a time): the last one decides the map.
+        adjustments = int(c.get("adjustments", 0))
+        for k, dy in enumerate([0.6, 0.7, 0.8, 0.9, 1.0]):
+            burst = Path()
+            burst.header.frame_id = "map"
+            burst.header.stamp = stamps[-1] + rospy.Duration(0.001 * (k + 1))
+            burst.poses = [pose(stamp, STEP * i, dy) for i, stamp in enumerate(stamps)]
+            self.path_pub.publish(burst)
+
+        def walls_moved_by(dy):
+            if not self.maps:
+                return False
+            ys = sorted(0.5 * (s.segment.start.y + s.segment.end.y) for s in self.maps[-1].segments)
+            return len(ys) == 2 and abs(ys[0] - (-2.0 + dy)) < 1e-6 and abs(ys[1] - (2.0 + dy)) < 1e-6
+
+        deadline = time.time() + 10.0
+        while time.time() < deadline and not walls_moved_by(1.0):
+            time.sleep(0.05)
+        self.assertTrue(walls_moved_by(1.0), "the last trajectory of a burst did not decide the map: %s" %
+                        [(s.segment.start.y, s.segment.end.y) for s in self.maps[-1].segments])
+        c = self.counters(lambda c: int(c.get("adjustments", 0)) > adjustments)
+        self.assertGreater(int(c.get("adjustments", 0)), adjustments, c)
+        self.assertLessEqual(int(c.get("adjustments", 0)), adjustments + 5, c)
         self.assertEqual(int(c.get("keyframes", -1)), 3, c)
 
 
