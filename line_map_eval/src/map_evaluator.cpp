@@ -33,7 +33,9 @@ bool MapEvaluator::addScan(double stamp, const linemap::Pose2& laser_pose, std::
     scan_gate_.setReference(laser_pose);
     return false;
   }
+  scan_gaps_.scan(stamp);
   if (!scan_gate_.accept(laser_pose)) return false;
+  scan_gaps_.keyframe(scans_.size());
   scan_stamps_.insert(stamp);
   scans_.push_back({stamp, laser_pose, odom_pose, std::move(points), {}});
   table_dirty_ = true;
@@ -49,13 +51,15 @@ bool MapEvaluator::addSegments(double stamp, const linemap::Pose2& laser_pose,
     segment_gate_.setReference(laser_pose);
     return false;
   }
+  segment_gaps_.scan(stamp);
   if (!segment_gate_.accept(laser_pose)) return false;
+  segment_gaps_.keyframe(segments_.size());
   segment_stamps_.insert(stamp);
   segments_.push_back({stamp, laser_pose, odom_pose, {}, std::move(segments)});
   return true;
 }
 
-std::size_t MapEvaluator::reregister(std::vector<Frame>& frames,
+std::size_t MapEvaluator::reregister(std::vector<Frame>& frames, const line_map_merging::ScanGapTracker& gaps,
                                      const std::vector<std::pair<double, linemap::Pose2>>& laser_poses,
                                      double tolerance)
 {
@@ -67,6 +71,7 @@ std::size_t MapEvaluator::reregister(std::vector<Frame>& frames,
     infos[i] = {i, frames[i].stamp, frames[i].pose, {}};
     if (frames[i].odom) odom[i] = *frames[i].odom;
   }
+  gaps.fill(infos);  // a pose of a scan that was not stored must not move its stored neighbour
   std::stable_sort(infos.begin(), infos.end(),
                    [](const auto& a, const auto& b) { return a.stamp < b.stamp; });
   std::map<std::uint64_t, linemap::Pose2> matched;
@@ -86,8 +91,8 @@ std::size_t MapEvaluator::reregister(std::vector<Frame>& frames,
 
 std::size_t MapEvaluator::applyTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses)
 {
-  const std::size_t unmatched = reregister(scans_, laser_poses, params_.stamp_tolerance);
-  reregister(segments_, laser_poses, params_.stamp_tolerance);
+  const std::size_t unmatched = reregister(scans_, scan_gaps_, laser_poses, params_.stamp_tolerance);
+  reregister(segments_, segment_gaps_, laser_poses, params_.stamp_tolerance);
   table_dirty_ = true;
   return unmatched;
 }
@@ -127,6 +132,8 @@ void MapEvaluator::reset()
   segments_.clear();
   scan_stamps_.clear();
   segment_stamps_.clear();
+  scan_gaps_.clear();
+  segment_gaps_.clear();
   scan_gate_ = line_map_merging::KeyframeGate(params_.gate);
   segment_gate_ = line_map_merging::KeyframeGate(params_.gate);
   table_ = LookupTable();

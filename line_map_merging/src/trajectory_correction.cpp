@@ -23,7 +23,50 @@ std::optional<std::size_t> matchByStamp(const std::vector<KeyframeInfo>& keyfram
       best = static_cast<std::size_t>(c - keyframes.begin());
     }
   }
+  if (best)
+  {
+    // Another scan the caller saw lies nearer to the stamp than the keyframe's own scan.
+    const KeyframeInfo& k = keyframes[*best];
+    const double dt = stamp - k.stamp;
+    if (dt > 0.0 && !(2.0 * dt < k.scan_gap_after)) return std::nullopt;
+    if (dt < 0.0 && !(-2.0 * dt < k.scan_gap_before)) return std::nullopt;
+  }
   return best;
+}
+
+void ScanGapTracker::scan(double stamp)
+{
+  const double inf = std::numeric_limits<double>::infinity();
+  const double gap = stamp > last_stamp_ ? stamp - last_stamp_ : inf;  // NaN last: unknown
+  if (waiting_)
+  {
+    gaps_[*waiting_].second = gap;
+    waiting_.reset();
+  }
+  last_gap_ = gap;
+  last_stamp_ = stamp;
+}
+
+void ScanGapTracker::keyframe(std::uint64_t index)
+{
+  gaps_[index] = {last_gap_, std::numeric_limits<double>::infinity()};
+  waiting_ = index;
+}
+
+void ScanGapTracker::fill(std::vector<KeyframeInfo>& keyframes) const
+{
+  for (KeyframeInfo& k : keyframes)
+  {
+    const auto it = gaps_.find(k.index);
+    if (it == gaps_.end()) continue;
+    k.scan_gap_before = it->second.first;
+    k.scan_gap_after = it->second.second;
+  }
+}
+
+void ScanGapTracker::clear()
+{
+  *this = ScanGapTracker();
 }
 
 std::vector<std::pair<std::uint64_t, linemap::Pose2>> correctKeyframes(

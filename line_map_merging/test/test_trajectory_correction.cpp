@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "line_map_merging/trajectory_correction.hpp"
 
@@ -34,6 +35,57 @@ TEST(TrajectoryCorrection, MatchByStampTakesTheNearestWithinTolerance)
   EXPECT_FALSE(matchByStamp(k, 99.0, 0.01).has_value());
   EXPECT_EQ(matchByStamp(k, 103.009, 0.01).value(), 3u);
   EXPECT_FALSE(matchByStamp({}, 100.0, 1.0).has_value());
+}
+
+TEST(TrajectoryCorrection, MatchByStampLeavesPosesOfNearerScansAlone)
+{
+  // Keyframe 1 (t = 101) had scans 2 ms before and 4 ms after it that did not become keyframes:
+  // a pose stamped 101.003 belongs to the scan at 101.004, not to the keyframe, although it is
+  // within the 10 ms tolerance; one stamped 101.0015 is nearer the keyframe's scan.
+  auto k = fourKeyframes();
+  k[1].scan_gap_before = 0.002;
+  k[1].scan_gap_after = 0.004;
+  EXPECT_EQ(matchByStamp(k, 101.0, 0.01).value(), 1u);
+  EXPECT_EQ(matchByStamp(k, 101.0015, 0.01).value(), 1u);
+  EXPECT_FALSE(matchByStamp(k, 101.003, 0.01).has_value());
+  EXPECT_FALSE(matchByStamp(k, 101.0021, 0.01).has_value());  // just nearer to the next scan
+  EXPECT_EQ(matchByStamp(k, 100.9995, 0.01).value(), 1u);
+  EXPECT_FALSE(matchByStamp(k, 100.9985, 0.01).has_value());  // the scan at 100.998 is nearer
+  // Two scans with one stamp: the exact stamp still matches the keyframe.
+  k[1].scan_gap_before = 0.0;
+  EXPECT_EQ(matchByStamp(k, 101.0, 0.01).value(), 1u);
+  // Unknown gaps (infinite): the tolerance alone decides, as before.
+  EXPECT_EQ(matchByStamp(k, 102.009, 0.01).value(), 2u);
+}
+
+TEST(TrajectoryCorrection, ScanGapTrackerLearnsTheGapsAroundKeyframes)
+{
+  line_map_merging::ScanGapTracker gaps;
+  auto k = fourKeyframes();  // indices 10..13
+  const double inf = std::numeric_limits<double>::infinity();
+  // Scans at 100.000 (keyframe 10), 100.002, 100.010 (keyframe 11), 100.013 (keyframe 12).
+  gaps.scan(100.000);
+  gaps.keyframe(10);
+  gaps.scan(100.002);
+  gaps.scan(100.010);
+  gaps.keyframe(11);
+  gaps.scan(100.013);
+  gaps.keyframe(12);
+  // Time jumps back: the next keyframe's gap before is unknown.
+  gaps.scan(50.0);
+  gaps.keyframe(13);
+  gaps.fill(k);
+  EXPECT_EQ(k[0].scan_gap_before, inf);  // the first scan
+  EXPECT_NEAR(k[0].scan_gap_after, 0.002, 1e-9);
+  EXPECT_NEAR(k[1].scan_gap_before, 0.008, 1e-9);
+  EXPECT_NEAR(k[1].scan_gap_after, 0.003, 1e-9);  // to keyframe 12's scan
+  EXPECT_NEAR(k[2].scan_gap_before, 0.003, 1e-9);
+  EXPECT_EQ(k[2].scan_gap_after, inf);  // the next stamp went back
+  EXPECT_EQ(k[3].scan_gap_before, inf);
+  EXPECT_EQ(k[3].scan_gap_after, inf);  // no scan after it yet
+  EXPECT_EQ(gaps.size(), 4u);
+  gaps.clear();
+  EXPECT_EQ(gaps.size(), 0u);
 }
 
 TEST(TrajectoryCorrection, UnmatchedKeyframesGetTheInterpolatedCorrection)

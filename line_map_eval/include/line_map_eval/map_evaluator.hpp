@@ -17,6 +17,7 @@
 #include "line_map_eval/map_statistics.hpp"
 #include "line_map_merging/fusion.hpp"
 #include "line_map_merging/keyframe_gate.hpp"
+#include "line_map_merging/trajectory_correction.hpp"
 
 namespace line_map_eval
 {
@@ -79,7 +80,7 @@ class MapEvaluator
     std::vector<linemap::Vec2> points;
     std::vector<linemap::Segment2> segments;
   };
-  static std::size_t reregister(std::vector<Frame>& frames,
+  static std::size_t reregister(std::vector<Frame>& frames, const line_map_merging::ScanGapTracker& gaps,
                                 const std::vector<std::pair<double, linemap::Pose2>>& laser_poses,
                                 double tolerance);
 
@@ -88,7 +89,8 @@ class MapEvaluator
   line_map_merging::KeyframeGate segment_gate_;
   std::vector<Frame> scans_;
   std::vector<Frame> segments_;
-  std::unordered_set<double> scan_stamps_, segment_stamps_;  // of the stored frames
+  std::unordered_set<double> scan_stamps_, segment_stamps_;    // of the stored frames
+  line_map_merging::ScanGapTracker scan_gaps_, segment_gaps_;  // keyed by position in scans_ / segments_
   LookupTable table_;
   bool table_dirty_ = true;
 };

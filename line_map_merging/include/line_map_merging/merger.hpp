@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -32,6 +33,11 @@ struct KeyframeInfo
   double stamp = 0.0;
   linemap::Pose2 pose;
   linemap::Pose2 mount;
+  /// Time from the scan before this keyframe's scan to it, and from it to the scan after [s]:
+  /// scans that did not become keyframes included, as the caller saw them (infinite = unknown).
+  /// Stamp matching gives a trajectory pose to this keyframe only when no other scan was nearer.
+  double scan_gap_before = std::numeric_limits<double>::infinity();
+  double scan_gap_after = std::numeric_limits<double>::infinity();
 };
 
 /// One segment of the merged map.

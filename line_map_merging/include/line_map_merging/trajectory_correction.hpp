@@ -12,8 +12,10 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <optional>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -21,10 +23,35 @@
 
 namespace line_map_merging
 {
-/// Index of the keyframe whose stamp is nearest to `stamp`, if within `tolerance` seconds.
+/// Index of the keyframe whose stamp is nearest to `stamp`, if within `tolerance` seconds and
+/// nearer to it than to the scans just before and after the keyframe's scan (half its
+/// scan_gap_before / scan_gap_after; an exact stamp always matches): a pose of a scan that did
+/// not become a keyframe must not move the keyframe next to it, however close their stamps.
 /// `keyframes` must be sorted by stamp.
 std::optional<std::size_t> matchByStamp(const std::vector<KeyframeInfo>& keyframes, double stamp,
                                         double tolerance);
+
+/// The time from each keyframe's scan to the scans just before and after it, learnt from the
+/// stream of every scan (KeyframeInfo::scan_gap_before / scan_gap_after). Stamps that do not
+/// increase (time jumped back, a replay) start the stream afresh: their gaps are unknown.
+class ScanGapTracker
+{
+ public:
+  /// Every new scan, in arrival order (replayed scans that are skipped are not new).
+  void scan(double stamp);
+  /// The scan just passed to scan() became keyframe `index`.
+  void keyframe(std::uint64_t index);
+  /// Sets the gaps of the keyframes it knows (the others keep theirs).
+  void fill(std::vector<KeyframeInfo>& keyframes) const;
+  void clear();
+  std::size_t size() const { return gaps_.size(); }
+
+ private:
+  double last_stamp_ = std::numeric_limits<double>::quiet_NaN();
+  double last_gap_ = std::numeric_limits<double>::infinity();
+  std::optional<std::uint64_t> waiting_;  ///< the last keyframe, until the scan after it
+  std::unordered_map<std::uint64_t, std::pair<double, double>> gaps_;
+};
 
 /// New laser poses for every keyframe. `matched` maps keyframe index -> new laser pose. A keyframe
 /// without a match gets the correction C = new * old^-1 of its nearest matched keyframes before and
