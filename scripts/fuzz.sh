@@ -8,14 +8,38 @@
 #   scripts/fuzz.sh test <junit_dir>      replays test/fuzz_regressions/<target>/* and fuzzes each target
 #                                         FUZZ_TEST_SECONDS (default 10); one JUnit test case per target
 # Targets: extractors merging map_file carmen.
+#
+# FUZZ_CAMPAIGN=1 selects the campaign build for long runs (bin and obj under
+# $BUILD_DIR/fuzz/campaign; corpus and crashes shared with the default build). The default -O1
+# build stays what `make test` uses. The campaign build differs in three ways, none of which
+# removes a check: ASan and UBSan stay on in every source.
+#  - -O2 instead of -O1;
+#  - UBSan's checks left out of the Eigen headers (scripts/fuzz_ubsan_ignorelist.txt; ASan still
+#    instruments them): with them, Eigen's 2-D expression templates are too big for the inliner
+#    and every Vec2 dot product became a chain of calls (half the time of ransac, em, wsac_ge);
+#  - no comparison tracing (-fsanitize-coverage=trace-cmp) in the numeric core sources
+#    (line_extraction/src, line_map_merging/src but map_file.cpp): at -O2 every inner-loop
+#    iteration called __sanitizer_cov_trace_cmp8 (47 % of the extractors target's time), while
+#    their branches hang on floating-point comparisons, which trace-cmp does not see. Edge
+#    coverage stays; the harnesses and the parsers (map_file.cpp, carmen_log.cpp) keep trace-cmp.
+# It also runs with ASAN_OPTIONS malloc_context_size=5 (allocation stacks of 5 frames, not 30, in
+# a report) unless ASAN_OPTIONS sets it.
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 cd "$LINEMAP_ROOT"
 FUZZ_DIR="$BUILD_DIR/fuzz"
+BIN_DIR="$FUZZ_DIR/bin" OBJ_DIR="$FUZZ_DIR/obj"
 TARGETS=(extractors merging map_file carmen)
 CXX="${FUZZ_CXX:-clang++}"
 SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
-CXXFLAGS=(-std=c++17 -O1 -g $SAN -I line_extraction/include -I line_map_merging/include
+OPT=(-O1) NO_TRACE_CMP="" NO_TRACE_CMP_EXCEPT=""
+if [ "${FUZZ_CAMPAIGN:-0}" = 1 ]; then
+  BIN_DIR="$FUZZ_DIR/campaign/bin" OBJ_DIR="$FUZZ_DIR/campaign/obj"
+  OPT=(-O2 -fsanitize-ignorelist=scripts/fuzz_ubsan_ignorelist.txt)
+  NO_TRACE_CMP='^line_(extraction|map_merging)/src/' NO_TRACE_CMP_EXCEPT='/map_file\.cpp$'
+  case "${ASAN_OPTIONS:-}" in *malloc_context_size*) ;; *) export ASAN_OPTIONS="malloc_context_size=5${ASAN_OPTIONS:+:$ASAN_OPTIONS}" ;; esac
+fi
+CXXFLAGS=(-std=c++17 "${OPT[@]}" -g $SAN -I line_extraction/include -I line_map_merging/include
   -I line_map_eval/include -I /usr/include/eigen3 -DLINEMAP_FUZZING)
 export ASAN_OPTIONS="halt_on_error=1:print_stacktrace=1:detect_leaks=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
@@ -50,22 +74,31 @@ target_libs() {
 
 # Compiles one source to an object unless the object is newer than it and than every header.
 compile() {
-  local src="$1" obj="$FUZZ_DIR/obj/${1%.cpp}.o"
+  local src="$1" obj="$OBJ_DIR/${1%.cpp}.o"
   mkdir -p "$(dirname "$obj")"
   if [ -f "$obj" ] && [ "$obj" -nt "$src" ] &&
     [ -z "$(find line_extraction/include line_map_merging/include line_map_eval/include -newer "$obj" -print -quit)" ]; then
     return 0
   fi
   echo "fuzz: compiling $src"
+  local cov=(-fsanitize=fuzzer-no-link)
+  if [ -n "${NO_TRACE_CMP:-}" ] && [[ $src =~ $NO_TRACE_CMP ]] && ! [[ $src =~ $NO_TRACE_CMP_EXCEPT ]]; then
+    cov+=(-fno-sanitize-coverage=trace-cmp)
+  fi
   # shellcheck disable=SC2086
-  "$CXX" $CXXFLAGS_STR -fsanitize=fuzzer-no-link -c "$src" -o "$obj"
+  "$CXX" $CXXFLAGS_STR "${cov[@]}" -c "$src" -o "$obj"
 }
 export -f compile
-export FUZZ_DIR CXX
+export OBJ_DIR CXX NO_TRACE_CMP NO_TRACE_CMP_EXCEPT
 export CXXFLAGS_STR="${CXXFLAGS[*]}"
 
 build() {
   command -v "$CXX" > /dev/null || { echo "fuzz.sh: $CXX not found (scripts/setup.sh installs clang)" >&2; return 1; }
+  # Objects of other flags (an older fuzz.sh) are stale whatever their time stamps.
+  local flags="${CXXFLAGS[*]} ${NO_TRACE_CMP:-} ${NO_TRACE_CMP_EXCEPT:-}"
+  if [ "$(cat "$OBJ_DIR/flags.txt" 2> /dev/null)" != "$flags" ]; then
+    rm -rf "$OBJ_DIR" && mkdir -p "$OBJ_DIR" && echo "$flags" > "$OBJ_DIR/flags.txt"
+  fi
   local srcs=()
   for t in "${TARGETS[@]}"; do
     mapfile -t -O "${#srcs[@]}" srcs < <(core_sources "$t")
@@ -73,12 +106,12 @@ build() {
   done
   printf '%s\n' "${srcs[@]}" | sort -u |
     xargs -P "${JOBS:-2}" -I{} bash -c 'compile "$1"' _ {} || return 1
-  mkdir -p "$FUZZ_DIR/bin"
+  mkdir -p "$BIN_DIR"
   for t in "${TARGETS[@]}"; do
     local objs=()
-    while read -r s; do objs+=("$FUZZ_DIR/obj/${s%.cpp}.o"); done < <(core_sources "$t"; target_source "$t")
+    while read -r s; do objs+=("$OBJ_DIR/${s%.cpp}.o"); done < <(core_sources "$t"; target_source "$t")
     # shellcheck disable=SC2046
-    "$CXX" "${CXXFLAGS[@]}" -fsanitize=fuzzer "${objs[@]}" $(target_libs "$t") -o "$FUZZ_DIR/bin/fuzz_$t"
+    "$CXX" "${CXXFLAGS[@]}" -fsanitize=fuzzer "${objs[@]}" $(target_libs "$t") -o "$BIN_DIR/fuzz_$t"
   done
 }
 
@@ -96,7 +129,7 @@ fuzz_one() {
     extra+=(-seed=1)
   fi
   set +e
-  "$FUZZ_DIR/bin/fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=20 -max_len=8192 \
+  "$BIN_DIR/fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=20 -max_len=8192 \
     -print_final_stats=1 -artifact_prefix="$crashes/" "${extra[@]}" "$corpus" "test/fuzz_regressions/$t" > "$log" 2>&1
   local rc=$?
   set -e
@@ -114,7 +147,7 @@ replay_one() {
   local files=()
   mapfile -t files < <(find "$dir" -maxdepth 1 -type f ! -name '*.md' 2> /dev/null | sort)
   [ ${#files[@]} -eq 0 ] && return 0
-  "$FUZZ_DIR/bin/fuzz_$t" -runs=1 "${files[@]}" > "$FUZZ_DIR/replay_$t.txt" 2>&1 ||
+  "$BIN_DIR/fuzz_$t" -runs=1 "${files[@]}" > "$FUZZ_DIR/replay_$t.txt" 2>&1 ||
     { tail -40 "$FUZZ_DIR/replay_$t.txt" >&2; return 1; }
 }
 
