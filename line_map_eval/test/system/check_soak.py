@@ -2,10 +2,10 @@
 """Rostest checker (test/soak.test): a prefix of the Intel raw log played three times in a row through
 linemap.launch under use_sim_time; each replay restarts the clock at the bag's start, as
 `rosbag play --loop` does, so time jumps backwards twice. Asserts that the nodelet manager stays
-alive, the merger drops (almost) no scans, every pass adds about as many keyframes as the first
-(the keyframe gate is reset at the jump), the manager's resident memory after pass 3 is within the
-band of pass 1, every line_map has finite coordinates and unique ids, and the autosave file is a
-complete map. Prints the sustained rate and the scan -> map latency."""
+alive, the merger drops (almost) no scans, the replays add no keyframes (the same stamps are
+skipped as replayed), the manager's resident memory after passes 2 and 3 is within the band
+(max_rss_growth) of pass 1, every line_map has finite coordinates and unique ids, and the autosave
+file is a complete map. Prints the sustained rate and the scan -> map latency."""
 import math
 import os
 import sys
@@ -132,8 +132,8 @@ class CheckSoak(unittest.TestCase):
                             "no line_map in pass %d" % (p + 1))
             self.assertEqual(manager_pid(), pid, "the nodelet manager died or restarted in pass %d" % (p + 1))
             self.assertTrue(os.path.exists("/proc/%d" % pid), "the nodelet manager process is gone")
-            # The smallest of 2 s of samples: the evaluator's lookup table and the autosave text come and
-            # go in blocks of megabytes; what stays is the floor.
+            # Read with the pipeline idle (no line_map for 1.5 s): the 10 samples of 2 s agree to the kB;
+            # the smallest guards against an autosave running in the window.
             samples = []
             for _ in range(10):
                 samples.append(rss_kb(pid))
@@ -169,13 +169,12 @@ class CheckSoak(unittest.TestCase):
         for k in keyframes[1:]:
             self.assertLessEqual(k, band["max_dropped_scans"], "a replay added keyframes: %s" % keyframes)
         self.assertGreaterEqual(mon.counter("replayed scans skipped"), 2 * (keyframes[0] - band["max_dropped_scans"]))
-        # Flat after the first pass: the last pass no higher than the passes before it (within
-        # max_rss_growth; the lookup table and the autosave text come and go in blocks of megabytes,
-        # so a single pass can read a few MB low), and within a looser bound of pass 1 alone.
-        self.assertLessEqual(rss[2], (1.0 + band["max_rss_growth"]) * max(rss[0], rss[1]),
-                             "resident memory grew over the replays: %s kB" % rss)
-        self.assertLessEqual(rss[2], (1.0 + band["max_rss_growth_from_pass_1"]) * rss[0],
-                             "resident memory grew from pass 1 to pass 3: %s kB" % rss)
+        # Flat after the first pass: every replay ends within max_rss_growth of pass 1. (The manager's
+        # fixed mmap threshold in linemap.launch keeps freed MB-sized buffers from staying resident
+        # in the malloc arenas, which made the readings jump by 2-7 MB from pass to pass.)
+        for p in (1, 2):
+            self.assertLessEqual(rss[p], (1.0 + band["max_rss_growth"]) * rss[0],
+                                 "resident memory grew over the replays (pass %d): %s kB" % (p + 1, rss))
         self.assertLessEqual(percentile(lat, 99), band["max_latency_p99_s"])
         # Autosave (soak.test sets a short period): a complete map file, and no failures.
         self.assertGreaterEqual(mon.counter("autosaves"), 1)
