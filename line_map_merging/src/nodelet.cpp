@@ -300,6 +300,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       gate_.setReference(base);
       return;
     }
+    scan_gaps_.scan(msg->header.stamp.toSec());
     // Keyframe gate on the robot (base) pose.
     if (!gate_.wouldAccept(base))
     {
@@ -343,6 +344,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     }
     last_otm_ms_ = msSince(t0);
     if (odom_laser) odom_poses_[keyframe.index] = *odom_laser;
+    scan_gaps_.keyframe(keyframe.index);
     ++next_index_;
     keyframe_stamps_.insert(keyframe.stamp);
     ++revision_;
@@ -375,6 +377,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       return;
     }
     std::vector<KeyframeInfo> keyframes = merger_->keyframes();
+    scan_gaps_.fill(keyframes);  // a pose of a scan that did not become a keyframe stays unmatched
     std::sort(keyframes.begin(), keyframes.end(),
               [](const KeyframeInfo& a, const KeyframeInfo& b) { return a.stamp < b.stamp; });
     std::map<std::uint64_t, linemap::Pose2> matched;
@@ -467,6 +470,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     }
     next_index_ = 0;
     odom_poses_.clear();
+    scan_gaps_.clear();
     keyframe_stamps_.clear();
     for (const KeyframeInfo& k : merger_->keyframes())
     {
@@ -490,6 +494,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     next_index_ = 0;
     keyframe_stamps_.clear();
     odom_poses_.clear();
+    scan_gaps_.clear();
     gate_.reset();
     res.success = true;
     res.message = "map cleared";
@@ -612,6 +617,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   std::unique_ptr<Merger> merger_;
   std::string method_, map_frame_, base_frame_, odom_frame_;
   std::map<std::uint64_t, linemap::Pose2> odom_poses_;  ///< keyframe index -> laser pose in odom_frame_
+  ScanGapTracker scan_gaps_;  ///< time to the scans around each keyframe, for stamp matching
   double stamp_tolerance_ = 0.01, tf_timeout_ = 0.5;
   KeyframeGate gate_;
   bool publish_labels_ = false;
