@@ -64,6 +64,35 @@ TEST(MapEvaluator, ReplayedStampsAreStoredOnce)
   EXPECT_TRUE(eval.addScan(5.0, Pose2(0, 0, 0), {}));
 }
 
+// A replay does not start where the last pass did (the first scans wait for tf, the gate still
+// holds the end of the last pass), and the tf filter lets some scans through late: a scan older
+// than the newest stored one is stored only where the stored scans leave a gap, so a replay keeps
+// the stored chain instead of starting one of its own beside it.
+TEST(MapEvaluator, ReplayAddsNoScansBesideTheStoredOnes)
+{
+  MapEvaluator eval(EvaluatorParams{});  // gate 0.2 m; a scan every 0.12 m: every other one is stored
+  auto pass = [&](int first, int dropped)
+  {
+    std::size_t stored = 0;
+    for (int i = first; i <= 20; ++i)
+      if (i != dropped && eval.addScan(i, Pose2(0.12 * i, 0, 0), {})) ++stored;
+    return stored;
+  };
+  EXPECT_EQ(pass(0, 8), 10u);  // 0, 2, 4, 6, then 9 (8 dropped), 11, ..., 19
+  // The replay starts at scan 1, 2.16 m from the gate's last pose (scan 19), which the live gate
+  // would store, as scan 8 (0.24 m after scan 6): both lie within 0.2 m of a stored scan.
+  EXPECT_EQ(pass(1, -1), 0u);
+  EXPECT_EQ(pass(0, -1), 0u);
+  EXPECT_EQ(eval.scanCount(), 10u);
+  // Past the stored span the live gate decides; a late scan gets in where the stored ones leave a gap.
+  EXPECT_TRUE(eval.addScan(30, Pose2(4, 0, 0), {}));
+  EXPECT_TRUE(eval.addScan(40, Pose2(5, 0, 0), {}));
+  EXPECT_TRUE(eval.addScan(35, Pose2(4.5, 0, 0), {}));
+  EXPECT_FALSE(eval.addScan(36, Pose2(4.6, 0, 0), {}));
+  EXPECT_FALSE(eval.addScan(41, Pose2(5.1, 0, 0), {}));  // the live gate is still at scan 40
+  EXPECT_EQ(eval.scanCount(), 13u);
+}
+
 TEST(MapEvaluator, TrajectoryReRegistersScansAndSegments)
 {
   // Two keyframes whose recorded poses drifted by 0.3 m / 3 degrees from the truth.

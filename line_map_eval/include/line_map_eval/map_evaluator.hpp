@@ -4,8 +4,8 @@
 #pragma once
 
 #include <cstddef>
+#include <map>
 #include <optional>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -48,7 +48,9 @@ class MapEvaluator
   /// Stores a scan's valid points (laser frame) taken at `laser_pose` (laser in map) when the
   /// keyframe gate admits it and no stored scan has the same stamp (a bag replayed with --loop
   /// sends the same scans again: keeping them twice would only grow memory); returns whether it
-  /// was stored. `odom_pose` is the laser in the
+  /// was stored. A scan older than the newest stored one (a replay, or a scan that arrived late) is
+  /// stored only where the stored scans leave a gap: the gate must admit it after the stored scan
+  /// before it and before the one after it, so a replay adds no scans. `odom_pose` is the laser in the
   /// odometry frame at the same stamp, when known: re-registration then interpolates corrections
   /// in the odometry frame, across the jumps of map->odom (line_map_merging::correctKeyframes).
   bool addScan(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Vec2> points,
@@ -80,6 +82,11 @@ class MapEvaluator
     std::vector<linemap::Vec2> points;
     std::vector<linemap::Segment2> segments;
   };
+  /// The keyframe gate for a frame that is not stored yet: `gate` (moved on when it admits) for a
+  /// stamp past the stored ones, else the stored frames before and after it in time (`stored`:
+  /// stamp -> pose).
+  bool gateAccepts(const std::map<double, linemap::Pose2>& stored, line_map_merging::KeyframeGate& gate,
+                   double stamp, const linemap::Pose2& pose) const;
   static std::size_t reregister(std::vector<Frame>& frames, const line_map_merging::ScanGapTracker& gaps,
                                 const std::vector<std::pair<double, linemap::Pose2>>& laser_poses,
                                 double tolerance);
@@ -89,8 +96,8 @@ class MapEvaluator
   line_map_merging::KeyframeGate segment_gate_;
   std::vector<Frame> scans_;
   std::vector<Frame> segments_;
-  std::unordered_set<double> scan_stamps_, segment_stamps_;    // of the stored frames
-  line_map_merging::ScanGapTracker scan_gaps_, segment_gaps_;  // keyed by position in scans_ / segments_
+  std::map<double, linemap::Pose2> scan_stamps_, segment_stamps_;  // stored frames: stamp -> gate pose
+  line_map_merging::ScanGapTracker scan_gaps_, segment_gaps_;      // keyed by position in scans_ / segments_
   LookupTable table_;
   bool table_dirty_ = true;
 };
