@@ -121,7 +121,7 @@ class CheckSoak(unittest.TestCase):
         self.assertTrue(lt.wait_for(lambda: manager_pid() is not None, 30.0), "no nodelet manager")
         pid = manager_pid()
         time.sleep(1.0)
-        rss, keyframes, play_wall = [], [], 0.0
+        rss, keyframes, eval_scans, play_wall = [], [], [], 0.0
         for p in range(3):
             mon.scan_wall.clear()
             before = mon.last_map.keyframes if mon.last_map else 0
@@ -140,17 +140,18 @@ class CheckSoak(unittest.TestCase):
                 time.sleep(0.2)
             rss.append(min(samples))
             keyframes.append(mon.last_map.keyframes - before)
+            eval_scans.append(mon.counter("keyframe scans", mon.evaluator))  # diagnostics of the last second
         time.sleep(1.5)  # one more diagnostics period
         dropped, jumps = mon.counter("dropped scans"), mon.counter("time jumps")
         eval_jumps = mon.counter("time jumps", mon.evaluator)
         lat = sorted(mon.latencies)
         print("soak: %d scans (%.0f s of log) x 3 at rate %s: sustained %.1f x real time; latency scan -> "
               "line_map median %.1f ms, p99 %.1f ms (%d maps); keyframes per pass %s; dropped scans %d; time "
-              "jumps %d (evaluator %d); replayed scans skipped %d; autosaves %d (failures %d); VmRSS after each pass %s kB (pass 3 / pass 1 = %.3f); "
+              "jumps %d (evaluator %d); replayed scans skipped %d; autosaves %d (failures %d); evaluator scans after each pass %s; VmRSS after each pass %s kB (pass 3 / pass 1 = %.3f); "
               "test %.0f s wall" % (scans, bag_s, band["rate"], 3 * bag_s / play_wall, 1e3 * percentile(lat, 50),
                                     1e3 * percentile(lat, 99), mon.maps, keyframes, dropped, jumps, eval_jumps,
                                     mon.counter("replayed scans skipped"),
-                                    mon.counter("autosaves"), mon.counter("autosave failures"), rss,
+                                    mon.counter("autosaves"), mon.counter("autosave failures"), eval_scans, rss,
                                     rss[2] / float(rss[0]), time.time() - t_start))
         self.assertEqual(mon.bad_coordinates, 0, "line_map with non-finite coordinates")
         self.assertEqual(mon.duplicate_ids, 0, "line_map with repeated segment ids")
@@ -169,6 +170,12 @@ class CheckSoak(unittest.TestCase):
         for k in keyframes[1:]:
             self.assertLessEqual(k, band["max_dropped_scans"], "a replay added keyframes: %s" % keyframes)
         self.assertGreaterEqual(mon.counter("replayed scans skipped"), 2 * (keyframes[0] - band["max_dropped_scans"]))
+        # The evaluator keeps its scans too: a replay stores at most the few its first pass missed
+        # (it used to store 58 more per replay, gated from where the last pass ended).
+        self.assertGreater(eval_scans[0], 0, "no diagnostics from the evaluator")
+        for p in (1, 2):
+            self.assertLessEqual(eval_scans[p] - eval_scans[p - 1], band["max_dropped_scans"],
+                                 "a replay added evaluator scans: %s" % eval_scans)
         # Flat after the first pass: every replay ends within max_rss_growth of pass 1. (The manager's
         # fixed mmap threshold in linemap.launch keeps freed MB-sized buffers from staying resident
         # in the malloc arenas, which made the readings jump by 2-7 MB from pass to pass.)
