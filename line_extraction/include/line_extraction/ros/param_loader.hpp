@@ -18,7 +18,8 @@ inline void flattenParam(const std::string& key, XmlRpc::XmlRpcValue& value, lin
   switch (value.getType())
   {
     case XmlRpc::XmlRpcValue::TypeStruct:
-      for (auto& entry : value) flattenParam(key.empty() ? entry.first : key + "/" + entry.first, entry.second, out);
+      for (auto& entry : value)
+        flattenParam(key.empty() ? entry.first : key + "/" + entry.first, entry.second, out);
       break;
     case XmlRpc::XmlRpcValue::TypeBoolean:
       out.set(key, static_cast<bool>(value) ? "true" : "false");
