@@ -24,6 +24,9 @@
 #    coverage stays; the harnesses and the parsers (map_file.cpp, carmen_log.cpp) keep trace-cmp.
 # It also runs with ASAN_OPTIONS malloc_context_size=5 (allocation stacks of 5 frames, not 30, in
 # a report) unless ASAN_OPTIONS sets it.
+# Campaign of 2026-11-23 with it (one core, README "Fuzzing" has the command): extractors 940,840
+# executions (870/s), merging 3,026,733 (3,149/s), map_file 1,653,584 (1,720/s), carmen 3,565,564
+# (4,239/s), no crash; 10^7 per target would take ~3.2 h, 53, 97 and 39 min of one core.
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 cd "$LINEMAP_ROOT"
