@@ -49,47 +49,20 @@ Vec2 project(const Vec2& p, double nx, double ny, double radius)
   const double d = p.x() * nx + p.y() * ny - radius;
   return {p.x() - d * nx, p.y() - d * ny};
 }
-}  // namespace
 
-LineFit fitLine(const LineSums& sums, double range_sigma)
+// h = |(cxx - cyy, 2 cxy)|: the difference of the scatter matrix's two eigenvalues.
+double scatterSpread(const Moments& m)
 {
-  LineFit fit;
-  // The normal and radius as fitNormal finds them (an eigenvector, no trigonometry);
-  // the angle from the normal is then the only transcendental call.
-  LineNormal line;
-  if (!fitNormal(sums, line)) return fit;
-  const Moments m = centred(sums);
   const double dxy = m.cxx - m.cyy;
-  const double h = std::sqrt(dxy * dxy + 4.0 * m.cxy * m.cxy);
-  const double trace = m.cxx + m.cyy;
-  const double along = 0.5 * (trace + h);  // scatter along the line
-  if (!(along > 0.0)) return fit;          // coincident points: no direction
-
-  const double c = line.nx, s = line.ny;
-  fit.angle = std::atan2(s, c);
-  fit.radius = line.radius;
-  fit.normal = Vec2(c, s);
-  fit.sum_squared_residuals = std::max(0.0, 0.5 * (trace - h));
-
-  const double var_noise = range_sigma * range_sigma;
-  const double var_angle = var_noise / along;
-  const double t_mean = -m.mx * s + m.my * c;
-  fit.covariance(0, 0) = var_noise / sums.n + t_mean * t_mean * var_angle;
-  fit.covariance(0, 1) = fit.covariance(1, 0) = t_mean * var_angle;
-  fit.covariance(1, 1) = var_angle;
-  fit.valid = true;
-  return fit;
+  return std::sqrt(dxy * dxy + 4.0 * m.cxy * m.cxy);
 }
 
-bool fitNormal(const LineSums& sums, LineNormal& out)
+// The total-least-squares normal of centred moments `m`, whose h = |(cxx - cyy, 2 cxy)| is given;
+// false for coincident points.
+bool normalOf(const Moments& m, double h, LineNormal& out)
 {
-  if (sums.n < 2.0) return false;
-  const double inv_n = 1.0 / sums.n;
-  const double mx = sums.sx * inv_n, my = sums.sy * inv_n;
-  const double cxx = std::max(0.0, sums.sxx - sums.sx * mx), cyy = std::max(0.0, sums.syy - sums.sy * my);
-  const double cxy = sums.sxy - sums.sx * my;
+  const double cxx = m.cxx, cyy = m.cyy, cxy = m.cxy, mx = m.mx, my = m.my;
   const double dxy = cxx - cyy;
-  const double h = std::sqrt(dxy * dxy + 4.0 * cxy * cxy);
   if (!(cxx + cyy + h > 0.0)) return false;
   // The normal is the eigenvector of the scatter matrix for its smaller eigenvalue
   // lmin = (cxx + cyy - h)/2, taken from the row of (S - lmin I) with the larger
@@ -128,6 +101,44 @@ bool fitNormal(const LineSums& sums, LineNormal& out)
   out.ny = vy;
   out.radius = r;
   return true;
+}
+
+}  // namespace
+
+LineFit fitLine(const LineSums& sums, double range_sigma)
+{
+  LineFit fit;
+  // The normal and radius as fitNormal finds them (an eigenvector, no trigonometry);
+  // the angle from the normal is then the only transcendental call.
+  if (sums.n < 2.0) return fit;
+  const Moments m = centred(sums);
+  const double h = scatterSpread(m);
+  LineNormal line;
+  if (!normalOf(m, h, line)) return fit;  // coincident points: no direction
+  const double trace = m.cxx + m.cyy;
+  const double along = 0.5 * (trace + h);  // scatter along the line, > 0 here
+
+  const double c = line.nx, s = line.ny;
+  fit.angle = std::atan2(s, c);
+  fit.radius = line.radius;
+  fit.normal = Vec2(c, s);
+  fit.sum_squared_residuals = std::max(0.0, 0.5 * (trace - h));
+
+  const double var_noise = range_sigma * range_sigma;
+  const double var_angle = var_noise / along;
+  const double t_mean = -m.mx * s + m.my * c;
+  fit.covariance(0, 0) = var_noise / sums.n + t_mean * t_mean * var_angle;
+  fit.covariance(0, 1) = fit.covariance(1, 0) = t_mean * var_angle;
+  fit.covariance(1, 1) = var_angle;
+  fit.valid = true;
+  return fit;
+}
+
+bool fitNormal(const LineSums& sums, LineNormal& out)
+{
+  if (sums.n < 2.0) return false;
+  const Moments m = centred(sums);
+  return normalOf(m, scatterSpread(m), out);
 }
 
 LineSums sumRange(const PreparedScan& scan, int begin, int end)
