@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <new>
 
 #include "line_extraction/extractor_registry.hpp"
 
@@ -48,7 +49,7 @@ void HoughExtractor::vote(const Vec2& p, int delta)
   int* __restrict index = bins_.data();
   // Cell indices first (a loop the compiler vectorises), then the scattered increments.
   for (int a = 0; a < bins; ++a) index[a] = static_cast<int>(x * c[a] + y * s[a] + offset) * bins + a;
-  std::uint16_t* acc = acc_.data();
+  std::uint16_t* acc = acc_.get();
   if (delta < 0)
   {
     for (int a = 0; a < bins; ++a) --acc[index[a]];
@@ -77,7 +78,14 @@ void HoughExtractor::extractRange(const PreparedScan& scan, PointRange range, Ex
   max_radius_ = half * radius_resolution_;
   radius_bins_ = 2 * half + 2;
   const std::size_t cells = static_cast<std::size_t>(angle_bins_) * radius_bins_;
-  if (acc_.size() < cells) acc_.resize(cells, 0);
+  if (acc_cells_ < cells)
+  {
+    acc_.reset();
+    acc_cells_ = 0;
+    acc_.reset(static_cast<std::uint16_t*>(std::calloc(cells, sizeof(std::uint16_t))));
+    if (!acc_) throw std::bad_alloc();
+    acc_cells_ = cells;
+  }
 
   const std::size_t first_segment = out.segments.size();
   remaining_.clear();
@@ -162,7 +170,7 @@ void HoughExtractor::extractRange(const PreparedScan& scan, PointRange range, Ex
   if (remaining_.size() * static_cast<std::size_t>(angle_bins_) * 16 < cells)
     for (int idx : remaining_) vote(scan.points[idx], -1);
   else
-    std::fill_n(acc_.begin(), cells, std::uint16_t{0});
+    std::fill_n(acc_.get(), cells, std::uint16_t{0});
   sortSegmentsByFirstPoint(out, first_segment);
 }
 

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
 #include <vector>
 
 #include "line_extraction/extractor.hpp"
@@ -46,8 +48,15 @@ class HoughExtractor : public Extractor
   std::vector<double> cos_, sin_;
   std::vector<int> bins_;
   // Accumulator [radius][angle] over the signed radius [-max_radius_, max_radius_] (one point
-  // votes into neighbouring rows: cache friendly); all zero between calls.
-  std::vector<std::uint16_t> acc_;
+  // votes into neighbouring rows: cache friendly); all zero between calls. Held in calloc'd
+  // memory: a larger one then needs neither a copy nor a clear, and its fresh pages are
+  // only faulted in where votes land.
+  struct FreeDeleter
+  {
+    void operator()(std::uint16_t* p) const { std::free(p); }
+  };
+  std::unique_ptr<std::uint16_t[], FreeDeleter> acc_;
+  std::size_t acc_cells_ = 0;
   int radius_bins_ = 0;
   double max_radius_ = 0.0;
   std::vector<int> remaining_, inliers_, candidates_;
