@@ -80,6 +80,7 @@ void HoughExtractor::extractRange(const PreparedScan& scan, PointRange range, Ex
   const std::size_t cells = static_cast<std::size_t>(angle_bins_) * radius_bins_;
   if (acc_cells_ < cells)
   {
+    // Free the old block first (lower peak), and stay consistent if calloc fails.
     acc_.reset();
     acc_cells_ = 0;
     acc_.reset(static_cast<std::uint16_t*>(std::calloc(cells, sizeof(std::uint16_t))));

@@ -108,8 +108,8 @@ bool normalOf(const Moments& m, double h, LineNormal& out)
 LineFit fitLine(const LineSums& sums, double range_sigma)
 {
   LineFit fit;
-  // The normal and radius as fitNormal finds them (an eigenvector, no trigonometry);
-  // the angle from the normal is then the only transcendental call.
+  // The normal and radius from the same moments and h as fitNormal (an eigenvector, no
+  // trigonometry); the angle from the normal is then the only transcendental call.
   if (sums.n < 2.0) return fit;
   const Moments m = centred(sums);
   const double h = scatterSpread(m);
