@@ -64,6 +64,11 @@ bool meetsFusionConditions(const Segment2& map, const Segment2& scan, const Fusi
          horizontalOverlap(map, scan) >= params.min_overlap;
 }
 
+bool meetEachOther(const Segment2& a, const Segment2& b, const FusionParams& params)
+{
+  return meetsFusionConditions(a, b, params) || meetsFusionConditions(b, a, params);
+}
+
 void FusionMoments::add(const Segment2& s, double w)
 {
   const Vec2 d = s.end - s.start;

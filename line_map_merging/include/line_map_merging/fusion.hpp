@@ -39,6 +39,9 @@ double horizontalOverlap(const Segment2& map, const Segment2& scan);
 /// All three conditions: heading deviation <= max_angle, vertical distance <= max_distance,
 /// horizontal overlap >= min_overlap.
 bool meetsFusionConditions(const Segment2& map, const Segment2& scan, const FusionParams& params);
+/// Whether two map segments are redundant with each other: the conditions hold with either one as
+/// the map segment M (they are asymmetric: a short segment beside a long one meets them one way).
+bool meetEachOther(const Segment2& a, const Segment2& b, const FusionParams& params);
 
 struct WeightedSegment
 {
