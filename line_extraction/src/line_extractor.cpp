@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "line_extraction/isolated_points.hpp"
 
@@ -16,6 +17,15 @@ namespace
   throw linemap::ParameterError("parameter '" + key + "' " + why);
 }
 }  // namespace
+
+void orientFreeSideLeft(Segment& segment)
+{
+  // The sensor sits at the origin of the laser frame; it is left of start -> end when the cross
+  // product of the direction and (sensor - start) is positive. Members stay in scan order.
+  const Vec2 d = segment.end - segment.start;
+  const Vec2 to_sensor = -segment.start;
+  if (d.x() * to_sensor.y() - d.y() * to_sensor.x() < 0.0) std::swap(segment.start, segment.end);
+}
 
 PipelineParams PipelineParams::fromParams(const linemap::ParamSet& ps)
 {
@@ -82,6 +92,7 @@ const ExtractionResult& LineExtractor::extract(const ScanInput& scan)
   {
     if (seg.num_points < params_.min_points || seg.length() < params_.min_length) continue;
     Segment copy = seg;
+    orientFreeSideLeft(copy);
     copy.index_begin = static_cast<int>(result_.point_indices.size());
     result_.point_indices.insert(result_.point_indices.end(), source->point_indices.begin() + seg.index_begin,
                                  source->point_indices.begin() + seg.index_end);

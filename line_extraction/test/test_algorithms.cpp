@@ -148,3 +148,68 @@ TEST(Pipeline, BadParametersAreNamed)
 }
 
 }  // namespace
+
+// The orientation convention: the sensor (the laser frame's origin) lies left of start -> end.
+// A wall with Hessian normal n = (cos angle, sin angle) points away from the origin (radius >= 0),
+// so its left normal must be -n: the direction is n turned by +90 deg, heading = angle + pi/2.
+class Orientation : public testing::TestWithParam<std::string>
+{
+};
+
+TEST_P(Orientation, FreeSideOnTheLeft)
+{
+  const double h = 3.0;
+  const int beams = 360;
+  const double inc = 2.0 * kPi / beams;
+  linemap::ParamSet params;
+  params.set("algorithm", GetParam());
+  LineExtractor extractor(params);
+  std::size_t checked = 0;
+  for (const Pose& pose : {Pose{0.4, -0.3, 0.2}, Pose{-1.1, 0.7, -2.5}, Pose{2.0, 1.5, 1.0}})
+  {
+    // A full turn of beams starting at several angles: the wall cut by the scan start wraps.
+    for (double angle_min : {-kPi, -kPi / 2, 0.3})
+    {
+      const std::vector<float> ranges =
+          line_extraction_test::squareRoomRanges(h, pose.x, pose.y, pose.yaw, beams, angle_min, inc);
+      ScanInput scan;
+      scan.ranges = ranges.data();
+      scan.count = ranges.size();
+      scan.angle_min = angle_min;
+      scan.angle_increment = inc;
+      scan.range_min = 0.05;
+      scan.range_max = 20.0;
+      for (const Segment& s : extractor.extract(scan).segments)
+      {
+        const double heading = std::atan2(s.end.y() - s.start.y(), s.end.x() - s.start.x());
+        EXPECT_NEAR(linemap::normalizeAngle(heading - (s.angle + kPi / 2)), 0.0, 1e-3)
+            << GetParam() << ": segment radius " << s.radius << " angle " << s.angle << " runs with heading "
+            << heading;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GE(checked, 12u) << GetParam() << " found too few segments to check";
+}
+
+INSTANTIATE_TEST_SUITE_P(Algorithms, Orientation,
+                         testing::Values("srg", "split_merge", "iepf", "smsm", "incremental",
+                                         "line_regression", "hough", "ransac", "em", "wsac_ge"));
+
+TEST(Orientation, ReversedSegmentIsSwapped)
+{
+  // The wall x = 1 seen from the origin: running towards +y keeps the origin on the left.
+  Segment s;
+  s.start = Vec2(1.0, 1.0);
+  s.end = Vec2(1.0, -1.0);
+  orientFreeSideLeft(s);
+  EXPECT_EQ(s.start, Vec2(1.0, -1.0));
+  EXPECT_EQ(s.end, Vec2(1.0, 1.0));
+  orientFreeSideLeft(s);  // already oriented: unchanged
+  EXPECT_EQ(s.start, Vec2(1.0, -1.0));
+  // Behind the sensor (x = -2) the same direction would put the origin on the right.
+  s.start = Vec2(-2.0, -1.0);
+  s.end = Vec2(-2.0, 1.0);
+  orientFreeSideLeft(s);
+  EXPECT_EQ(s.start, Vec2(-2.0, 1.0));
+}

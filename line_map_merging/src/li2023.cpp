@@ -62,8 +62,12 @@ bool fitCluster(const std::vector<Segment2>& members, Segment2& out)
   }
   line_extraction::LineNormal line;
   if (!line_extraction::fitNormal(sums, line)) return false;
+  // The criteria are undirected; the fused segment takes the direction of the length-weighted
+  // majority of its members, so that it keeps the orientation convention (free side on the left).
   Vec2 dir(-line.ny, line.nx);
-  if (dir.dot(members.front().end - members.front().start) < 0.0) dir = -dir;
+  double vote = 0.0;
+  for (const Segment2& s : members) vote += dir.dot(s.end - s.start);
+  if (vote < 0.0) dir = -dir;
   const Vec2 foot = line.radius * Vec2(line.nx, line.ny);
   double t_min = std::numeric_limits<double>::infinity(), t_max = -t_min;
   for (const Segment2& s : members)

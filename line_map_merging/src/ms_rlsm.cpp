@@ -7,6 +7,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace line_map_merging
 {
@@ -194,6 +195,7 @@ std::vector<MapSegment> MsRlsm::compute() const
   // Orient every segment along its cluster direction so that the fusion's heading mean does not
   // cancel a segment against its reverse.
   std::vector<double> rho(n), t0(n), t1(n);
+  std::vector<bool> reversed(n, false);
   for (std::size_t c = 0; c < modes.size(); ++c)
   {
     const Vec2 u(std::cos(modes[c]), std::sin(modes[c]));
@@ -201,7 +203,11 @@ std::vector<MapSegment> MsRlsm::compute() const
     for (std::size_t i : members[c])
     {
       Segment2& s = segments[i];
-      if ((s.end - s.start).dot(u) < 0.0) std::swap(s.start, s.end);
+      if ((s.end - s.start).dot(u) < 0.0)
+      {
+        std::swap(s.start, s.end);
+        reversed[i] = true;
+      }
       rho[i] = normal.dot(s.midpoint());
       t0[i] = u.dot(s.start);
       t1[i] = u.dot(s.end);
@@ -224,6 +230,7 @@ std::vector<MapSegment> MsRlsm::compute() const
   // Union-find roots are the smallest member index, so iterating in index order numbers the
   // clusters by their first segment.
   std::vector<std::vector<WeightedSegment>> clusters;
+  std::vector<double> direction_vote;  // length of members kept as they came minus of those reversed
   std::vector<int> cluster_of(n, -1);
   for (std::size_t i = 0; i < n; ++i)
   {
@@ -232,12 +239,21 @@ std::vector<MapSegment> MsRlsm::compute() const
     {
       cluster_of[root] = static_cast<int>(clusters.size());
       clusters.emplace_back();
+      direction_vote.push_back(0.0);
     }
     clusters[cluster_of[root]].push_back({segments[i], lengths[i]});
+    direction_vote[cluster_of[root]] += reversed[i] ? -lengths[i] : lengths[i];
   }
   std::vector<MapSegment> out;
   out.reserve(clusters.size());
-  for (const auto& c : clusters) out.push_back({out.size(), fuse(c), static_cast<std::uint32_t>(c.size())});
+  for (std::size_t c = 0; c < clusters.size(); ++c)
+  {
+    // The clustering is undirected, but the output keeps the orientation convention (free side on
+    // the left) of the length-weighted majority of its members.
+    Segment2 fused = fuse(clusters[c]);
+    if (direction_vote[c] < 0.0) std::swap(fused.start, fused.end);
+    out.push_back({out.size(), fused, static_cast<std::uint32_t>(clusters[c].size())});
+  }
   return out;
 }
 

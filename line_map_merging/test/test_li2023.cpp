@@ -162,3 +162,16 @@ TEST(Li2023, BadParametersNameTheKey)
   EXPECT_THROW(Li2023Params::fromParams(params), linemap::ParameterError);
   EXPECT_THROW(line_map_merging::lensArea(-1.0, 1.0, 1.0), std::invalid_argument);
 }
+
+TEST(Li2023, FusedSegmentTakesTheMajorityDirection)
+{
+  // The criteria are undirected: a 1 m segment running -x fuses with a 4 m one running +x. The
+  // length-weighted majority runs +x, whichever member comes first.
+  for (bool short_first : {true, false})
+  {
+    const Segment2 long_one(Vec2(0, 0), Vec2(4, 0)), short_one(Vec2(2.5, 0.02), Vec2(1.5, 0.02));
+    auto map = short_first ? merge({{short_one}, {long_one}}) : merge({{long_one}, {short_one}});
+    ASSERT_EQ(map.size(), 1u);
+    EXPECT_GT(map[0].segment.end.x() - map[0].segment.start.x(), 3.9) << "short first: " << short_first;
+  }
+}

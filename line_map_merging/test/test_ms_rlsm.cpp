@@ -122,3 +122,21 @@ TEST(MsRlsm, BadParametersNameTheKey)
   params.set("ms/lateral_separation", "-0.1");
   EXPECT_THROW(MsParams::fromParams(params), linemap::ParameterError);
 }
+
+TEST(MsRlsm, FusedSegmentTakesTheMajorityDirection)
+{
+  // Angular clusters are undirected: a 1 m segment running -x fuses with a 4 m one running +x.
+  // The output runs like the length-weighted majority of its members, in either input order.
+  const Segment2 long_one(Vec2(0, 0), Vec2(4, 0)), short_one(Vec2(2.5, 0.02), Vec2(1.5, 0.02));
+  for (const auto& input :
+       {std::vector<Segment2>{short_one, long_one}, std::vector<Segment2>{long_one, short_one}})
+  {
+    const auto map = merge(input);
+    ASSERT_EQ(map.size(), 1u);
+    EXPECT_GT(map[0].segment.end.x() - map[0].segment.start.x(), 3.9);
+  }
+  const Segment2 reversed_long(Vec2(4, 0), Vec2(0, 0)), forward_short(Vec2(1.5, 0.02), Vec2(2.5, 0.02));
+  const auto map = merge({forward_short, reversed_long});
+  ASSERT_EQ(map.size(), 1u);
+  EXPECT_LT(map[0].segment.end.x() - map[0].segment.start.x(), -3.9);
+}

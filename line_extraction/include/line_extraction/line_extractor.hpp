@@ -32,6 +32,12 @@ struct PipelineParams
   static PipelineParams fromParams(const linemap::ParamSet& params);
 };
 
+/// The project's orientation convention: a segment runs so that the free side, where the sensor
+/// is, lies on its left (the sensor at the laser frame's origin). Swaps start and end when needed;
+/// the Hessian form does not depend on the direction. Scan order (counter-clockwise beams) already
+/// gives it; fits whose members come out of order (Hough, RANSAC, EM, full-circle wraps) may not.
+void orientFreeSideLeft(Segment& segment);
+
 class LineExtractor
 {
  public:

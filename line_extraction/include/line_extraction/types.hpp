@@ -59,8 +59,10 @@ struct PointRange
 /// An extracted segment, in the laser frame.
 struct Segment
 {
-  Vec2 start = Vec2::Zero();  ///< first member point projected onto the line
-  Vec2 end = Vec2::Zero();    ///< last member point projected onto the line
+  /// The extreme member points projected onto the line; LineExtractor orders them so that the
+  /// sensor lies left of start -> end (orientFreeSideLeft), whatever the algorithm's order.
+  Vec2 start = Vec2::Zero();
+  Vec2 end = Vec2::Zero();
   double angle = 0.0;         ///< Hessian form: x cos(angle) + y sin(angle) = radius
   double radius = 0.0;        ///< >= 0
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  ///< of (radius, angle)
