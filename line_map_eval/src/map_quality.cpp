@@ -11,6 +11,7 @@ namespace line_map_eval
 QualityParams QualityParams::fromParams(const linemap::ParamSet& params)
 {
   QualityParams p;
+  p.directed = params.getBool("eval/directed", p.directed);
   p.direction_bins = params.getInt("eval/direction_bins", p.direction_bins);
   p.redundancy_penalty = params.getDouble("eval/redundancy_penalty", p.redundancy_penalty);
   p.validate();
@@ -27,15 +28,16 @@ void QualityParams::validate() const
                                   std::to_string(redundancy_penalty));
 }
 
-int directionBin(double heading, int bins)
+int directionBin(double heading, int bins, bool directed)
 {
   // Shift by half a bin so that bin 0 is centred on 0: axis-aligned walls (the common case
   // indoors) sit in the middle of a bin, and a wall at +0.1 deg and its copy at -0.1 deg share it.
-  const double width = linemap::kPi / bins;
-  double h = std::fmod(heading + 0.5 * width, linemap::kPi);
-  if (h < 0.0) h += linemap::kPi;
+  const double period = directed ? 2.0 * linemap::kPi : linemap::kPi;
+  const double width = period / bins;
+  double h = std::fmod(heading + 0.5 * width, period);
+  if (h < 0.0) h += period;
   const int b = static_cast<int>(h / width);
-  return std::clamp(b, 0, bins - 1);  // h may round up to pi
+  return std::clamp(b, 0, bins - 1);  // h may round up to the period
 }
 
 QualityResult computeMapQuality(const LookupTable& table, const std::vector<linemap::Segment2>& map,
@@ -61,7 +63,8 @@ QualityResult computeMapQuality(const LookupTable& table, const std::vector<line
     if (s.start.cwiseAbs().maxCoeff() > limit || s.end.cwiseAbs().maxCoeff() > limit)
       throw std::invalid_argument("map quality: map segment " + std::to_string(i) +
                                   " lies more than 6e7 cells from the origin");
-    const std::uint64_t bin = static_cast<std::uint64_t>(directionBin(s.heading(), params.direction_bins));
+    const std::uint64_t bin =
+        static_cast<std::uint64_t>(directionBin(s.heading(), params.direction_bins, params.directed));
     const Cell a = table.cellOf(s.start), b = table.cellOf(s.end);
     forEachBresenhamCell(
         a.x, a.y, b.x, b.y,

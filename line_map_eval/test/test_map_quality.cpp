@@ -26,10 +26,11 @@ LookupTableParams tableParams()
   return p;
 }
 
-QualityParams qualityParams(double w)
+QualityParams qualityParams(double w, bool directed = true)
 {
   QualityParams p;
-  p.direction_bins = 8;
+  p.directed = directed;
+  p.direction_bins = directed ? 16 : 8;
   p.redundancy_penalty = w;
   return p;
 }
@@ -42,20 +43,58 @@ TEST(DirectionBin, UndirectedEightBinsCentredOnTheAxes)
 {
   // Bins of 22.5 deg centred on 0, 22.5, 45, ... deg: bin 0 = [-11.25, 11.25) deg.
   const double pi = linemap::kPi, deg = pi / 180.0;
-  EXPECT_EQ(directionBin(0.0, 8), 0);
-  EXPECT_EQ(directionBin(pi, 8), 0);  // the same wall walked the other way
-  EXPECT_EQ(directionBin(-pi, 8), 0);
-  EXPECT_EQ(directionBin(-0.5 * deg, 8), 0);  // a hair below horizontal stays with horizontal
-  EXPECT_EQ(directionBin(pi - 0.5 * deg, 8), 0);
-  EXPECT_EQ(directionBin(11.0 * deg, 8), 0);
-  EXPECT_EQ(directionBin(-11.0 * deg, 8), 0);
-  EXPECT_EQ(directionBin(12.0 * deg, 8), 1);
-  EXPECT_EQ(directionBin(-12.0 * deg, 8), 7);
-  EXPECT_EQ(directionBin(pi / 2, 8), 4);
-  EXPECT_EQ(directionBin(-pi / 2, 8), 4);
-  EXPECT_EQ(directionBin(3.0 * pi / 4, 8), 6);
-  EXPECT_EQ(directionBin(-pi / 4, 8), 6);
-  EXPECT_EQ(directionBin(1.0, 1), 0);
+  EXPECT_EQ(directionBin(0.0, 8, false), 0);
+  EXPECT_EQ(directionBin(pi, 8, false), 0);  // the same wall walked the other way
+  EXPECT_EQ(directionBin(-pi, 8, false), 0);
+  EXPECT_EQ(directionBin(-0.5 * deg, 8, false), 0);  // a hair below horizontal stays with horizontal
+  EXPECT_EQ(directionBin(pi - 0.5 * deg, 8, false), 0);
+  EXPECT_EQ(directionBin(11.0 * deg, 8, false), 0);
+  EXPECT_EQ(directionBin(-11.0 * deg, 8, false), 0);
+  EXPECT_EQ(directionBin(12.0 * deg, 8, false), 1);
+  EXPECT_EQ(directionBin(-12.0 * deg, 8, false), 7);
+  EXPECT_EQ(directionBin(pi / 2, 8, false), 4);
+  EXPECT_EQ(directionBin(-pi / 2, 8, false), 4);
+  EXPECT_EQ(directionBin(3.0 * pi / 4, 8, false), 6);
+  EXPECT_EQ(directionBin(-pi / 4, 8, false), 6);
+  EXPECT_EQ(directionBin(1.0, 1, false), 0);
+}
+
+TEST(DirectionBin, DirectedSixteenBinsOverTheFullCircle)
+{
+  // Bins of 22.5 deg over 360 deg centred on 0, 22.5, ... deg: opposite headings are 8 bins apart.
+  const double pi = linemap::kPi, deg = pi / 180.0;
+  EXPECT_EQ(directionBin(0.0, 16, true), 0);
+  EXPECT_EQ(directionBin(pi, 16, true), 8);
+  EXPECT_EQ(directionBin(-pi, 16, true), 8);
+  EXPECT_EQ(directionBin(-0.5 * deg, 16, true), 0);
+  EXPECT_EQ(directionBin(11.0 * deg, 16, true), 0);
+  EXPECT_EQ(directionBin(12.0 * deg, 16, true), 1);
+  EXPECT_EQ(directionBin(-12.0 * deg, 16, true), 15);
+  EXPECT_EQ(directionBin(pi / 2, 16, true), 4);
+  EXPECT_EQ(directionBin(-pi / 2, 16, true), 12);
+  EXPECT_EQ(directionBin(pi - 0.5 * deg, 16, true), 8);
+  EXPECT_EQ(directionBin(1.0, 1, true), 0);
+}
+
+TEST(MapQuality, TwoFacesOfAThinWallAreNotRedundantButASecondCopyIs)
+{
+  // A 10 cm wall between y = 0 and y = 0.1 seen from both sides: its faces run in opposite directions
+  // (free side on the left). With 5 cm cells both faces' rows are distinct anyway, so draw the faces
+  // into one row as a wall thinner than a cell would: a 2 cm wall, faces at y = 0.015 and 0.035.
+  const LookupTable t = LookupTable::build({Vec2(0.025, 0.025)}, tableParams());
+  const Segment2 lower(Vec2(0.125, 0.015), Vec2(-0.075, 0.015));  // free side below: runs -x
+  const Segment2 upper(Vec2(-0.075, 0.035), Vec2(0.125, 0.035));  // free side above: runs +x
+  const QualityResult faces = computeMapQuality(t, {lower, upper}, qualityParams(1.0));
+  EXPECT_EQ(faces.pixel_count, 10u);
+  EXPECT_EQ(faces.redundant_pixels, 0u);
+  EXPECT_NEAR(faces.quality, 100.0 * 2.0 * kRowSum / 10.0, 1e-4);
+  // The same face drawn twice in one direction is redundant: the copy cancels it (w = 1).
+  const QualityResult twice = computeMapQuality(t, {upper, upper}, qualityParams(1.0));
+  EXPECT_EQ(twice.redundant_pixels, 5u);
+  EXPECT_NEAR(twice.quality, 0.0, 1e-9);
+  // The undirected variant calls the two faces redundant.
+  const QualityResult undirected = computeMapQuality(t, {lower, upper}, qualityParams(1.0, false));
+  EXPECT_EQ(undirected.redundant_pixels, 5u);
 }
 
 TEST(MapQuality, SingleSegmentOverOnePointInClosedForm)
@@ -70,20 +109,22 @@ TEST(MapQuality, SingleSegmentOverOnePointInClosedForm)
   EXPECT_NEAR(r.quality, 100.0 * kRowSum / 5.0, 1e-4);
 }
 
-TEST(MapQuality, ReversedDuplicateIsRedundantAndPenalised)
+TEST(MapQuality, UndirectedReversedDuplicateIsRedundantAndPenalised)
 {
   const LookupTable t = LookupTable::build({Vec2(0.025, 0.025)}, tableParams());
   const Segment2 s(Vec2(-0.075, 0.025), Vec2(0.125, 0.025));
   const std::vector<Segment2> map = {s, Segment2(s.end, s.start)};
   // w = 0.5: q = 100 (S - 0.5 S) / 10.
-  const QualityResult r = computeMapQuality(t, map, qualityParams(0.5));
+  const QualityResult r = computeMapQuality(t, map, qualityParams(0.5, false));
   EXPECT_EQ(r.pixel_count, 10u);
   EXPECT_EQ(r.redundant_pixels, 5u);
   EXPECT_NEAR(r.redundant_sum, kRowSum, 1e-6);
   EXPECT_NEAR(r.quality, 100.0 * 0.5 * kRowSum / 10.0, 1e-4);
   // w = 1 cancels the duplicate completely; w = 0 only dilutes by N.
-  EXPECT_NEAR(computeMapQuality(t, map, qualityParams(1.0)).quality, 0.0, 1e-9);
-  EXPECT_NEAR(computeMapQuality(t, map, qualityParams(0.0)).quality, 100.0 * kRowSum / 10.0, 1e-4);
+  EXPECT_NEAR(computeMapQuality(t, map, qualityParams(1.0, false)).quality, 0.0, 1e-9);
+  EXPECT_NEAR(computeMapQuality(t, map, qualityParams(0.0, false)).quality, 100.0 * kRowSum / 10.0, 1e-4);
+  // Directed, the reversed copy is another face: nothing is redundant.
+  EXPECT_EQ(computeMapQuality(t, map, qualityParams(1.0)).redundant_pixels, 0u);
 }
 
 TEST(MapQuality, CopyTiltedToTheOtherSideOfHorizontalIsStillRedundant)
