@@ -176,8 +176,9 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       checkTimeJump(msg->header.stamp);
       // A frame that tf has never heard of would wait in the filter until its queue overflows,
       // unreported: drop and count it now (a frame that exists but is not yet connected still waits).
+      // The map frame itself needs no tf (its pose is the identity), so tf may never have heard of it.
       const std::string frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
-      if (frame.empty() || !tf_buffer_->_frameExists(frame))
+      if (frame.empty() || (frame != map_frame_ && !tf_buffer_->_frameExists(frame)))
       {
         ++dropped_scans_;
         NODELET_WARN_THROTTLE(5.0,
@@ -283,8 +284,9 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       }
       catch (const tf2::TransformException& e)
       {
-        // Without base -> laser the trajectory is applied to the laser pose directly.
-        NODELET_WARN_THROTTLE(30.0,
+        // Without base -> laser the trajectory is applied to the laser pose directly. A bag without
+        // that transform lacks it for good: saying so once is enough.
+        NODELET_WARN_ONCE(
                               "line_map_merging: no %s -> %s transform (%s); taking them as the same frame",
                               base_frame_.c_str(), msg->header.frame_id.c_str(), e.what());
       }
