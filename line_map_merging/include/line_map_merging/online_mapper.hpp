@@ -1,0 +1,146 @@
+// The online mapper (ROS-free): everything the merging nodelet and linemap_batch's replay mode do
+// between receiving data and publishing a map. Fed plain data: stamped segment sets with their
+// laser pose in the map frame (and in the odometry frame), stamped trajectories of base poses
+// from a SLAM back end, save / load / reset. It owns the keyframe gate, the keyframe and scan pose
+// bookkeeping, matching trajectory nodes to scans by stamp, correcting keyframes between nodes
+// (trajectory_anchor.hpp), the adjustments, replay and time-jump handling, the autosave policy
+// (when to save; the file is written by the merger's save()) and every counter of the diagnostics.
+// Not thread-safe: the caller serialises the calls.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+#include "line_extraction/params.hpp"
+#include "line_map_merging/keyframe_gate.hpp"
+#include "line_map_merging/merger.hpp"
+#include "line_map_merging/trajectory_anchor.hpp"
+
+namespace line_map_merging
+{
+struct OnlineMapperParams
+{
+  KeyframeGateParams gate;
+  double stamp_tolerance = 0.01;     ///< [s] trajectory node <-> scan stamp
+  double max_gap = 1.0;              ///< [s] a node between two scans at most this far apart is interpolated
+  double time_jump_tolerance = 1.0;  ///< [s] clock or stamp this much earlier than before = time jumped back
+  double autosave_period = 0.0;      ///< [s] 0 = no autosave
+  CorrectionMode correction = CorrectionMode::kNearest;
+
+  /// Keys "keyframe_distance", "keyframe_angle", "stamp_tolerance", "trajectory_max_gap",
+  /// "time_jump_tolerance", "autosave_period", "trajectory_correction" (nearest | interpolate);
+  /// throws linemap::ParameterError naming the key.
+  static OnlineMapperParams fromParams(const linemap::ParamSet& params);
+};
+
+/// One segment set as the extraction produced it, with its poses at its stamp.
+struct StampedScan
+{
+  double stamp = 0.0;                       ///< [s]; zero is dropped (a "latest transform" stamp)
+  linemap::Pose2 laser;                     ///< laser in the map frame
+  std::optional<linemap::Pose2> odom;       ///< laser in the odometry frame, when there is one
+  linemap::Pose2 mount;                     ///< base -> laser
+  std::vector<linemap::Segment2> segments;  ///< laser frame
+};
+
+/// A trajectory node: base pose in the map frame at a stamp.
+using StampedPose = std::pair<double, linemap::Pose2>;
+
+enum class ScanOutcome
+{
+  kKeyframe,   ///< merged
+  kBelowGate,  ///< the robot has not moved enough since the last keyframe
+  kReplayed,   ///< a keyframe with this stamp exists (a replayed bag): skipped
+  kZeroStamp,  ///< stamped zero: dropped
+  kRejected,   ///< the merger refused it (non-finite pose)
+};
+
+struct MapperCounters
+{
+  std::size_t scans = 0, keyframes_added = 0, below_gate = 0, replayed = 0, zero_stamps = 0;
+  std::size_t dropped = 0;  ///< by the caller (no transform) or the merger (rejected)
+  std::size_t bad_segments = 0;
+  std::size_t trajectories = 0, ignored_trajectories = 0, bad_poses = 0, unmatched_poses = 0;
+  std::size_t adjustments = 0, adjustment_failures = 0;
+  std::size_t time_jumps = 0, autosaves = 0, autosave_failures = 0;
+  double last_otm_ms = 0.0, last_gma_ms = 0.0;
+};
+
+class OnlineMapper
+{
+ public:
+  OnlineMapper(std::unique_ptr<Merger> merger, const OnlineMapperParams& params);
+
+  /// Gates and merges one segment set. A scan whose stamp a keyframe already has is a replay:
+  /// skipped, and the gate moves on from it as from that keyframe, so a replay adds nothing.
+  ScanOutcome addScan(const StampedScan& scan);
+
+  /// Applies a trajectory of base poses (map frame) of the back end's nodes, at any stamps: each
+  /// node found among the scans seen gives the corrected map->odom there; every keyframe gets the
+  /// correction of its nearest node (or the interpolation, see CorrectionMode) and the map is
+  /// adjusted. Non-finite poses are counted and skipped. Returns whether the map changed.
+  bool addTrajectory(const std::vector<StampedPose>& base_poses);
+
+  /// The clock reading and/or a message stamp (NaN or 0: not known). Returns true when time jumped
+  /// back by more than the tolerance (rosbag play --loop): the gate is reset, the map kept, and
+  /// the caller should drop what it holds of the old time line (tf buffer).
+  bool observeTime(double clock, double stamp);
+
+  /// Empties the map and every record of scans and keyframes (counters stay).
+  void reset();
+  /// Replaces the map by the file's (throws MapFileError and keeps everything on failure). The
+  /// odometry of the loaded keyframes is unknown: their map poses stand in for it.
+  void load(const std::string& path);
+
+  /// The autosave policy: true when autosave is on, the map changed since the last save and the
+  /// period has passed since the last save (`now` in seconds, e.g. wall time).
+  bool autosaveDue(double now) const;
+  /// The caller saved `revision` (of revision(), taken when it took the snapshot) at `now`, or failed.
+  void autosaved(std::uint64_t revision, double now, bool ok);
+
+  /// Counts a scan the caller could not pose (no transform) or that came stamped zero.
+  void countDropped() { ++counters_.dropped; }
+  void countZeroStamp() { ++counters_.zero_stamps; }
+  /// Counts a trajectory the caller refused (wrong frame) and poses it could not convert.
+  void countIgnoredTrajectory() { ++counters_.ignored_trajectories; }
+  void countBadPoses(std::size_t n) { counters_.bad_poses += n; }
+
+  const Merger& merger() const { return *merger_; }
+  Merger& merger() { return *merger_; }
+  /// Increases with every change of the map.
+  std::uint64_t revision() const { return revision_; }
+  const MapperCounters& counters() const { return counters_; }
+  const OnlineMapperParams& params() const { return params_; }
+  /// Stamps of the keyframes, in the order they were merged.
+  const std::vector<double>& keyframeStamps() const { return keyframe_order_; }
+  /// Every counter of the diagnostics with its label, in display order.
+  std::vector<std::pair<std::string, std::string>> diagnostics() const;
+
+ private:
+  /// Where the map-level merge step (map segment against map segment) is to be scheduled once the
+  /// merger offers one: after each keyframe and after each adjustment, on the merger's own state.
+  void afterMapChange() { ++revision_; }
+
+  std::unique_ptr<Merger> merger_;
+  OnlineMapperParams params_;
+  KeyframeGate gate_;
+  OdometryHistory history_;  ///< base pose of every scan seen, in the continuous frame
+  std::unordered_map<std::uint64_t, linemap::Pose2> continuous_;  ///< keyframe index -> laser, same frame
+  std::unordered_set<double> keyframe_stamps_;
+  std::vector<double> keyframe_order_;
+  std::uint64_t next_index_ = 0;
+  double last_clock_ = 0.0, last_stamp_ = 0.0;
+  std::uint64_t revision_ = 0, saved_revision_ = 0;
+  double last_save_ = -1e300;
+  MapperCounters counters_;
+};
+
+}  // namespace line_map_merging

@@ -1,0 +1,340 @@
+// The online mapper without ROS, fed what a real SLAM front and back end send: scans posed through
+// a drifting odometry and a jumping map->odom, trajectories whose nodes are not the mapper's
+// keyframes, bursts, replays, out-of-order and duplicate stamps.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+#include "line_map_merging/online_mapper.hpp"
+
+using namespace line_map_merging;
+using linemap::Pose2;
+using linemap::Segment2;
+using linemap::Vec2;
+
+namespace
+{
+constexpr double kStep = 0.05;   // [m] per scan
+constexpr double kDrift = 0.01;  // [rad] odometry heading error per scan
+constexpr int kScans = 120;
+
+/// A robot driving straight along x at one scan per 0.05 m; its odometry turns by kDrift per scan
+/// (after 120 scans: 1.2 rad and metres of position error). Each scan sees a wall at y = 1.
+struct Drive
+{
+  std::vector<double> stamps;
+  std::vector<Pose2> truth, odom;  // base = laser (identity mount)
+
+  Drive()
+  {
+    Pose2 t, o;
+    for (int i = 0; i < kScans; ++i)
+    {
+      stamps.push_back(100.0 + 0.1 * i);
+      truth.push_back(t);
+      odom.push_back(o);
+      t = t * Pose2(kStep, 0.0, 0.0);
+      o = o * Pose2(kStep, 0.0, kDrift);
+    }
+  }
+
+  /// Scan i posed in the map through `map_to_odom` (what tf map -> laser gives).
+  StampedScan scan(int i, const Pose2& map_to_odom = Pose2()) const
+  {
+    StampedScan s;
+    s.stamp = stamps[i];
+    s.odom = odom[i];
+    s.laser = map_to_odom * odom[i];
+    const Pose2 inv = truth[i].inverse();
+    s.segments.emplace_back(inv.apply(Vec2(truth[i].x - 1.0, 1.0)), inv.apply(Vec2(truth[i].x + 1.0, 1.0)));
+    return s;
+  }
+
+  /// The back end's nodes: true poses of scans 2, 6, 10, ... (none of them a keyframe, see below).
+  std::vector<StampedPose> nodes() const
+  {
+    std::vector<StampedPose> out;
+    for (int i = 2; i < kScans; i += 4) out.emplace_back(stamps[i], truth[i]);
+    return out;
+  }
+};
+
+OnlineMapperParams params()
+{
+  OnlineMapperParams p;
+  p.gate.distance = 0.19;  // every 4th scan (0, 4, 8, ...): the chord of 4 drifting steps is > 0.19 m
+  p.gate.angle = 1.0;
+  return p;
+}
+
+std::unique_ptr<OnlineMapper> mapper(const OnlineMapperParams& p = params())
+{
+  return std::make_unique<OnlineMapper>(makeMerger("cae", linemap::ParamSet()), p);
+}
+
+int scanOf(const Drive& run, double stamp)
+{
+  return static_cast<int>(std::find(run.stamps.begin(), run.stamps.end(), stamp) - run.stamps.begin());
+}
+
+/// Largest position error [m] and heading error [rad] of the keyframes against the truth.
+std::pair<double, double> keyframeError(const Drive& run, const OnlineMapper& m)
+{
+  double dp = 0.0, da = 0.0;
+  for (const KeyframeInfo& k : m.merger().keyframes())
+  {
+    const Pose2& t = run.truth[scanOf(run, k.stamp)];
+    dp = std::max(dp, std::hypot(k.pose.x - t.x, k.pose.y - t.y));
+    da = std::max(da, std::abs(linemap::normalizeAngle(k.pose.theta - t.theta)));
+  }
+  return {dp, da};
+}
+
+// Relative odometry over the two scans to the nearest node: heading off by at most 2 kDrift, position
+// by at most 0.05 * (kDrift + 2 kDrift) = 1.5 mm.
+constexpr double kPosTol = 0.002, kAngleTol = 2.0 * kDrift + 1e-9;
+}  // namespace
+
+TEST(OnlineMapper, KeyframeGateAndCounters)
+{
+  Drive run;
+  auto m = mapper();
+  for (int i = 0; i < kScans; ++i) m->addScan(run.scan(i));
+  EXPECT_EQ(m->merger().keyframeCount(), static_cast<std::size_t>(kScans / 4));
+  for (const KeyframeInfo& k : m->merger().keyframes()) EXPECT_EQ(scanOf(run, k.stamp) % 4, 0);
+  EXPECT_EQ(m->counters().scans, static_cast<std::size_t>(kScans));
+  EXPECT_EQ(m->counters().below_gate, static_cast<std::size_t>(kScans - kScans / 4));
+  EXPECT_GT(m->merger().segmentCount(), 0u);
+}
+
+TEST(OnlineMapper, TrajectoryNodesThatAreNoKeyframesCorrectEveryKeyframe)
+{
+  Drive run;
+  auto m = mapper();
+  for (int i = 0; i < kScans; ++i) m->addScan(run.scan(i));
+  const auto before = keyframeError(run, *m);
+  ASSERT_GT(before.first, 1.0);  // the drift the trajectory must remove
+  ASSERT_TRUE(m->addTrajectory(run.nodes()));
+  EXPECT_EQ(m->counters().unmatched_poses, 0u);
+  const auto after = keyframeError(run, *m);
+  EXPECT_LT(after.first, kPosTol);
+  EXPECT_LT(after.second, kAngleTol);
+  // The map lies on the wall y = 1 again.
+  for (const MapSegment& s : m->merger().map())
+  {
+    EXPECT_NEAR(s.segment.start.y(), 1.0, 0.01);
+    EXPECT_NEAR(s.segment.end.y(), 1.0, 0.01);
+  }
+}
+
+TEST(OnlineMapper, InterpolatedCorrectionsAlsoReachTheTruth)
+{
+  Drive run;
+  OnlineMapperParams p = params();
+  p.correction = CorrectionMode::kInterpolate;
+  auto m = mapper(p);
+  for (int i = 0; i < kScans; ++i) m->addScan(run.scan(i));
+  ASSERT_TRUE(m->addTrajectory(run.nodes()));
+  EXPECT_LT(keyframeError(run, *m).first, 0.01);
+}
+
+TEST(OnlineMapperMapToOdom, JumpsOfMapToOdomDoNotMoveTheCorrectedKeyframes)
+{
+  // The back end's map->odom jumps at scans 40 and 80 (as a SLAM publishes new estimates); the
+  // keyframes are registered through it, but corrected from their odometry: the same result.
+  Drive run;
+  auto m = mapper();
+  for (int i = 0; i < kScans; ++i)
+    m->addScan(run.scan(i, i < 40 ? Pose2() : i < 80 ? Pose2(3.0, -2.0, 0.7) : Pose2(-5.0, 4.0, -2.5)));
+  ASSERT_TRUE(m->addTrajectory(run.nodes()));
+  const auto after = keyframeError(run, *m);
+  EXPECT_LT(after.first, kPosTol);
+  EXPECT_LT(after.second, kAngleTol);
+}
+
+TEST(OnlineMapperBursts, ATrajectoryAfterEveryScanEndsOnTheTruth)
+{
+  // A back end publishing after every scan the nodes known so far, and tf map -> odom following
+  // its latest node: over a hundred adjustments, each from the odometry, none compounding.
+  Drive run;
+  auto m = mapper();
+  Pose2 map_to_odom;
+  for (int i = 0; i < kScans; ++i)
+  {
+    m->addScan(run.scan(i, map_to_odom));
+    std::vector<StampedPose> so_far;
+    for (const auto& n : run.nodes())
+      if (n.first <= run.stamps[i]) so_far.push_back(n);
+    if (so_far.empty()) continue;
+    m->addTrajectory(so_far);
+    const int last = scanOf(run, so_far.back().first);
+    map_to_odom = run.truth[last] * run.odom[last].inverse();
+  }
+  for (int k = 0; k < 5; ++k) m->addTrajectory(run.nodes());
+  EXPECT_GT(m->counters().adjustments, 100u);
+  EXPECT_GT(m->merger().keyframeCount(), static_cast<std::size_t>(kScans / 5));
+  const auto after = keyframeError(run, *m);
+  EXPECT_LT(after.first, kPosTol);
+  EXPECT_LT(after.second, kAngleTol);
+}
+
+TEST(OnlineMapperReplay, AReplayAfterTheClockJumpedBackAddsNothing)
+{
+  Drive run;
+  auto m = mapper();
+  for (int i = 0; i < kScans; ++i)
+  {
+    EXPECT_FALSE(m->observeTime(run.stamps[i], run.stamps[i]));
+    m->addScan(run.scan(i));
+  }
+  const std::size_t keyframes = m->merger().keyframeCount(), segments = m->merger().segmentCount();
+  const std::uint64_t revision = m->revision();
+  // rosbag play --loop: the clock restarts.
+  EXPECT_TRUE(m->observeTime(run.stamps[0], run.stamps[0]));
+  EXPECT_EQ(m->counters().time_jumps, 1u);
+  for (int i = 0; i < kScans; ++i)
+  {
+    m->observeTime(run.stamps[i], run.stamps[i]);
+    const ScanOutcome o = m->addScan(run.scan(i));
+    EXPECT_EQ(o, i % 4 == 0 ? ScanOutcome::kReplayed : ScanOutcome::kBelowGate) << "scan " << i;
+  }
+  EXPECT_EQ(m->counters().time_jumps, 1u);
+  EXPECT_EQ(m->merger().keyframeCount(), keyframes);
+  EXPECT_EQ(m->merger().segmentCount(), segments);
+  EXPECT_EQ(m->counters().replayed, keyframes);
+  EXPECT_EQ(m->revision(), revision);
+}
+
+TEST(OnlineMapperStamps, OutOfOrderAndDuplicateNodesGiveTheSameCorrection)
+{
+  Drive run;
+  auto clean = mapper(), messy = mapper();
+  for (int i = 0; i < kScans; ++i)
+  {
+    clean->addScan(run.scan(i));
+    messy->addScan(run.scan(i));
+  }
+  auto nodes = run.nodes();
+  clean->addTrajectory(nodes);
+  auto shuffled = nodes;
+  shuffled.insert(shuffled.end(), nodes.begin(), nodes.end());  // every node twice
+  std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(7));
+  messy->addTrajectory(shuffled);
+  const auto a = clean->merger().keyframes(), b = messy->merger().keyframes();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i)
+  {
+    EXPECT_NEAR(a[i].pose.x, b[i].pose.x, 1e-12);
+    EXPECT_NEAR(a[i].pose.y, b[i].pose.y, 1e-12);
+  }
+}
+
+TEST(OnlineMapperStamps, LateScansDuplicatesAndZeroStamps)
+{
+  Drive run;
+  auto m = mapper();
+  // Scans 0..7 with scan 6 arriving after 7 (a late scan the tf filter let through).
+  for (int i : {0, 1, 2, 3, 4, 5, 7, 6}) m->addScan(run.scan(i));
+  EXPECT_EQ(m->merger().keyframeCount(), 2u);  // scans 0 and 4; late 6 is within the gate of 4
+  // The same stamp again is a replay of keyframe 4; stamp zero is dropped.
+  EXPECT_EQ(m->addScan(run.scan(4)), ScanOutcome::kReplayed);
+  StampedScan zero = run.scan(8);
+  zero.stamp = 0.0;
+  EXPECT_EQ(m->addScan(zero), ScanOutcome::kZeroStamp);
+  EXPECT_EQ(m->counters().zero_stamps, 1u);
+  // A node at the late scan 6 is found (it was seen) and corrects keyframe 4 by the odometry from 6.
+  ASSERT_TRUE(m->addTrajectory({{run.stamps[6], run.truth[6]}}));
+  const auto ks = m->merger().keyframes();
+  const Pose2 expected = run.truth[6] * run.odom[6].inverse() * run.odom[4];
+  EXPECT_NEAR(ks[1].pose.x, expected.x, 1e-9);
+  EXPECT_NEAR(ks[1].pose.y, expected.y, 1e-9);
+  // A node between two scans (another sensor's stamp) takes the interpolated odometry; one
+  // outside the scans seen is unmatched; a non-finite one is counted as bad.
+  EXPECT_TRUE(m->addTrajectory({{0.5 * (run.stamps[2] + run.stamps[3]), Pose2(0.125, 0.0, 0.0)},
+                                {run.stamps[50], run.truth[50]},
+                                {run.stamps[1], Pose2(NAN, 0.0, 0.0)}}));
+  EXPECT_EQ(m->counters().unmatched_poses, 1u);
+  EXPECT_EQ(m->counters().bad_poses, 1u);
+}
+
+TEST(OnlineMapperAutosave, DueOnlyWhenChangedAndThePeriodPassed)
+{
+  Drive run;
+  OnlineMapperParams p = params();
+  EXPECT_FALSE(mapper(p)->autosaveDue(1e9));  // off by default
+  p.autosave_period = 2.0;
+  auto m = mapper(p);
+  EXPECT_FALSE(m->autosaveDue(10.0));  // nothing to save
+  m->addScan(run.scan(0));
+  EXPECT_TRUE(m->autosaveDue(10.0));
+  m->autosaved(m->revision(), 10.0, true);
+  EXPECT_FALSE(m->autosaveDue(20.0));  // unchanged
+  m->addScan(run.scan(4));
+  EXPECT_FALSE(m->autosaveDue(11.0));  // changed, but within the period
+  EXPECT_TRUE(m->autosaveDue(12.0));
+  m->autosaved(m->revision(), 12.0, false);
+  EXPECT_EQ(m->counters().autosave_failures, 1u);
+  EXPECT_TRUE(m->autosaveDue(14.0));  // still unsaved
+  // A change made while a snapshot was being written keeps the map due.
+  const std::uint64_t snapshot = m->revision();
+  m->addScan(run.scan(8));
+  m->autosaved(snapshot, 14.0, true);
+  EXPECT_TRUE(m->autosaveDue(16.0));
+  EXPECT_EQ(m->counters().autosaves, 2u);
+}
+
+TEST(OnlineMapperFiles, ALoadedMapTakesTheSameTrajectoryLikeTheOriginal)
+{
+  // Every keyframe a node (the restart case): the loaded keyframes, whose odometry is unknown,
+  // end where the original's do.
+  Drive run;
+  auto original = mapper();
+  for (int i = 0; i < kScans; ++i) original->addScan(run.scan(i));
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("online_mapper_" + std::to_string(::getpid()) + ".yaml"))
+          .string();
+  original->merger().save(path);
+  auto loaded = mapper();
+  loaded->load(path);
+  std::filesystem::remove(path);
+  std::vector<StampedPose> nodes;
+  for (int i = 0; i < kScans; i += 4) nodes.emplace_back(run.stamps[i], run.truth[i]);
+  original->addTrajectory(nodes);
+  loaded->addTrajectory(nodes);
+  const auto a = original->merger().map(), b = loaded->merger().map();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i)
+  {
+    EXPECT_NEAR(a[i].segment.start.x(), b[i].segment.start.x(), 1e-6);
+    EXPECT_NEAR(a[i].segment.end.y(), b[i].segment.end.y(), 1e-6);
+  }
+  // The loaded keyframes are known: a replay of them adds nothing; reset forgets them.
+  EXPECT_EQ(loaded->addScan(run.scan(0)), ScanOutcome::kReplayed);
+  loaded->reset();
+  EXPECT_EQ(loaded->merger().keyframeCount(), 0u);
+  EXPECT_EQ(loaded->addScan(run.scan(0)), ScanOutcome::kKeyframe);
+}
+
+TEST(TrajectoryAnchor, HistoryAndCorrections)
+{
+  OdometryHistory h;
+  h.add(1.0, Pose2(0.0, 0.0, 0.0));
+  h.add(2.0, Pose2(1.0, 0.0, 0.2));
+  h.add(2.0, Pose2(9.0, 9.0, 0.0));  // a replayed stamp keeps the first pose
+  EXPECT_NEAR(h.at(2.004, 0.01, 1.0)->x, 1.0, 1e-12);
+  EXPECT_NEAR(h.at(1.25, 0.01, 1.0)->x, 0.25, 1e-12);  // interpolated
+  EXPECT_NEAR(h.at(1.25, 0.01, 1.0)->theta, 0.05, 1e-12);
+  EXPECT_FALSE(h.at(1.25, 0.01, 0.5).has_value());  // scans too far apart
+  EXPECT_FALSE(h.at(2.5, 0.01, 1.0).has_value());   // after the last scan
+  const std::vector<std::pair<double, Pose2>> c{{1.0, Pose2(1.0, 0.0, 0.0)}, {2.0, Pose2(3.0, 0.0, 0.0)}};
+  EXPECT_NEAR(correctionAt(c, 1.4, CorrectionMode::kNearest).x, 1.0, 1e-12);
+  EXPECT_NEAR(correctionAt(c, 1.6, CorrectionMode::kNearest).x, 3.0, 1e-12);
+  EXPECT_NEAR(correctionAt(c, 1.25, CorrectionMode::kInterpolate).x, 1.5, 1e-12);
+  EXPECT_NEAR(correctionAt(c, 0.0, CorrectionMode::kInterpolate).x, 1.0, 1e-12);
+  EXPECT_NEAR(correctionAt(c, 9.0, CorrectionMode::kNearest).x, 3.0, 1e-12);
+  EXPECT_THROW(correctionModeFromString("trajectory_correction", "spline"), linemap::ParameterError);
+}
