@@ -233,6 +233,7 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
   const auto table_params = LookupTableParams::fromParams(params);
   const auto quality_params = QualityParams::fromParams(params);
   const auto fusion_params = line_map_merging::FusionParams::fromParams(params);
+  const MapMetricParams metric_params{quality_params, fusion_params, CoverageParams::fromParams(params)};
   std::optional<GroundTruthParams> truth_params;
   if (dataset.truth) truth_params = GroundTruthParams::fromParams(params);
   const std::vector<std::string> names =
@@ -375,33 +376,31 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
     run.originals = result.originals;
     run.map_segments = map.size();
     run.map = lengthStatistics(run.final_map);
-    run.quality = computeMapQuality(table, run.final_map, quality_params);
+    ErrorAssignment provenance;
     if (run.provenance)
     {
       std::map<std::uint64_t, Pose2> pose_of;
       for (const auto& info : merger->keyframes()) pose_of[info.index] = info.pose;
-      std::vector<Segment2> leaves;
-      std::vector<int> index;
       for (std::size_t i = 0; i < map.size(); ++i)
         for (const auto& leaf : merger->leaves(map[i].id))
         {
           const auto it = pose_of.find(leaf.keyframe);
           if (it == pose_of.end()) continue;
-          leaves.push_back(leaf.segment.transformed(it->second));
-          index.push_back(static_cast<int>(i));
+          provenance.originals.push_back(leaf.segment.transformed(it->second));
+          provenance.map_index.push_back(static_cast<int>(i));
         }
-      run.error = computeErrorMetric(leaves, index, run.final_map);
-      run.error_assignment = "provenance";
     }
-    else
-    {
-      const auto index = assignToMapSegments(originals_world, run.final_map, fusion_params);
-      run.error = computeErrorMetric(originals_world, index, run.final_map);
-      run.error_assignment = "nearest segment meeting the fusion conditions";
-    }
+    MapMetrics metrics = computeMapMetrics(table, scan_points, originals_world, run.final_map, metric_params,
+                                           run.provenance ? &provenance : nullptr);
+    run.quality = metrics.quality;
+    run.error = metrics.error;
+    run.error_assignment = run.provenance ? "provenance" : "nearest segment meeting the fusion conditions";
+    run.point_coverage = std::move(metrics.point_coverage);
+    run.length_coverage = metrics.length_coverage;
+    run.redundancy = std::move(metrics.redundancy);
     run.evaluation_ms = msSince(eval_start);
     if (dataset.truth)
-      run.ground_truth = evaluateAgainstGroundTruth(dataset.truth->walls, run.final_map, *truth_params);
+      run.ground_truth = evaluateAgainstGroundTruth(*dataset.truth, run.final_map, *truth_params);
 
     if (!options.out_dir.empty())
     {
@@ -416,6 +415,10 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
       figure.segments = run.final_map;
       figure.scan_points = scan_points;
       figure.caption = caption;
+      figure.show_coverage = true;
+      for (const std::size_t i : run.point_coverage.uncovered) figure.uncovered_points.push_back(scan_points[i]);
+      for (const auto& [i, j] : run.redundancy.pair_indices)
+        figure.redundant_pairs.emplace_back(run.final_map[i], run.final_map[j]);
       if (figures)
         for (auto& f : drawMap(figure, (dir / "map").string(), options.figure_formats))
           run.files.push_back(f);

@@ -11,6 +11,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <string>
 
 namespace line_map_eval
 {
@@ -51,10 +52,13 @@ void throwIfFailed(cairo_status_t status, const std::string& file)
     throw std::runtime_error("figure: cannot write '" + file + "': " + cairo_status_to_string(status));
 }
 
-/// Light grey dots of the scan points as an image covering panel k's map area at `scale`
-/// image pixels per canvas unit: a raster layer keeps SVG/PDF small with 10^5 points.
+constexpr std::uint32_t kScanGrey = 0xFFB4B4B4u;  // opaque light grey, native-endian ARGB
+constexpr std::uint32_t kUncoveredOrange = 0xFFFF8000u;
+
+/// Dots of `colour` (dot x dot canvas units) at the points as an image covering panel k's map
+/// area at `scale` image pixels per canvas unit: a raster layer keeps SVG/PDF small with 10^5 points.
 void drawScanPoints(cairo_t* cr, const std::vector<Vec2>& points, const FigureLayout& l, int panel,
-                    double scale)
+                    double scale, std::uint32_t colour = kScanGrey, double dot = 1.0)
 {
   if (points.empty()) return;
   const int w = std::max(1, static_cast<int>(std::ceil(l.map_width * scale)));
@@ -69,13 +73,17 @@ void drawScanPoints(cairo_t* cr, const std::vector<Vec2>& points, const FigureLa
   unsigned char* data = cairo_image_surface_get_data(img);
   const int stride = cairo_image_surface_get_stride(img);
   const double ppm = l.pixels_per_metre * scale;
+  const int size = std::max(1, static_cast<int>(std::lround(dot * scale)));
   for (const Vec2& p : points)
   {
     if (!p.allFinite()) continue;
     const double fx = (p.x() - l.min_x) * ppm, fy = (l.max_y - p.y()) * ppm;
     if (fx < 0.0 || fy < 0.0 || fx >= w || fy >= h) continue;
-    auto* px = reinterpret_cast<std::uint32_t*>(data + static_cast<int>(fy) * stride) + static_cast<int>(fx);
-    *px = 0xFFB4B4B4u;  // opaque light grey, native-endian ARGB
+    // A dot larger than a pixel is centred on the point's pixel.
+    const int x0 = static_cast<int>(fx) - (size - 1) / 2, y0 = static_cast<int>(fy) - (size - 1) / 2;
+    for (int y = std::max(0, y0); y < std::min(h, y0 + size); ++y)
+      for (int x = std::max(0, x0); x < std::min(w, x0 + size); ++x)
+        reinterpret_cast<std::uint32_t*>(data + y * stride)[x] = colour;
   }
   cairo_surface_mark_dirty(img);
   cairo_save(cr);
@@ -135,6 +143,80 @@ std::string formatMetres(double m)
   return buf;
 }
 
+void setColour(cairo_t* cr, std::uint32_t argb)
+{
+  cairo_set_source_rgb(cr, ((argb >> 16) & 0xFF) / 255.0, ((argb >> 8) & 0xFF) / 255.0,
+                       (argb & 0xFF) / 255.0);
+}
+
+const double kMapBlue[3] = {0.05, 0.10, 0.45};
+const double kRedundantMagenta[4] = {0.85, 0.0, 0.85, 0.45};
+
+/// One line of legend entries (a glyph and a label each), left to right from x, centred on y.
+void drawLegend(cairo_t* cr, const MapFigure& f, double x, double y, const FigureStyle& style)
+{
+  cairo_save(cr);
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, 0.85 * style.font_size);
+  const double glyph = 14.0;
+  const auto label = [&](const std::string& text)
+  {
+    cairo_set_source_rgb(cr, 0.0, 0.0, 0.0);
+    cairo_move_to(cr, x + glyph + 4.0, y + 0.3 * style.font_size);
+    cairo_show_text(cr, text.c_str());
+    cairo_text_extents_t ext;
+    cairo_text_extents(cr, text.c_str(), &ext);
+    x += glyph + 4.0 + ext.x_advance + 14.0;
+  };
+  const auto line = [&](const double* rgba, double width)
+  {
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+    cairo_set_line_width(cr, width);
+    cairo_set_source_rgba(cr, rgba[0], rgba[1], rgba[2], rgba[3]);
+    cairo_move_to(cr, x + 2.0, y);
+    cairo_line_to(cr, x + glyph - 2.0, y);
+    cairo_stroke(cr);
+  };
+  const auto disc = [&](double r, double g, double b)
+  {
+    cairo_set_source_rgb(cr, r, g, b);
+    cairo_new_sub_path(cr);
+    cairo_arc(cr, x + 0.5 * glyph, y, style.endpoint_radius, 0.0, 2.0 * linemap::kPi);
+    cairo_fill(cr);
+  };
+  const auto square = [&](std::uint32_t argb, double side)
+  {
+    setColour(cr, argb);
+    cairo_rectangle(cr, x + 0.5 * (glyph - side), y - 0.5 * side, side, side);
+    cairo_fill(cr);
+  };
+  const double blue[4] = {kMapBlue[0], kMapBlue[1], kMapBlue[2], 1.0};
+  line(blue, style.line_width);
+  label("map segment");
+  disc(0.90, 0.0, 0.0);
+  label("start");
+  disc(0.0, 0.70, 0.0);
+  label("end");
+  if (!f.scan_points.empty())
+  {
+    square(kScanGrey, 4.0);
+    label("scan point");
+  }
+  if (f.lookup)
+  {
+    square(0xFF999999u, 10.0);  // the table's 1 (grey 40 %); 0 is white
+    label("lookup table (white 0 to grey 1)");
+  }
+  if (f.show_coverage)
+  {
+    square(kUncoveredOrange, 4.0);
+    label("uncovered scan point (" + std::to_string(f.uncovered_points.size()) + ")");
+    line(kRedundantMagenta, 4.0 * style.line_width);
+    label("redundant pair (" + std::to_string(f.redundant_pairs.size()) + ")");
+  }
+  cairo_restore(cr);
+}
+
 void drawPanel(cairo_t* cr, const MapFigure& f, const FigureLayout& l, int panel, const FigureStyle& style,
                double raster_scale)
 {
@@ -144,10 +226,30 @@ void drawPanel(cairo_t* cr, const MapFigure& f, const FigureLayout& l, int panel
   cairo_clip(cr);
   if (f.lookup) drawLookup(cr, *f.lookup, l, panel);
   drawScanPoints(cr, f.scan_points, l, panel, raster_scale);
+  // Uncovered points larger than the grey ones: they are few and must stand out.
+  if (f.show_coverage) drawScanPoints(cr, f.uncovered_points, l, panel, raster_scale, kUncoveredOrange, 2.0);
+
+  // Redundant pairs under the map: a wide translucent band over both segments of each pair.
+  if (f.show_coverage && !f.redundant_pairs.empty())
+  {
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+    cairo_set_line_width(cr, 4.0 * style.line_width);
+    cairo_set_source_rgba(cr, kRedundantMagenta[0], kRedundantMagenta[1], kRedundantMagenta[2],
+                          kRedundantMagenta[3]);
+    for (const auto& pair : f.redundant_pairs)
+      for (const Segment2* s : {&pair.first, &pair.second})
+      {
+        if (!s->start.allFinite() || !s->end.allFinite()) continue;
+        const Vec2 a = l.toCanvas(s->start, panel), b = l.toCanvas(s->end, panel);
+        cairo_move_to(cr, a.x(), a.y());
+        cairo_line_to(cr, b.x(), b.y());
+      }
+    cairo_stroke(cr);
+  }
 
   cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
   cairo_set_line_width(cr, style.line_width);
-  cairo_set_source_rgb(cr, 0.05, 0.10, 0.45);
+  cairo_set_source_rgb(cr, kMapBlue[0], kMapBlue[1], kMapBlue[2]);
   for (const Segment2& s : f.segments)
   {
     if (!s.start.allFinite() || !s.end.allFinite()) continue;
@@ -201,6 +303,16 @@ void drawPanel(cairo_t* cr, const MapFigure& f, const FigureLayout& l, int panel
   cairo_text_extents(cr, label.c_str(), &ext);
   cairo_move_to(cr, x0 - ext.x_advance - 6.0, mid + 0.35 * style.font_size);
   cairo_show_text(cr, label.c_str());
+
+  if (l.legend_height > 0.0)
+  {
+    // Clipped to the panel: a narrow panel shows the first entries.
+    cairo_save(cr);
+    cairo_rectangle(cr, ax, base + l.caption_height, l.map_width, l.legend_height);
+    cairo_clip(cr);
+    drawLegend(cr, f, ax, base + l.caption_height + 0.5 * l.legend_height, style);
+    cairo_restore(cr);
+  }
 }
 
 void render(cairo_t* cr, const std::vector<const MapFigure*>& panels, const FigureLayout& l,
@@ -302,10 +414,10 @@ double scaleBarLength(double width)
 FigureLayout layoutFigure(const std::vector<const MapFigure*>& panels, const FigureStyle& style)
 {
   if (panels.empty()) throw std::invalid_argument("figure: no panel to draw");
-  if (!(style.margin >= 0.0) || !(style.caption_height >= 0.0) || !(style.padding >= 0.0) ||
-      !(style.pixels_per_metre >= 0.0) || !(style.max_size > 0.0))
+  if (!(style.margin >= 0.0) || !(style.caption_height >= 0.0) || !(style.legend_height >= 0.0) ||
+      !(style.padding >= 0.0) || !(style.pixels_per_metre >= 0.0) || !(style.max_size > 0.0))
     throw std::invalid_argument(
-        "figure: margin, caption_height, padding, pixels_per_metre must be >= 0 and "
+        "figure: margin, caption_height, legend_height, padding, pixels_per_metre must be >= 0 and "
         "max_size > 0");
   Bounds b;
   for (const MapFigure* f : panels)
@@ -337,11 +449,12 @@ FigureLayout layoutFigure(const std::vector<const MapFigure*>& panels, const Fig
       style.pixels_per_metre > 0.0 ? style.pixels_per_metre : style.max_size / std::max(w, h);
   l.margin = style.margin;
   l.caption_height = style.caption_height;
+  l.legend_height = style.legend_height;
   l.map_width = w * l.pixels_per_metre;
   l.map_height = h * l.pixels_per_metre;
   l.panel_width = l.map_width + 2.0 * l.margin;
   l.width = l.panels * l.panel_width;
-  l.height = l.map_height + 2.0 * l.margin + l.caption_height;
+  l.height = l.map_height + 2.0 * l.margin + l.caption_height + l.legend_height;
   if (l.width > kMaxCanvas || l.height > kMaxCanvas)
     throw std::invalid_argument("figure: canvas of " + std::to_string(l.width) + " x " +
                                 std::to_string(l.height) + " exceeds 20000; lower pixels_per_metre");

@@ -17,6 +17,7 @@ EvaluatorParams EvaluatorParams::fromParams(const linemap::ParamSet& params)
   p.table = LookupTableParams::fromParams(params);
   p.quality = QualityParams::fromParams(params);
   p.fusion = line_map_merging::FusionParams::fromParams(params);
+  p.coverage = CoverageParams::fromParams(params);
   return p;
 }
 
@@ -125,22 +126,19 @@ MapMetrics MapEvaluator::evaluate(const std::vector<linemap::Segment2>& map)
 {
   if (table_dirty_)
   {
-    std::vector<linemap::Vec2> world;
-    for (const Frame& f : scans_) appendWorldPoints(f.pose, f.points, world);
-    table_ = LookupTable::build(world, params_.table);
+    table_points_.clear();
+    for (const Frame& f : scans_) appendWorldPoints(f.pose, f.points, table_points_);
+    table_ = LookupTable::build(table_points_, params_.table);
     table_dirty_ = false;
   }
   std::vector<linemap::Segment2> originals;
   for (const Frame& f : segments_)
     for (const linemap::Segment2& s : f.segments) originals.push_back(s.transformed(f.pose));
 
-  MapMetrics m;
-  m.quality = computeMapQuality(table_, map, params_.quality);
   // The map message carries no provenance: each original goes to the nearest map segment that
   // meets the fusion conditions with it.
-  m.error = computeErrorMetric(originals, assignToMapSegments(originals, map, params_.fusion), map);
-  m.statistics = computeMapStatistics(map, originals.size());
-  return m;
+  return computeMapMetrics(table_, table_points_, originals, map,
+                           {params_.quality, params_.fusion, params_.coverage});
 }
 
 std::size_t MapEvaluator::originalCount() const
@@ -161,6 +159,7 @@ void MapEvaluator::reset()
   scan_gate_ = line_map_merging::KeyframeGate(params_.gate);
   segment_gate_ = line_map_merging::KeyframeGate(params_.gate);
   table_ = LookupTable();
+  table_points_.clear();
   table_dirty_ = true;
 }
 

@@ -346,6 +346,11 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     q.longest_length = m.statistics.longest_length;
     q.mean_length = m.statistics.mean_length;
     q.redundant_pixels = static_cast<uint32_t>(m.quality.redundant_pixels);
+    q.unassigned_originals = static_cast<uint32_t>(m.error.unassigned);
+    q.point_coverage = m.point_coverage.fraction() * 100.0;
+    q.length_coverage = m.length_coverage.fraction() * 100.0;
+    q.redundant_pairs = static_cast<uint32_t>(m.redundancy.pairs);
+    q.redundant_overlap = m.redundancy.overlap_length;
     return q;
   }
 

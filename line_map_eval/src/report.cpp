@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace line_map_eval
@@ -31,11 +32,14 @@ struct Column
   bool left = false;
 };
 
+/// The full table of report.md.
 std::vector<Column> columns()
 {
-  return {{"merger", true}, {"scans"},    {"orig segs"},  {"orig min mm"}, {"orig max mm"},
-          {"orig mean mm"}, {"map segs"}, {"map min mm"}, {"map max mm"},  {"map mean mm"},
-          {"quality %"},    {"error mm"}, {"frame ms"},   {"total ms"}};
+  return {{"merger", true},        {"scans"},        {"orig segs"},    {"orig min mm"},
+          {"orig max mm"},         {"orig mean mm"}, {"map segs"},     {"map min mm"},
+          {"map max mm"},          {"map mean mm"},  {"quality %"},    {"error mm"},
+          {"unassigned"},          {"point cov %"},  {"length cov %"}, {"redundant pairs"},
+          {"redundant overlap m"}, {"frame ms"},     {"total ms"}};
 }
 
 std::vector<std::string> row(const MergerRun& r)
@@ -52,8 +56,33 @@ std::vector<std::string> row(const MergerRun& r)
           fixed(r.map.mean * kMm, 1),
           fixed(r.quality.quality, 2),
           fixed(r.error.mean_error * kMm, 2),
+          std::to_string(r.error.unassigned),
+          fixed(r.point_coverage.fraction() * 100.0, 2),
+          fixed(r.length_coverage.fraction() * 100.0, 2),
+          std::to_string(r.redundancy.pairs),
+          fixed(r.redundancy.overlap_length, 2),
           fixed(r.per_frame_ms, 3),
           fixed(r.total_ms, 1)};
+}
+
+/// The terminal table: what decides between maps, within 80 columns (two header lines).
+std::vector<std::pair<Column, std::string>> compactColumns()
+{
+  return {
+      {{"merger", true}, ""},        {{"map"}, "segs"},    {{"quality"}, "%"},    {{"error"}, "mm"},
+      {{"unassigned"}, "originals"}, {{"point"}, "cov %"}, {{"length"}, "cov %"}, {{"redundant"}, "pairs"}};
+}
+
+std::vector<std::string> compactRow(const MergerRun& r)
+{
+  return {r.name,
+          std::to_string(r.map_segments),
+          fixed(r.quality.quality, 2),
+          fixed(r.error.mean_error * kMm, 2),
+          std::to_string(r.error.unassigned),
+          fixed(r.point_coverage.fraction() * 100.0, 2),
+          fixed(r.length_coverage.fraction() * 100.0, 2),
+          std::to_string(r.redundancy.pairs)};
 }
 
 /// Rounds for the JSON output so that the files stay readable; keeps null for non-finite values.
@@ -106,6 +135,22 @@ void emitRun(YAML::Emitter& out, const MergerRun& r)
   out << r.error.assigned;
   key(out, "unassigned_originals");
   out << r.error.unassigned;
+  key(out, "scan_points");
+  out << r.point_coverage.points;
+  key(out, "covered_scan_points");
+  out << r.point_coverage.covered;
+  key(out, "point_coverage_pct");
+  number(out, r.point_coverage.fraction() * 100.0);
+  key(out, "original_length_m");
+  number(out, r.length_coverage.total);
+  key(out, "covered_original_length_m");
+  number(out, r.length_coverage.covered);
+  key(out, "length_coverage_pct");
+  number(out, r.length_coverage.fraction() * 100.0);
+  key(out, "redundant_pairs");
+  out << r.redundancy.pairs;
+  key(out, "redundant_overlap_m");
+  number(out, r.redundancy.overlap_length);
   key(out, "per_frame_ms");
   number(out, r.per_frame_ms, 4);
   key(out, "total_ms");
@@ -162,11 +207,15 @@ void writeFile(const std::filesystem::path& path, const std::string& text)
 
 std::string formatTable(const BatchResult& result)
 {
-  const auto cols = columns();
-  std::vector<std::vector<std::string>> cells;
-  cells.emplace_back();
-  for (const auto& c : cols) cells.back().push_back(c.header);
-  for (const auto& r : result.mergers) cells.push_back(row(r));
+  std::vector<Column> cols;
+  std::vector<std::vector<std::string>> cells(2);
+  for (const auto& [c, second] : compactColumns())
+  {
+    cols.push_back(c);
+    cells[0].push_back(c.header);
+    cells[1].push_back(second);
+  }
+  for (const auto& r : result.mergers) cells.push_back(compactRow(r));
   std::vector<std::size_t> width(cols.size(), 0);
   for (const auto& line : cells)
     for (std::size_t i = 0; i < line.size(); ++i) width[i] = std::max(width[i], line[i].size());
@@ -281,9 +330,13 @@ std::string toMarkdown(const BatchResult& result)
   }
   md << "\nOriginal segments and their lengths are those of Table I of the CAE-RLSM paper, map segments "
         "those of Table III. Quality is the correlation quality against the lookup table of the registered "
-        "scans; error the mean distance of the originals' midpoints to their map segment's line. Per-frame "
-        "runtime is the median addKeyframe time of online mergers; total runtime covers every addKeyframe, "
-        "adjust and the final map.\n\n";
+        "scans; error the mean distance of the originals' midpoints to their map segment's line, over the "
+        "originals assigned to one (unassigned: the others). Point coverage is the share of the registered "
+        "scan points within one lookup-table sigma of a map segment; length coverage the share of the "
+        "originals' length lying within d_max and theta_max of a map segment. Redundant pairs are pairs of "
+        "map segments meeting the fusion conditions with each other (overlap: their summed overlap along "
+        "the line). Per-frame runtime is the median addKeyframe time of online mergers; total runtime covers "
+        "every addKeyframe, adjust and the final map.\n\n";
   md << "## Notes per merger\n\n";
   for (const auto& r : result.mergers)
   {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "line_map_eval/batch.hpp"
@@ -109,9 +110,27 @@ TEST(Batch, EveryMergerProducesEveryColumn)
     SCOPED_TRACE(r.name);
     const YAML::Node m = json["mergers"][r.name];
     ASSERT_TRUE(m.IsMap());
-    for (const char* key : {"scans", "original_segments", "map_segments", "shortest_mm", "longest_mm",
-                            "mean_length_mm", "quality_pct", "error_mm", "per_frame_ms", "total_ms"})
+    for (const char* key :
+         {"scans", "original_segments", "map_segments", "shortest_mm", "longest_mm", "mean_length_mm",
+          "quality_pct", "error_mm", "per_frame_ms", "total_ms", "unassigned_originals", "point_coverage_pct",
+          "length_coverage_pct", "redundant_pairs", "redundant_overlap_m"})
       EXPECT_TRUE(m[key].IsDefined()) << key;
+    EXPECT_EQ(m["scan_points"].as<std::size_t>(), result.scan_points);
+    EXPECT_EQ(m["redundant_pairs"].as<std::size_t>(), r.redundancy.pairs);
+    EXPECT_EQ(m["unassigned_originals"].as<std::size_t>(), r.error.unassigned);
+    EXPECT_NEAR(m["point_coverage_pct"].as<double>(), r.point_coverage.fraction() * 100.0, 1e-3);
+    EXPECT_NEAR(m["length_coverage_pct"].as<double>(), r.length_coverage.fraction() * 100.0, 1e-3);
+    // A map on the room's walls covers most of what was scanned (what it misses are short pieces);
+    // an online merger that cannot take the loop closure keeps its drifted map, off the walls.
+    EXPECT_LE(r.point_coverage.fraction(), 1.0);
+    EXPECT_LE(r.length_coverage.fraction(), 1.0);
+    if (!r.online || line_map_merging::makeMerger(r.name, options.params)->supportsAdjustment())
+    {
+      EXPECT_GT(r.point_coverage.fraction(), 0.9);
+      EXPECT_GT(r.length_coverage.fraction(), 0.9);
+    }
+    else
+      EXPECT_LT(r.point_coverage.fraction(), 0.9);
     EXPECT_EQ(m["scans"].as<std::size_t>(), r.scans);
     EXPECT_EQ(m["map_segments"].as<std::size_t>(), r.map_segments);
     EXPECT_NEAR(m["longest_mm"].as<double>(), r.map.longest * 1000.0, 1e-3);
@@ -120,6 +139,13 @@ TEST(Batch, EveryMergerProducesEveryColumn)
   }
   const std::string md = toMarkdown(result);
   EXPECT_NE(md.find("| merger |"), std::string::npos);
+  EXPECT_NE(md.find("| redundant pairs |"), std::string::npos);
+  // The terminal table fits an 80-column terminal: a header of two lines and one row per merger.
+  const std::string table = formatTable(result);
+  std::istringstream lines(table);
+  std::size_t rows = 0;
+  for (std::string line; std::getline(lines, line); ++rows) EXPECT_LE(line.size(), 80u) << line;
+  EXPECT_EQ(rows, 2 + result.mergers.size());
   fs::remove_all(out);
 }
 

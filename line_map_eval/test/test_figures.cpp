@@ -41,6 +41,7 @@ FigureStyle testStyle()
   s.pixels_per_metre = 50.0;
   s.margin = 20.0;
   s.caption_height = 28.0;
+  s.legend_height = 22.0;
   s.padding = 0.25;
   s.endpoint_radius = 3.0;
   return s;
@@ -107,9 +108,10 @@ TEST(Figures, MapInAllFormatsWithEndpointColours)
 
   cairo_surface_t* img = cairo_image_surface_create_from_png((dir + "/map.png").c_str());
   ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
-  // World box [-0.25, 4.25] x [-0.25, 2.25] at 50 px/m: 225 x 125 px, plus 2 x 20 margin and 28 caption.
+  // World box [-0.25, 4.25] x [-0.25, 2.25] at 50 px/m: 225 x 125 px, plus 2 x 20 margin, 28 caption
+  // and 22 legend.
   EXPECT_EQ(cairo_image_surface_get_width(img), 265);
-  EXPECT_EQ(cairo_image_surface_get_height(img), 193);
+  EXPECT_EQ(cairo_image_surface_get_height(img), 215);
   // canvas x = 20 + (x + 0.25) * 50, y = 20 + (2.25 - y) * 50 (y up).
   EXPECT_TRUE(isRed(pixel(img, 32, 132)));     // start (0, 0)
   EXPECT_TRUE(isGreen(pixel(img, 232, 132)));  // end (4, 0)
@@ -145,7 +147,7 @@ TEST(Figures, ExtensionSelectsTheFormatAndComparisonSharesTheScale)
   cairo_surface_t* img = cairo_image_surface_create_from_png(cmp[0].c_str());
   ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
   EXPECT_EQ(cairo_image_surface_get_width(img), 2 * 265);
-  EXPECT_EQ(cairo_image_surface_get_height(img), 193);
+  EXPECT_EQ(cairo_image_surface_get_height(img), 215);
   EXPECT_TRUE(isRed(pixel(img, 265 + 32, 132)));     // the right panel's start (0, 0)
   EXPECT_TRUE(isGreen(pixel(img, 265 + 232, 132)));  // and end (4, 0)
   cairo_surface_destroy(img);
@@ -166,7 +168,7 @@ TEST(Figures, LookupTableFigureIsGreyscaleUnderTheMap)
   // Window: cells x -4..84, y 16..24 (the points' cells 0..80 x 20 plus 3 + 1 each side), i.e.
   // [-0.2, 4.25] x [0.8, 1.25] m, padded 0.25 m: 4.95 m x 0.95 m = 247.5 x 47.5 px.
   EXPECT_EQ(cairo_image_surface_get_width(img), 288);   // ceil(247.5 + 40)
-  EXPECT_EQ(cairo_image_surface_get_height(img), 116);  // ceil(47.5 + 40 + 28)
+  EXPECT_EQ(cairo_image_surface_get_height(img), 138);  // ceil(47.5 + 40 + 28 + 22)
   // (2, 1.125) is two cells (2 sigma) above the wall: exp(-2) -> grey 255 (1 - 0.6 e^-2) = 234,
   // at canvas (20 + 2.45 * 50, 20 + (1.5 - 1.125) * 50) = (142.5, 38.75).
   const Rgb grey = pixel(img, 142, 38);
@@ -187,4 +189,34 @@ TEST(Figures, UnwritableFileNamesTheFile)
   {
     EXPECT_NE(std::string(e.what()).find("/nonexistent_dir_linemap/x.png"), std::string::npos) << e.what();
   }
+}
+
+// Coverage layers: the lone scan point (2, 1) uncovered in orange, a redundant pair as a magenta band
+// under the map, and the legend's first glyph (a map segment) in the band under the caption.
+TEST(Figures, UncoveredPointsRedundantPairsAndLegend)
+{
+  const std::string dir = tempDir();
+  MapFigure f = testFigure();
+  f.show_coverage = true;
+  f.uncovered_points = {Vec2(2.0, 1.0)};
+  f.redundant_pairs = {{f.segments[0], Segment2(Vec2(1, 0.02), Vec2(3, 0.02))}};
+  const auto files = drawMap(f, dir + "/cov.png", line_map_eval::kFigurePng, testStyle());
+  ASSERT_EQ(files.size(), 1u);
+  cairo_surface_t* img = cairo_image_surface_create_from_png(files[0].c_str());
+  ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
+  const Rgb orange = pixel(img, 132, 82);  // (2, 1)
+  EXPECT_EQ(orange.r, 255);
+  EXPECT_EQ(orange.g, 128);
+  EXPECT_EQ(orange.b, 0);
+  // 2 px below (2, 0), inside the 6 px band but off the 1.5 px line and the scan points: magenta at
+  // 45 % over white, 255 (1 - 0.45) + 0.45 * 0.85 * 255 = 238 in red and blue, 140 in green.
+  const Rgb band = pixel(img, 132, 134);
+  EXPECT_NEAR(band.r, 238, 3);
+  EXPECT_NEAR(band.g, 140, 3);
+  EXPECT_NEAR(band.b, 238, 3);
+  // Legend band: y from 20 + 125 + 20 + 28 = 193 to 215; the map-segment glyph spans x 22..32 at its middle.
+  const Rgb glyph = pixel(img, 27, 204);
+  EXPECT_LT(glyph.r, 80);
+  EXPECT_GT(glyph.b, glyph.r + 40);
+  cairo_surface_destroy(img);
 }

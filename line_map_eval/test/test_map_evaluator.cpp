@@ -185,3 +185,35 @@ TEST(MapEvaluator, OdometryPosesKeepCorrectionsApartAcrossAMapToOdomJump)
       EXPECT_EQ(m.error.assigned, 12u);
   }
 }
+
+// Coverage and redundancy through evaluate(): the square's walls scanned (1 cm apart, 400 points
+// per wall) and extracted exactly. Mapping all four walls covers everything; leaving the west wall
+// out loses its 400 points except the 11 within one sigma (5 cm) of the neighbouring walls' ends
+// (t <= 0.0125 and t >= 0.9875 of the 4 m wall), and exactly a quarter of the originals' length.
+TEST(MapEvaluator, CoverageDropsWhenAWallIsLeftOut)
+{
+  MapEvaluator eval(EvaluatorParams{});
+  const std::vector<Vec2> points = wallPointsInLaserFrame(Pose2(0, 0, 0));
+  const double per_wall = points.size() / 4.0;  // 400, or 401 if the sampling's t reaches 1 - 1e-16
+  ASSERT_TRUE(eval.addScan(1.0, Pose2(0, 0, 0), points));
+  ASSERT_TRUE(eval.addSegments(1.0, Pose2(0, 0, 0), wallsInLaserFrame(Pose2(0, 0, 0))));
+  const auto all = eval.evaluate(kWalls);
+  EXPECT_EQ(all.point_coverage.points, points.size());
+  EXPECT_EQ(all.point_coverage.covered, points.size());
+  EXPECT_NEAR(all.length_coverage.fraction(), 1.0, 1e-12);
+  EXPECT_EQ(all.redundancy.pairs, 0u);
+  EXPECT_EQ(all.error.unassigned, 0u);
+
+  const std::vector<Segment2> three(kWalls.begin(), kWalls.begin() + 3);
+  const auto m = eval.evaluate(three);
+  EXPECT_NEAR(static_cast<double>(m.point_coverage.covered), 3.0 * per_wall + 11.0, 1.5);
+  EXPECT_NEAR(m.length_coverage.fraction(), 0.75, 1e-12);
+  EXPECT_EQ(m.error.unassigned, 1u);  // the west wall's original has no map segment
+
+  // The north wall drawn twice, the copy 3 cm inside: one redundant pair overlapping 4 m.
+  std::vector<Segment2> twice = kWalls;
+  twice.emplace_back(Vec2(2, 1.97), Vec2(-2, 1.97));
+  const auto r = eval.evaluate(twice);
+  EXPECT_EQ(r.redundancy.pairs, 1u);
+  EXPECT_NEAR(r.redundancy.overlap_length, 4.0, 1e-12);
+}

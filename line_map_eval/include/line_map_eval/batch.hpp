@@ -14,6 +14,7 @@
 #include "line_map_eval/error_metric.hpp"
 #include "line_map_eval/ground_truth.hpp"
 #include "line_map_eval/ground_truth_metrics.hpp"
+#include "line_map_eval/map_metrics.hpp"
 #include "line_map_eval/map_quality.hpp"
 #include "line_map_eval/map_statistics.hpp"
 #include "line_map_eval/recording.hpp"
@@ -101,14 +102,17 @@ struct MergerRun
   LengthStatistics map;
   QualityResult quality;
   ErrorMetricResult error;
-  std::string error_assignment;  ///< "provenance" or "nearest segment meeting the fusion conditions"
-  std::size_t adjustments = 0;   ///< adjust() calls (loop closure runs of online mergers)
+  PointCoverage point_coverage;    ///< of the registered scan points (lookup table)
+  LengthCoverage length_coverage;  ///< of the originals extracted from the keyframes
+  RedundancyResult redundancy;     ///< pairs of map segments meeting the fusion conditions
+  std::string error_assignment;    ///< "provenance" or "nearest segment meeting the fusion conditions"
+  std::size_t adjustments = 0;     ///< adjust() calls (loop closure runs of online mergers)
   std::optional<double> quality_before_adjust;  ///< [%] map just before the final adjustment
   std::optional<GroundTruthResult> ground_truth;
   double per_frame_ms = std::numeric_limits<double>::quiet_NaN();  ///< median addKeyframe, online only
   double total_ms = 0.0;       ///< every addKeyframe and adjust, and the final map() call
   double adjust_ms = 0.0;      ///< of which adjust()
-  double evaluation_ms = 0.0;  ///< quality + error + statistics of this map (table excluded)
+  double evaluation_ms = 0.0;  ///< every metric of this map (computeMapMetrics; table excluded)
   std::vector<linemap::Segment2> final_map;
   std::vector<linemap::Segment2> map_before_adjust;  ///< loop closure runs of online mergers
   std::vector<std::string> files;                    ///< figures and map file written

@@ -2,7 +2,9 @@
 // figure has a scale bar of a round number of metres and a caption line.
 #pragma once
 
+#include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "line_extraction/geometry.hpp"
@@ -25,6 +27,7 @@ struct FigureStyle
   double max_size = 1600.0;       ///< map area's larger side when fitting
   double margin = 20.0;           ///< blank border around each map area
   double caption_height = 28.0;   ///< band below the map area with the caption and the scale bar
+  double legend_height = 22.0;    ///< band below the caption with the legend (0: no legend)
   double padding = 0.25;          ///< world border around the content [m]
   double line_width = 1.5;
   double endpoint_radius = 2.5;
@@ -33,24 +36,31 @@ struct FigureStyle
 
 /// One map panel. Segments are drawn dark blue with a red disc at each start and a green disc
 /// at each end, over the scan points in light grey, over the lookup table (if any) in greys
-/// (white for 0 to grey 40 % for 1, so the dark blue map stays visible on it).
+/// (white for 0 to grey 40 % for 1, so the dark blue map stays visible on it). With
+/// show_coverage, the uncovered scan points are drawn orange over the grey ones and both segments
+/// of every redundant pair get a wide translucent magenta band under the map. The legend names
+/// the layers the panel has.
 struct MapFigure
 {
   std::vector<linemap::Segment2> segments;
   std::vector<linemap::Vec2> scan_points;
   const LookupTable* lookup = nullptr;  ///< not owned; must outlive the draw call
   std::string caption;                  ///< e.g. "intel - CAE-RLSM"
+  bool show_coverage = false;           ///< draw (and list in the legend) the two layers below, even empty
+  std::vector<linemap::Vec2> uncovered_points;  ///< scan points farther than the coverage radius from the map
+  std::vector<std::pair<linemap::Segment2, linemap::Segment2>> redundant_pairs;
 };
 
 /// Placement shared by the panels of a figure: the world box [min_x, max_x] x [min_y, max_y]
 /// (content bounds plus padding, the union over all panels, so panels share one scale) maps
 /// to a map area of map_width x map_height; panel k's area starts at x = k * panel_width + margin,
-/// y = margin. The canvas is panels * panel_width x (map_height + 2 margin + caption_height).
+/// y = margin. The canvas is panels * panel_width x (map_height + 2 margin + caption_height +
+/// legend_height).
 struct FigureLayout
 {
   double min_x = 0.0, max_x = 0.0, min_y = 0.0, max_y = 0.0;
   double pixels_per_metre = 1.0;
-  double margin = 0.0, caption_height = 0.0;
+  double margin = 0.0, caption_height = 0.0, legend_height = 0.0;
   double map_width = 0.0, map_height = 0.0, panel_width = 0.0;
   double width = 0.0, height = 0.0;
   int panels = 1;

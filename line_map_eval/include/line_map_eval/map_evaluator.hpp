@@ -13,6 +13,7 @@
 #include "line_extraction/params.hpp"
 #include "line_map_eval/error_metric.hpp"
 #include "line_map_eval/lookup_table.hpp"
+#include "line_map_eval/map_metrics.hpp"
 #include "line_map_eval/map_quality.hpp"
 #include "line_map_eval/map_statistics.hpp"
 #include "line_map_merging/fusion.hpp"
@@ -27,17 +28,11 @@ struct EvaluatorParams
   double stamp_tolerance = 0.05;  ///< [s] trajectory pose <-> stored frame matching
   LookupTableParams table;
   QualityParams quality;
-  line_map_merging::FusionParams fusion;  ///< assigns originals to map segments for the error metric
+  line_map_merging::FusionParams fusion;  ///< error assignment, redundant pairs, length coverage
+  CoverageParams coverage;
 
   /// Keys "keyframe_distance", "keyframe_angle", "stamp_tolerance", "eval/...", "fusion/...".
   static EvaluatorParams fromParams(const linemap::ParamSet& params);
-};
-
-struct MapMetrics
-{
-  QualityResult quality;
-  ErrorMetricResult error;
-  MapStatistics statistics;
 };
 
 class MapEvaluator
@@ -64,7 +59,7 @@ class MapEvaluator
   /// neighbours. Returns how many trajectory poses matched no stored frame.
   std::size_t applyTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses);
 
-  /// Scores `map` (map frame); rebuilds the lookup table first when frames changed.
+  /// Scores `map` (map frame) with computeMapMetrics; rebuilds the lookup table first when frames changed.
   MapMetrics evaluate(const std::vector<linemap::Segment2>& map);
   /// The lookup table of the last evaluate() (empty before).
   const LookupTable& table() const { return table_; }
@@ -99,6 +94,7 @@ class MapEvaluator
   std::map<double, linemap::Pose2> scan_stamps_, segment_stamps_;  // stored frames: stamp -> gate pose
   line_map_merging::ScanGapTracker scan_gaps_, segment_gaps_;      // keyed by position in scans_ / segments_
   LookupTable table_;
+  std::vector<linemap::Vec2> table_points_;  // the registered scan points of table_ (point coverage)
   bool table_dirty_ = true;
 };
 
