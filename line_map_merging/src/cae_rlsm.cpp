@@ -17,6 +17,7 @@ CaeParams CaeParams::fromParams(const linemap::ParamSet& params)
                                   " must be >= 0 (0 = all cores)");
   p.consistent_adjustment = params.getBool("consistent_adjustment", p.consistent_adjustment);
   p.spatial_index = params.getBool("spatial_index", p.spatial_index);
+  p.map_merge = params.getBool("map_merge", p.map_merge);
   return p;
 }
 
@@ -50,6 +51,7 @@ AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
   transforms_.back() << c, -s, p.x, s, c, p.y;
 
   AddResult result;
+  std::set<std::uint64_t> touched;
   for (const Segment2& local : keyframe.segments)
   {
     // A finite segment under a huge (finite) pose can still overflow in the map frame.
@@ -61,9 +63,10 @@ AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
     }
     const auto leaf = static_cast<std::uint32_t>(leaves_.size());
     leaves_.push_back({slot, local});
-    insertSegment(global, leaf);
+    touched.insert(insertSegment(global, leaf));
     ++result.merged;
   }
+  if (params_.map_merge) mergeMapSegments(std::move(touched));
   return result;
 }
 

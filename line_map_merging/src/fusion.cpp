@@ -13,6 +13,14 @@ FusionParams FusionParams::fromParams(const linemap::ParamSet& params)
   p.max_angle = params.getDouble("fusion/max_angle", p.max_angle);
   p.max_distance = params.getDouble("fusion/max_distance", p.max_distance);
   p.min_overlap = params.getDouble("fusion/min_overlap", p.min_overlap);
+  const std::string weighting = params.getString("fusion/weighting", "length");
+  if (weighting == "length")
+    p.weighting = FusionWeighting::length;
+  else if (weighting == "count")
+    p.weighting = FusionWeighting::count;
+  else
+    throw linemap::ParameterError("parameter 'fusion/weighting': '" + weighting +
+                                  "' is neither 'length' nor 'count'");
   p.validate();
   return p;
 }
@@ -73,28 +81,60 @@ void FusionMoments::add(const Segment2& s, double w)
 {
   const Vec2 d = s.end - s.start;
   const double n = d.norm();
+  const Vec2 c = s.midpoint();
+  if (weight == 0.0) reference = c;
   weight += w;
-  centroid_sum += w * s.midpoint();
+  centroid_sum += w * c;
   if (n > 0.0) direction_sum += (w / n) * d;
+  const double m = w * n;
+  const Vec2 r = c - reference;
+  mass += m;
+  first += m * r;
+  second += m * (r * r.transpose() + d * d.transpose() / 12.0);
 }
 
 void FusionMoments::add(const FusionMoments& m)
 {
+  if (m.weight == 0.0) return;
+  if (weight == 0.0)
+  {
+    *this = m;
+    return;
+  }
   weight += m.weight;
   centroid_sum += m.centroid_sum;
   direction_sum += m.direction_sum;
+  // Parallel axis theorem: m's moments about this reference.
+  const Vec2 delta = m.reference - reference;
+  mass += m.mass;
+  first += m.first + m.mass * delta;
+  second += m.second + delta * m.first.transpose() + m.first * delta.transpose() +
+            m.mass * delta * delta.transpose();
 }
 
-Vec2 FusionMoments::direction() const
+Vec2 FusionMoments::centroid(FusionWeighting weighting) const
+{
+  if (weighting == FusionWeighting::length && mass > 0.0) return reference + first / mass;
+  return centroid_sum / weight;
+}
+
+Vec2 FusionMoments::direction(FusionWeighting weighting) const
 {
   const double n = direction_sum.norm();
   // Headings within max_angle of each other never cancel; a zero sum only comes from degenerate input.
-  return n > 0.0 ? Vec2(direction_sum / n) : Vec2(1.0, 0.0);
+  const Vec2 mean = n > 0.0 ? Vec2(direction_sum / n) : Vec2(1.0, 0.0);
+  if (weighting != FusionWeighting::length || !(mass > 0.0)) return mean;
+  const Vec2 mu = first / mass;
+  const Eigen::Matrix2d cov = second / mass - mu * mu.transpose();
+  // Principal axis of a symmetric 2x2 matrix in closed form.
+  const double angle = 0.5 * std::atan2(2.0 * cov(0, 1), cov(0, 0) - cov(1, 1));
+  const Vec2 axis(std::cos(angle), std::sin(angle));
+  return axis.dot(mean) < 0.0 ? Vec2(-axis) : axis;
 }
 
-FusedLine::FusedLine(const FusionMoments& moments)
-    : origin_(moments.centroid()),
-      direction_(moments.direction()),
+FusedLine::FusedLine(const FusionMoments& moments, FusionWeighting weighting)
+    : origin_(moments.centroid(weighting)),
+      direction_(moments.direction(weighting)),
       t_min_(std::numeric_limits<double>::infinity()),
       t_max_(-std::numeric_limits<double>::infinity())
 {
@@ -113,7 +153,7 @@ Segment2 FusedLine::segment() const
   return {origin_ + t_min_ * direction_, origin_ + t_max_ * direction_};
 }
 
-Segment2 fuse(const std::vector<WeightedSegment>& segments)
+Segment2 fuse(const std::vector<WeightedSegment>& segments, FusionWeighting weighting)
 {
   if (segments.empty()) throw std::invalid_argument("fuse: no segments to fuse");
   FusionMoments moments;
@@ -122,7 +162,7 @@ Segment2 fuse(const std::vector<WeightedSegment>& segments)
     if (!(s.weight > 0.0)) throw std::invalid_argument("fuse: segment weight must be > 0");
     moments.add(s.segment, s.weight);
   }
-  FusedLine line(moments);
+  FusedLine line(moments, weighting);
   for (const auto& s : segments) line.include(s.segment);
   return line.segment();
 }

@@ -17,7 +17,9 @@ namespace line_map_merging
 {
 namespace
 {
-constexpr int kFormatVersion = 1;
+// 2: parameters gained 'weighting' and 'map_merge'. Version 1 files still load (see load()).
+constexpr int kFormatVersion = 2;
+constexpr int kOldestFormatVersion = 1;
 
 void writeFileAtomically(const std::string& path, const std::string& text)
 {
@@ -122,6 +124,9 @@ void CaeRlsm::save(const std::string& path) const
   out << YAML::Key << "max_distance" << YAML::Value << params_.fusion.max_distance;
   out << YAML::Key << "min_overlap" << YAML::Value << params_.fusion.min_overlap;
   out << YAML::Key << "consistent_adjustment" << YAML::Value << params_.consistent_adjustment;
+  out << YAML::Key << "weighting" << YAML::Value
+      << (params_.fusion.weighting == FusionWeighting::length ? "length" : "count");
+  out << YAML::Key << "map_merge" << YAML::Value << params_.map_merge;
   out << YAML::EndMap;
   out << YAML::Key << "next_id" << YAML::Value << next_id_;
   out << YAML::Key << "keyframe_count" << YAML::Value << keyframes_.size();
@@ -176,9 +181,10 @@ void CaeRlsm::load(const std::string& path)
   if (!root.IsMap())
     throw MapFileError("map file '" + path + "': not a line map file (no top-level mapping)");
   const int version = read<int>(path, require(path, root, "format_version"), "format_version");
-  if (version != kFormatVersion)
+  if (version < kOldestFormatVersion || version > kFormatVersion)
     throw MapFileError("map file '" + path + "': format_version " + std::to_string(version) +
-                       " is not supported (this build reads " + std::to_string(kFormatVersion) + ")");
+                       " is not supported (this build reads " + std::to_string(kOldestFormatVersion) + " to " +
+                       std::to_string(kFormatVersion) + ")");
   const std::string method = read<std::string>(path, require(path, root, "method"), "method");
   if (method != name())
     throw MapFileError("map file '" + path + "': field 'method' is '" + method + "', expected '" + name() +
@@ -193,6 +199,15 @@ void CaeRlsm::load(const std::string& path)
   params.fusion.min_overlap = readFinite(path, require(path, p, "min_overlap"), "parameters/min_overlap");
   params.consistent_adjustment =
       read<bool>(path, require(path, p, "consistent_adjustment"), "parameters/consistent_adjustment");
+  // Version 1 files were made with the paper's count weighting and no map-level merge: they load
+  // as such, so a saved map adjusts as it would have.
+  const std::string weighting =
+      p["weighting"] ? read<std::string>(path, p["weighting"], "parameters/weighting") : std::string("count");
+  if (weighting != "length" && weighting != "count")
+    throw MapFileError("map file '" + path + "': field 'parameters/weighting' is '" + weighting +
+                       "', expected 'length' or 'count'");
+  params.fusion.weighting = weighting == "length" ? FusionWeighting::length : FusionWeighting::count;
+  params.map_merge = p["map_merge"] ? read<bool>(path, p["map_merge"], "parameters/map_merge") : false;
   try
   {
     params.fusion.validate();

@@ -78,7 +78,7 @@ void CaeRlsm::refuse(Node& node) const
   for (std::uint32_t l : node.leaves) world.push_back(worldLeaf(l));
   FusionMoments moments;
   for (const Segment2& s : world) moments.add(s);
-  FusedLine line(moments);
+  FusedLine line(moments, params_.fusion.weighting);
   for (const Segment2& s : world) line.include(s);
   node.moments = moments;
   node.segment = line.segment();
@@ -144,7 +144,7 @@ std::size_t CaeRlsm::mergeConsistentSegments(tbb::task_arena& arena)
               [&](std::size_t i)
               {
                 thread_local std::vector<Entry> hits;
-                has_partner[i] = hasCandidate(all[i].second->segment, all[i].first, hits);
+                has_partner[i] = hasCandidate(all[i].second->segment, all[i].first, hits, params_.map_merge);
               });
   std::set<std::uint64_t> pending;
   for (std::size_t i = 0; i < all.size(); ++i)
@@ -156,7 +156,7 @@ std::size_t CaeRlsm::mergeConsistentSegments(tbb::task_arena& arena)
     pending.erase(pending.begin());
     auto it = nodes_.find(id);
     if (it == nodes_.end()) continue;
-    findCandidates(it->second.segment, id, candidates);
+    findCandidates(it->second.segment, id, candidates, params_.map_merge);
     if (candidates.empty()) continue;
     candidates.push_back(id);
     std::sort(candidates.begin(), candidates.end());

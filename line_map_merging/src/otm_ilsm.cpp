@@ -33,47 +33,55 @@ void CaeRlsm::indexRemove(std::uint64_t id, const Node& node)
   index_.remove(Entry(node.box, id));
 }
 
-void CaeRlsm::findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out)
+bool CaeRlsm::candidateMeets(const Segment2& map, const Segment2& scan, bool symmetric) const
+{
+  return symmetric ? meetEachOther(map, scan, params_.fusion)
+                   : meetsFusionConditions(map, scan, params_.fusion);
+}
+
+void CaeRlsm::findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out,
+                             bool symmetric)
 {
   out.clear();
   if (params_.spatial_index)
   {
     if (index_stale_) rebuildIndex();
-    // Every map segment meeting the conditions has a point of `scan` inside its padded box.
+    // Every map segment meeting the conditions has a point of `scan` inside its padded box; one
+    // that `scan` meets as M has a point within the padding of `scan`'s box: the same test.
     const Box query = boundingBox(scan);
     hits_.clear();
     index_.query(bgi::intersects(query), std::back_inserter(hits_));
     for (const Entry& e : hits_)
-      if (e.second != exclude && meetsFusionConditions(nodes_.at(e.second).segment, scan, params_.fusion))
+      if (e.second != exclude && candidateMeets(nodes_.at(e.second).segment, scan, symmetric))
         out.push_back(e.second);
   }
   else
   {
     for (const auto& [id, node] : nodes_)
-      if (id != exclude && meetsFusionConditions(node.segment, scan, params_.fusion)) out.push_back(id);
+      if (id != exclude && candidateMeets(node.segment, scan, symmetric)) out.push_back(id);
   }
   // Fusing in id order makes the result independent of the search structure.
   std::sort(out.begin(), out.end());
 }
 
-bool CaeRlsm::hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vector<Entry>& hits) const
+bool CaeRlsm::hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vector<Entry>& hits,
+                           bool symmetric) const
 {
   if (!params_.spatial_index)
   {
     for (const auto& [id, node] : nodes_)
-      if (id != exclude && meetsFusionConditions(node.segment, scan, params_.fusion)) return true;
+      if (id != exclude && candidateMeets(node.segment, scan, symmetric)) return true;
     return false;
   }
   const Box query = boundingBox(scan);
   hits.clear();
   index_.query(bgi::intersects(query), std::back_inserter(hits));
   for (const Entry& e : hits)
-    if (e.second != exclude && meetsFusionConditions(nodes_.at(e.second).segment, scan, params_.fusion))
-      return true;
+    if (e.second != exclude && candidateMeets(nodes_.at(e.second).segment, scan, symmetric)) return true;
   return false;
 }
 
-void CaeRlsm::insertSegment(const Segment2& world, std::uint32_t leaf)
+std::uint64_t CaeRlsm::insertSegment(const Segment2& world, std::uint32_t leaf)
 {
   std::vector<std::uint64_t>& candidates = candidates_;
   findCandidates(world, UINT64_MAX, candidates);
@@ -85,7 +93,7 @@ void CaeRlsm::insertSegment(const Segment2& world, std::uint32_t leaf)
     node.moments.add(world);
     node.leaves.push_back(leaf);
     indexInsert(id, node);
-    return;
+    return id;
   }
 
   Node& target = nodes_.at(candidates.front());
@@ -94,7 +102,7 @@ void CaeRlsm::insertSegment(const Segment2& world, std::uint32_t leaf)
   for (std::size_t i = 1; i < candidates.size(); ++i) moments.add(nodes_.at(candidates[i]).moments);
   moments.add(world);
 
-  FusedLine line(moments);
+  FusedLine line(moments, params_.fusion.weighting);
   line.include(target.segment);
   line.include(world);
   for (std::size_t i = 1; i < candidates.size(); ++i)
@@ -110,6 +118,7 @@ void CaeRlsm::insertSegment(const Segment2& world, std::uint32_t leaf)
   target.moments = moments;
   target.segment = line.segment();
   indexInsert(candidates.front(), target);
+  return candidates.front();
 }
 
 }  // namespace line_map_merging

@@ -76,7 +76,7 @@ void OtoIlsm::insertSegment(const Segment2& world)
     node = &nodes_.at(best);
     index_.remove(Entry(node->box, best));
     node->moments.add(world);
-    FusedLine line(node->moments);
+    FusedLine line(node->moments, params_.weighting);
     line.include(node->segment);
     line.include(world);
     node->segment = line.segment();

@@ -197,3 +197,59 @@ TEST(Fusion, SingleSegmentIsItselfAndEmptyInputThrows)
   EXPECT_THROW(fuse({}), std::invalid_argument);
   EXPECT_THROW(fuse({{s, 0.0}}), std::invalid_argument);
 }
+
+TEST(Fusion, LengthWeightingIsTheTotalLeastSquaresLineOfTheMembersMass)
+{
+  // y = 0 over [0, 4] (4 m) and y = 0.06 over [1, 3] (2 m), weight 1 each. Length weighting: centre
+  // of mass y = (4 * 0 + 2 * 0.06) / 6 = 0.02, principal axis along x. Count weighting: y = 0.03.
+  const std::vector<line_map_merging::WeightedSegment> members = {{seg(0, 0, 4, 0), 1.0},
+                                                                  {seg(1, 0.06, 3, 0.06), 1.0}};
+  const Segment2 by_length = fuse(members, line_map_merging::FusionWeighting::length);
+  EXPECT_NEAR(by_length.start.y(), 0.02, 1e-12);
+  EXPECT_NEAR(by_length.end.y(), 0.02, 1e-12);
+  EXPECT_NEAR(by_length.start.x(), 0.0, 1e-12);
+  EXPECT_NEAR(by_length.end.x(), 4.0, 1e-12);
+  EXPECT_NEAR(fuse(members, line_map_merging::FusionWeighting::count).start.y(), 0.03, 1e-12);
+  // Both members reversed: the same line, running the other way.
+  const Segment2 reversed =
+      fuse({{seg(4, 0, 0, 0), 1.0}, {seg(3, 0.06, 1, 0.06), 1.0}}, line_map_merging::FusionWeighting::length);
+  EXPECT_NEAR(reversed.start.x(), 4.0, 1e-12);
+  EXPECT_NEAR(reversed.end.x(), 0.0, 1e-12);
+}
+
+TEST(Fusion, LengthWeightedHeadingOfTiltedMembers)
+{
+  // Two 2 m members on the line y = x tan(0.3), one shifted along it: the TLS axis is the line itself.
+  const double a = 0.3;
+  const Vec2 u(std::cos(a), std::sin(a));
+  const Segment2 f = fuse({{Segment2(Vec2(0, 0), 2 * u), 1.0}, {Segment2(5 * u, 7 * u), 1.0}},
+                          line_map_merging::FusionWeighting::length);
+  EXPECT_NEAR(f.heading(), a, 1e-12);
+  EXPECT_NEAR((f.start - Vec2(0, 0)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((f.end - 7 * u).norm(), 0.0, 1e-12);
+}
+
+TEST(FusionMoments, AddingGroupMomentsEqualsAddingTheMembers)
+{
+  // Groups with different reference points: the parallel axis shift must reproduce the members' sums.
+  const Segment2 a = seg(100.0, 50.0, 103.0, 50.2), b = seg(101.0, 50.1, 104.5, 50.0),
+                 c = seg(-20.0, 7.0, -18.0, 7.5);
+  line_map_merging::FusionMoments all, left, right;
+  all.add(a, 2.0);
+  all.add(b);
+  all.add(c, 0.5);
+  left.add(a, 2.0);
+  right.add(b);
+  right.add(c, 0.5);
+  left.add(right);
+  EXPECT_NEAR(left.mass, all.mass, 1e-12);
+  EXPECT_NEAR((left.centroid(line_map_merging::FusionWeighting::length) -
+               all.centroid(line_map_merging::FusionWeighting::length))
+                  .norm(),
+              0.0, 1e-9);
+  EXPECT_NEAR((left.direction(line_map_merging::FusionWeighting::length) -
+               all.direction(line_map_merging::FusionWeighting::length))
+                  .norm(),
+              0.0, 1e-12);
+  EXPECT_NEAR((left.second - all.second).norm(), 0.0, 1e-6);
+}

@@ -83,7 +83,7 @@ TEST(MpGma, EverySegmentIsTheFusionOfItsLeavesUnderTheNewPoses)
     std::vector<line_map_merging::WeightedSegment> leaves;
     for (const auto& leaf : merger.leaves(after[i].id))
       leaves.push_back({leaf.segment.transformed(d.truth[leaf.keyframe]), 1.0});
-    const Segment2 expected = line_map_merging::fuse(leaves);
+    const Segment2 expected = line_map_merging::fuse(leaves, paper.fusion.weighting);
     EXPECT_NEAR((after[i].segment.start - expected.start).norm(), 0.0, 1e-9) << "id " << after[i].id;
     EXPECT_NEAR((after[i].segment.end - expected.end).norm(), 0.0, 1e-9) << "id " << after[i].id;
     moved = std::max(moved, (after[i].segment.start - before[i].segment.start).norm());

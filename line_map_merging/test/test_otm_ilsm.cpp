@@ -97,11 +97,12 @@ TEST(OtmIlsm, OneSegmentBridgingTheTwoEndsOfALoopMergesAllThree)
   ASSERT_EQ(map.size(), 1u);  // a one-to-one merge would leave two
   EXPECT_EQ(map[0].id, 0u);   // the smallest id survives
   EXPECT_EQ(map[0].merged_count, 3u);
-  // Barycentre (2 + 7 + 4.5, 0 + 0 + 0.02) / 3, heading 0: the line y = 0.02/3 over x in [0, 9].
+  // Length weighting (4, 4 and 3 m): centre of mass y = 3 * 0.02 / 11 at x = (8 + 28 + 13.5) / 11 = 4.5,
+  // the middle of the bridging segment, so the principal axis is x: the line y = 0.06/11 over [0, 9].
   EXPECT_NEAR(map[0].segment.start.x(), 0.0, 1e-9);
   EXPECT_NEAR(map[0].segment.end.x(), 9.0, 1e-9);
-  EXPECT_NEAR(map[0].segment.start.y(), 0.02 / 3.0, 1e-9);
-  EXPECT_NEAR(map[0].segment.end.y(), 0.02 / 3.0, 1e-9);
+  EXPECT_NEAR(map[0].segment.start.y(), 0.06 / 11.0, 1e-9);
+  EXPECT_NEAR(map[0].segment.end.y(), 0.06 / 11.0, 1e-9);
   EXPECT_EQ(merger.leaves(0).size(), 3u);
   // The merged id 1 is gone for good: the next new segment gets a fresh id.
   merger.addKeyframe(keyframeOf(3, Pose2(), {Segment2(Vec2(0, 5), Vec2(1, 5))}));
@@ -177,4 +178,37 @@ TEST(OtmIlsm, SpatialIndexAndLinearSearchGiveIdenticalMaps)
     multi += ma[i].merged_count > 1;
   }
   EXPECT_GT(multi, 100u);
+}
+
+TEST(MapMerge, SegmentsThatMeetOnlyWithTheOtherAsMapSegmentAreMerged)
+{
+  // M: 0.6 m along y = 0. S: 6 m through M's middle, 3 deg off (within theta_max = 4 deg). As a scan
+  // segment S fails the vertical distance to M's line (3 sin 3 deg = 0.157 m > d_max = 0.1 m), so
+  // OTM-ILSM starts a new map segment; the other way round M's endpoints lie 0.3 sin 3 deg = 0.016 m
+  // from S's line and overlap it fully: the two are redundant, and the map-level merge joins them.
+  const double a = 3.0 * linemap::kPi / 180.0;
+  const Vec2 u(std::cos(a), std::sin(a)), mid(0.3, 0.0);
+  const Segment2 m(Vec2(0, 0), Vec2(0.6, 0)), s(mid - 3.0 * u, mid + 3.0 * u);
+  ASSERT_FALSE(line_map_merging::meetsFusionConditions(m, s, line_map_merging::FusionParams()));
+  ASSERT_TRUE(line_map_merging::meetEachOther(m, s, line_map_merging::FusionParams()));
+  for (bool map_merge : {false, true})
+  {
+    CaeParams params;
+    params.map_merge = map_merge;
+    CaeRlsm merger(params);
+    merger.addKeyframe(keyframeOf(0, Pose2(0.2, -1, 0.4), {m}));
+    merger.addKeyframe(keyframeOf(1, Pose2(1, 1, -0.3), {s}));
+    const auto map = merger.map();
+    if (!map_merge)
+    {
+      EXPECT_EQ(map.size(), 2u) << "the paper's OTM-ILSM keeps them apart";
+      continue;
+    }
+    ASSERT_EQ(map.size(), 1u);
+    EXPECT_EQ(map[0].id, 0u);  // the smallest id survives and takes the other's leaves
+    EXPECT_EQ(merger.leaves(0).size(), 2u);
+    EXPECT_EQ(merger.leafCount(), 2u);
+    // Length weighting: the 6 m segment dominates; the fused line stays within 4 deg of S.
+    EXPECT_LT(std::abs(linemap::normalizeAngle(map[0].segment.heading() - a)), 0.5 * a);
+  }
 }

@@ -34,6 +34,15 @@ std::vector<Keyframe> loopCase()
           keyframeOf(2, Pose2(4.5, 1, 0.1), {Segment2(Vec2(3, 0.02), Vec2(6, 0.02))})};
 }
 
+/// The paper's count weighting, which the hand-computed fusions below assume (these tests are about
+/// which map segment a scan segment joins, not how the fusion weighs its members).
+line_map_merging::FusionParams countWeighting()
+{
+  line_map_merging::FusionParams p;
+  p.weighting = line_map_merging::FusionWeighting::count;
+  return p;
+}
+
 void expectSegment(const Segment2& s, const Vec2& a, const Vec2& b, double tol = 1e-9)
 {
   EXPECT_NEAR(s.start.x(), a.x(), tol);
@@ -46,7 +55,7 @@ void expectSegment(const Segment2& s, const Vec2& a, const Vec2& b, double tol =
 TEST(OtoIlsm, BridgingSegmentMergesWithOneMapSegmentOnlyWhereCaeMergesAllThree)
 {
   CaeRlsm cae;
-  OtoIlsm oto;
+  OtoIlsm oto(countWeighting());
   for (const Keyframe& k : loopCase())
   {
     cae.addKeyframe(k);
@@ -73,7 +82,7 @@ TEST(OtoIlsm, ClosestCandidateWinsAndTiesGoToTheSmallerId)
   const std::vector<Segment2> walls{Segment2(Vec2(0, 0), Vec2(4, 0)),
                                     Segment2(Vec2(0, 0.125), Vec2(4, 0.125))};
   {
-    OtoIlsm oto;
+    OtoIlsm oto(countWeighting());
     oto.addKeyframe(keyframeOf(0, Pose2(), walls));
     ASSERT_EQ(oto.segmentCount(), 2u);
     // 0.09 m from A, 0.035 m from B: joins B.
@@ -84,7 +93,7 @@ TEST(OtoIlsm, ClosestCandidateWinsAndTiesGoToTheSmallerId)
     expectSegment(map[1].segment, Vec2(0, 0.1075), Vec2(4, 0.1075));
   }
   {
-    OtoIlsm oto;
+    OtoIlsm oto(countWeighting());
     oto.addKeyframe(keyframeOf(0, Pose2(), walls));
     // 0.0625 m from both, same heading: the smaller id (A) wins.
     oto.addKeyframe(keyframeOf(1, Pose2(), {Segment2(Vec2(1, 0.0625), Vec2(3, 0.0625))}));
@@ -98,7 +107,7 @@ TEST(OtoIlsm, ClosestCandidateWinsAndTiesGoToTheSmallerId)
 
 TEST(OtoIlsm, NoAdjustmentWithoutProvenance)
 {
-  OtoIlsm oto;
+  OtoIlsm oto(countWeighting());
   for (const Keyframe& k : loopCase()) oto.addKeyframe(k);
   const auto before = oto.map();
   EXPECT_FALSE(oto.supportsAdjustment());
@@ -119,7 +128,7 @@ TEST(OtoIlsm, NoAdjustmentWithoutProvenance)
 
 TEST(OtoIlsm, IdsStayStableAndResetRestartsThem)
 {
-  OtoIlsm oto;
+  OtoIlsm oto(countWeighting());
   for (const Keyframe& k : loopCase()) oto.addKeyframe(k);
   oto.addKeyframe(keyframeOf(3, Pose2(), {Segment2(Vec2(0, 5), Vec2(1, 5))}));
   EXPECT_EQ(oto.map().back().id, 2u);
@@ -132,7 +141,7 @@ TEST(OtoIlsm, IdsStayStableAndResetRestartsThem)
 
 TEST(OtoIlsm, BadInputIsCountedOrRejectedWithoutChangingTheMap)
 {
-  OtoIlsm oto;
+  OtoIlsm oto(countWeighting());
   Keyframe k = keyframeOf(7, Pose2(), {Segment2(Vec2(0, 0), Vec2(1, 0))});
   k.segments.push_back(Segment2(Vec2(1, 1), Vec2(1, 1)));
   k.segments.push_back(Segment2(Vec2(std::numeric_limits<double>::quiet_NaN(), 0), Vec2(1, 0)));

@@ -13,6 +13,7 @@
 #include <boost/geometry.hpp>
 #include <boost/geometry/index/rtree.hpp>
 #include <cstdint>
+#include <set>
 #include <unordered_map>
 #include <vector>
 
@@ -27,8 +28,13 @@ struct CaeParams
   int threads = 0;                    ///< MP-GMA worker threads; 0 = all cores
   bool consistent_adjustment = true;  ///< split/merge after re-fusing (off = the paper's behaviour)
   bool spatial_index = true;          ///< R-tree candidate search (off = linear reference search)
+  /// Map-level merge: after each keyframe's OTM-ILSM, the map segments it touched are merged with
+  /// every map segment they meet the fusion conditions with (either way round), until none is left;
+  /// the consistency pass after MP-GMA uses the same symmetric test. Off = the paper's behaviour,
+  /// where two map segments born apart stay apart unless one scan segment bridges them.
+  bool map_merge = true;
 
-  /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index".
+  /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge".
   static CaeParams fromParams(const linemap::ParamSet& params);
 };
 
@@ -77,11 +83,21 @@ class CaeRlsm : public Merger
   };
 
   // OTM-ILSM (otm_ilsm.cpp).
-  void insertSegment(const Segment2& world, std::uint32_t leaf);
-  void findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out);
-  /// Read-only, thread-safe: whether any map segment but `exclude` meets the fusion conditions with
-  /// `scan`. Needs a fresh index (or the linear search); `hits` is the caller's scratch.
-  bool hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vector<Entry>& hits) const;
+  /// Returns the id of the map segment that now holds the leaf.
+  std::uint64_t insertSegment(const Segment2& world, std::uint32_t leaf);
+  /// Map segments but `exclude` that meet the fusion conditions with `scan` as S, or with either as
+  /// M when `symmetric` (map segment against map segment); in id order.
+  void findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out,
+                      bool symmetric = false);
+  /// Read-only, thread-safe: whether findCandidates would find any. Needs a fresh index (or the
+  /// linear search); `hits` is the caller's scratch.
+  bool hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vector<Entry>& hits,
+                    bool symmetric = false) const;
+  bool candidateMeets(const Segment2& map, const Segment2& scan, bool symmetric) const;
+  /// Map-level merge (map_merge.cpp): merges each pending map segment with the map segments it meets
+  /// the conditions with, either way round, re-queueing the result, until none is left; the smallest
+  /// id survives and takes the others' leaves. Returns how many map segments were merged away.
+  std::size_t mergeMapSegments(std::set<std::uint64_t> pending);
   Box paddedBox(const Segment2& s) const;  // padded by the fusion conditions' reach
   static Box boundingBox(const Segment2& s, double pad = 0.0);
   void indexInsert(std::uint64_t id, Node& node);
