@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <sstream>
+
+#include "line_map_merging/cae_rlsm.hpp"
+#include "line_map_merging/oto_ilsm.hpp"
 
 namespace line_map_merging
 {
@@ -213,6 +217,61 @@ void OnlineMapper::load(const std::string& path)
     continuous_[k.index] = k.pose;
   }
   afterMapChange();
+}
+
+std::shared_ptr<const Merger> OnlineMapper::snapshot() const
+{
+  // The online mergers hold plain containers: a copy is a consistent snapshot, taken in
+  // milliseconds, where writing the file (fsync) takes tens.
+  if (const auto* cae = dynamic_cast<const CaeRlsm*>(merger_.get())) return std::make_shared<CaeRlsm>(*cae);
+  if (const auto* oto = dynamic_cast<const OtoIlsm*>(merger_.get())) return std::make_shared<OtoIlsm>(*oto);
+  return nullptr;
+}
+
+OnlineMapper::~OnlineMapper()
+{
+  if (writer_.valid()) writer_.wait();
+}
+
+std::string OnlineMapper::collectAutosave(bool wait)
+{
+  if (!writer_.valid() || (!wait && writer_.wait_for(std::chrono::seconds(0)) != std::future_status::ready))
+    return "";
+  const std::string error = writer_.get();
+  autosaved(writing_revision_, writing_since_, error.empty());
+  return error;
+}
+
+std::string OnlineMapper::autosave(const std::string& path, double now, bool wait)
+{
+  std::string error = collectAutosave(wait);
+  if (writer_.valid() || !autosaveDue(now)) return error;
+  writing_revision_ = revision_;
+  writing_since_ = now;
+  auto write = [path](std::shared_ptr<const Merger> merger) -> std::string
+  {
+    try
+    {
+      merger->save(path);
+      return "";
+    }
+    catch (const std::exception& e)
+    {
+      return e.what();
+    }
+  };
+  std::shared_ptr<const Merger> copy = snapshot();
+  if (copy && !wait)
+  {
+    writer_ = std::async(std::launch::async, write, std::move(copy));
+    return error;
+  }
+  // No copy: written from the live merger (not owned, so a no-op deleter), before returning.
+  std::promise<std::string> done;
+  done.set_value(write(copy ? copy : std::shared_ptr<const Merger>(merger_.get(), [](const Merger*) {})));
+  writer_ = done.get_future();
+  const std::string last = collectAutosave(true);
+  return last.empty() ? error : last;
 }
 
 bool OnlineMapper::autosaveDue(double now) const

@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -78,6 +79,7 @@ class OnlineMapper
 {
  public:
   OnlineMapper(std::unique_ptr<Merger> merger, const OnlineMapperParams& params);
+  ~OnlineMapper();  ///< waits for an autosave being written
 
   /// Gates and merges one segment set. A scan whose stamp a keyframe already has is a replay:
   /// skipped, and the gate moves on from it as from that keyframe, so a replay adds nothing.
@@ -103,6 +105,10 @@ class OnlineMapper
   /// The autosave policy: true when autosave is on, the map changed since the last save and the
   /// period has passed since the last save (`now` in seconds, e.g. wall time).
   bool autosaveDue(double now) const;
+  /// Autosave: when due, a snapshot of the map is written to `path` by a worker thread, so merging
+  /// goes on meanwhile (`wait`, e.g. at shutdown: written before returning; a merger that cannot be
+  /// copied is written here too). Returns the error of a save finished since the last call, or "".
+  std::string autosave(const std::string& path, double now, bool wait = false);
   /// The caller saved `revision` (of revision(), taken when it took the snapshot) at `now`, or failed.
   void autosaved(std::uint64_t revision, double now, bool ok);
 
@@ -112,6 +118,10 @@ class OnlineMapper
   /// Counts a trajectory the caller refused (wrong frame) and poses it could not convert.
   void countIgnoredTrajectory() { ++counters_.ignored_trajectories; }
   void countBadPoses(std::size_t n) { counters_.bad_poses += n; }
+
+  /// A copy of the merger's state, for writing it while merging goes on (the autosave); null for a
+  /// merger that cannot be copied.
+  std::shared_ptr<const Merger> snapshot() const;
 
   const Merger& merger() const { return *merger_; }
   Merger& merger() { return *merger_; }
@@ -140,6 +150,10 @@ class OnlineMapper
   double last_clock_ = 0.0, last_stamp_ = 0.0;
   std::uint64_t revision_ = 0, saved_revision_ = 0;
   double last_save_ = -1e300;
+  std::future<std::string> writer_;  ///< the autosave being written: its error, or ""
+  std::uint64_t writing_revision_ = 0;
+  double writing_since_ = 0.0;
+  std::string collectAutosave(bool wait);
   MapperCounters counters_;
 };
 

@@ -1,0 +1,169 @@
+// Message conversions of the merging nodelet (header-only, ROS side): poses from tf and
+// nav_msgs/Path, the map as line_map_msgs/LineMap, its RViz markers, errors as service answers.
+#pragma once
+
+#include <geometry_msgs/Quaternion.h>
+#include <line_map_msgs/LineMap.h>
+#include <line_map_msgs/LineSegmentArray.h>
+#include <nav_msgs/Path.h>
+#include <tf2_ros/buffer.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <cmath>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "line_map_merging/merger.hpp"
+
+namespace line_map_merging
+{
+/// The 2D pose of a position and quaternion, or nothing when the quaternion is not normalised or
+/// the position is not finite.
+inline std::optional<linemap::Pose2> toPose2(double x, double y, const geometry_msgs::Quaternion& q)
+{
+  const double n = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+  if (!std::isfinite(n) || std::abs(n - 1.0) > 1e-3 || !std::isfinite(x) || !std::isfinite(y))
+    return std::nullopt;
+  return linemap::Pose2(x, y, std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)));
+}
+
+/// The nodes of a trajectory (base poses in the map frame); `bad` counts the poses skipped.
+inline std::vector<std::pair<double, linemap::Pose2>> toNodes(const nav_msgs::Path& path, std::size_t& bad)
+{
+  std::vector<std::pair<double, linemap::Pose2>> nodes;
+  nodes.reserve(path.poses.size());
+  for (const auto& p : path.poses)
+    if (const auto pose = toPose2(p.pose.position.x, p.pose.position.y, p.pose.orientation))
+      nodes.emplace_back(p.header.stamp.toSec(), *pose);
+  bad = path.poses.size() - nodes.size();
+  return nodes;
+}
+
+inline std::vector<linemap::Segment2> toSegments(const line_map_msgs::LineSegmentArray& msg)
+{
+  std::vector<linemap::Segment2> out;
+  out.reserve(msg.segments.size());
+  for (const auto& s : msg.segments)
+    out.emplace_back(linemap::Vec2(s.start.x, s.start.y), linemap::Vec2(s.end.x, s.end.y));
+  return out;
+}
+
+/// The pose of `frame` in `target` at `stamp` (identity for the same frame: the map frame may be
+/// unknown to tf), or nothing when tf has none or it is not a valid 2D pose.
+inline std::optional<linemap::Pose2> lookupPose(const tf2_ros::Buffer& tf, const std::string& target,
+                                                const std::string& frame, const ros::Time& stamp)
+{
+  if (target == frame) return linemap::Pose2();
+  try
+  {
+    const auto t = tf.lookupTransform(target, frame, stamp).transform;
+    return toPose2(t.translation.x, t.translation.y, t.rotation);
+  }
+  catch (const tf2::TransformException&)
+  {
+    return std::nullopt;
+  }
+}
+
+/// Runs `action`; returns its error message, empty on success.
+template <class Action>
+std::string attemptAll(Action&& action)
+{
+  try
+  {
+    action();
+    return "";
+  }
+  catch (const std::exception& e)
+  {
+    return e.what();
+  }
+}
+
+/// A service's answer: `error`, or `done` when there is none.
+template <class Response>
+bool answer(Response& res, const std::string& error, const std::string& done)
+{
+  res.success = error.empty();
+  res.message = res.success ? done : error;
+  return true;
+}
+
+inline line_map_msgs::LineMap toLineMap(const Merger& merger, const std::string& frame,
+                                        const ros::Time& stamp)
+{
+  const std::vector<MapSegment> map = merger.map();
+  line_map_msgs::LineMap msg;
+  msg.header.stamp = stamp;
+  msg.header.frame_id = frame;
+  msg.segments.resize(map.size());
+  for (std::size_t i = 0; i < map.size(); ++i)
+  {
+    auto& out = msg.segments[i];
+    const linemap::Segment2& s = map[i].segment;
+    out.id = map[i].id;
+    out.merged_count = map[i].merged_count;
+    out.segment.start.x = s.start.x();
+    out.segment.start.y = s.start.y();
+    out.segment.end.x = s.end.x();
+    out.segment.end.y = s.end.y();
+    const linemap::HessianLine h = linemap::hessianFromPoints(s.start, s.end);
+    out.segment.angle = h.angle;
+    out.segment.radius = h.radius;
+  }
+  msg.original_segments = static_cast<std::uint32_t>(merger.leafCount());
+  msg.keyframes = static_cast<std::uint32_t>(merger.keyframeCount());
+  return msg;
+}
+
+/// Lines, start points red, end points green, optionally id labels; the first marker clears the old ones.
+inline visualization_msgs::MarkerArray toMarkers(const line_map_msgs::LineMap& map, double width, bool labels)
+{
+  using visualization_msgs::Marker;
+  auto make = [&](const std::string& ns, int type, float r, float g, float b, double scale)
+  {
+    Marker m;
+    m.header = map.header;
+    m.ns = ns;
+    m.type = type;
+    m.action = Marker::ADD;
+    m.pose.orientation.w = 1.0;
+    m.scale.x = m.scale.y = scale;
+    m.color.r = r;
+    m.color.g = g;
+    m.color.b = b;
+    m.color.a = 1.0;
+    return m;
+  };
+  visualization_msgs::MarkerArray array;
+  Marker clear;
+  clear.header = map.header;
+  clear.action = Marker::DELETEALL;
+  array.markers.push_back(clear);
+  auto lines = make("segments", Marker::LINE_LIST, 0.1f, 0.3f, 1.0f, width);
+  auto starts = make("start_points", Marker::POINTS, 1.0f, 0.0f, 0.0f, 2.0 * width);
+  auto ends = make("end_points", Marker::POINTS, 0.0f, 0.8f, 0.0f, 2.0 * width);
+  for (const auto& s : map.segments)
+  {
+    lines.points.push_back(s.segment.start);
+    lines.points.push_back(s.segment.end);
+    starts.points.push_back(s.segment.start);
+    ends.points.push_back(s.segment.end);
+  }
+  if (!lines.points.empty()) array.markers.insert(array.markers.end(), {lines, starts, ends});
+  for (const auto& s : map.segments)
+  {
+    if (!labels) break;
+    auto label = make("labels", Marker::TEXT_VIEW_FACING, 1.0f, 1.0f, 1.0f, 0.0);
+    label.id = static_cast<int>(s.id % 2147483647u);
+    label.scale.z = 0.2;
+    label.pose.position.x = 0.5 * (s.segment.start.x + s.segment.end.x);
+    label.pose.position.y = 0.5 * (s.segment.start.y + s.segment.end.y);
+    label.text = std::to_string(s.id);
+    array.markers.push_back(label);
+  }
+  return array;
+}
+
+}  // namespace line_map_merging
