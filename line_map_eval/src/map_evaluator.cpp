@@ -4,8 +4,6 @@
 #include <iterator>
 #include <map>
 
-#include "line_map_merging/trajectory_correction.hpp"
-
 namespace line_map_eval
 {
 EvaluatorParams EvaluatorParams::fromParams(const linemap::ParamSet& params)
@@ -14,6 +12,10 @@ EvaluatorParams EvaluatorParams::fromParams(const linemap::ParamSet& params)
   p.gate = line_map_merging::KeyframeGateParams::fromParams(params);
   p.stamp_tolerance = params.getDouble("stamp_tolerance", p.stamp_tolerance);
   if (!(p.stamp_tolerance >= 0.0)) throw linemap::ParameterError("parameter 'stamp_tolerance' must be >= 0");
+  p.max_gap = params.getDouble("trajectory_max_gap", p.max_gap);
+  if (!(p.max_gap >= 0.0)) throw linemap::ParameterError("parameter 'trajectory_max_gap' must be >= 0");
+  p.correction = line_map_merging::correctionModeFromString(
+      "trajectory_correction", params.getString("trajectory_correction", "nearest"));
   p.table = LookupTableParams::fromParams(params);
   p.quality = QualityParams::fromParams(params);
   p.fusion = line_map_merging::FusionParams::fromParams(params);
@@ -58,9 +60,8 @@ bool MapEvaluator::addScan(double stamp, const linemap::Pose2& laser_pose, std::
     scan_gate_.setReference(laser_pose);
     return false;
   }
-  scan_gaps_.scan(stamp);
+  history_.add(stamp, odom_pose ? *odom_pose : laser_pose);
   if (!gateAccepts(scan_stamps_, scan_gate_, stamp, laser_pose)) return false;
-  scan_gaps_.keyframe(scans_.size());
   scan_stamps_.emplace(stamp, laser_pose);
   scans_.push_back({stamp, laser_pose, odom_pose, std::move(points), {}});
   table_dirty_ = true;
@@ -76,50 +77,23 @@ bool MapEvaluator::addSegments(double stamp, const linemap::Pose2& laser_pose,
     segment_gate_.setReference(laser_pose);
     return false;
   }
-  segment_gaps_.scan(stamp);
+  history_.add(stamp, odom_pose ? *odom_pose : laser_pose);
   if (!gateAccepts(segment_stamps_, segment_gate_, stamp, laser_pose)) return false;
-  segment_gaps_.keyframe(segments_.size());
   segment_stamps_.emplace(stamp, laser_pose);
   segments_.push_back({stamp, laser_pose, odom_pose, {}, std::move(segments)});
   return true;
 }
 
-std::size_t MapEvaluator::reregister(std::vector<Frame>& frames, const line_map_merging::ScanGapTracker& gaps,
-                                     const std::vector<std::pair<double, linemap::Pose2>>& laser_poses,
-                                     double tolerance)
-{
-  // Frames are appended in arrival order; stamps may repeat after a bag restart, so sort a view.
-  std::vector<line_map_merging::KeyframeInfo> infos(frames.size());
-  std::map<std::uint64_t, linemap::Pose2> odom;
-  for (std::size_t i = 0; i < frames.size(); ++i)
-  {
-    infos[i] = {i, frames[i].stamp, frames[i].pose, {}};
-    if (frames[i].odom) odom[i] = *frames[i].odom;
-  }
-  gaps.fill(infos);  // a pose of a scan that was not stored must not move its stored neighbour
-  std::stable_sort(infos.begin(), infos.end(),
-                   [](const auto& a, const auto& b) { return a.stamp < b.stamp; });
-  std::map<std::uint64_t, linemap::Pose2> matched;
-  std::size_t unmatched = 0;
-  for (const auto& [stamp, pose] : laser_poses)
-  {
-    const auto k = line_map_merging::matchByStamp(infos, stamp, tolerance);
-    if (k)
-      matched[infos[*k].index] = pose;
-    else
-      ++unmatched;
-  }
-  for (const auto& [index, pose] : line_map_merging::correctKeyframes(infos, matched, odom))
-    frames[index].pose = pose;
-  return unmatched;
-}
-
 std::size_t MapEvaluator::applyTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses)
 {
-  const std::size_t unmatched = reregister(scans_, scan_gaps_, laser_poses, params_.stamp_tolerance);
-  reregister(segments_, segment_gaps_, laser_poses, params_.stamp_tolerance);
+  const auto nc =
+      line_map_merging::nodeCorrections(history_, laser_poses, params_.stamp_tolerance, params_.max_gap);
+  if (nc.corrections.empty()) return nc.unmatched;
+  for (std::vector<Frame>* frames : {&scans_, &segments_})
+    for (Frame& f : *frames)
+      f.pose = line_map_merging::correctionAt(nc.corrections, f.stamp, params_.correction) * continuous(f);
   table_dirty_ = true;
-  return unmatched;
+  return nc.unmatched;
 }
 
 MapMetrics MapEvaluator::evaluate(const std::vector<linemap::Segment2>& map)
@@ -154,8 +128,7 @@ void MapEvaluator::reset()
   segments_.clear();
   scan_stamps_.clear();
   segment_stamps_.clear();
-  scan_gaps_.clear();
-  segment_gaps_.clear();
+  history_.clear();
   scan_gate_ = line_map_merging::KeyframeGate(params_.gate);
   segment_gate_ = line_map_merging::KeyframeGate(params_.gate);
   table_ = LookupTable();

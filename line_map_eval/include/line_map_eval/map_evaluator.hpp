@@ -18,20 +18,23 @@
 #include "line_map_eval/map_statistics.hpp"
 #include "line_map_merging/fusion.hpp"
 #include "line_map_merging/keyframe_gate.hpp"
-#include "line_map_merging/trajectory_correction.hpp"
+#include "line_map_merging/trajectory_anchor.hpp"
 
 namespace line_map_eval
 {
 struct EvaluatorParams
 {
   line_map_merging::KeyframeGateParams gate;
-  double stamp_tolerance = 0.05;  ///< [s] trajectory pose <-> stored frame matching
+  double stamp_tolerance = 0.05;  ///< [s] trajectory node <-> scan matching
+  double max_gap = 1.0;           ///< [s] a node between two scans at most this far apart is interpolated
+  line_map_merging::CorrectionMode correction = line_map_merging::CorrectionMode::kNearest;
   LookupTableParams table;
   QualityParams quality;
   line_map_merging::FusionParams fusion;  ///< error assignment, redundant pairs, length coverage
   CoverageParams coverage;
 
-  /// Keys "keyframe_distance", "keyframe_angle", "stamp_tolerance", "eval/...", "fusion/...".
+  /// Keys "keyframe_distance", "keyframe_angle", "stamp_tolerance", "trajectory_max_gap",
+  /// "trajectory_correction", "eval/...", "fusion/...".
   static EvaluatorParams fromParams(const linemap::ParamSet& params);
 };
 
@@ -54,9 +57,10 @@ class MapEvaluator
   bool addSegments(double stamp, const linemap::Pose2& laser_pose, std::vector<linemap::Segment2> segments,
                    const std::optional<linemap::Pose2>& odom_pose = std::nullopt);
 
-  /// Re-registers every stored frame: `laser_poses` are (stamp, new laser pose) pairs; frames
-  /// matched by stamp take their pose, the others the interpolated correction of their matched
-  /// neighbours. Returns how many trajectory poses matched no stored frame.
+  /// Re-registers every stored frame on a trajectory of laser poses (map frame) at any stamps: as
+  /// the merger does (line_map_merging/trajectory_anchor.hpp), each node found among the scans and
+  /// segment sets seen gives the corrected map->odom there, and every frame takes that of its nearest
+  /// node (or the interpolation). Returns how many trajectory poses matched no scan seen.
   std::size_t applyTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses);
 
   /// Scores `map` (map frame) with computeMapMetrics; rebuilds the lookup table first when frames changed.
@@ -82,9 +86,8 @@ class MapEvaluator
   /// stamp -> pose).
   bool gateAccepts(const std::map<double, linemap::Pose2>& stored, line_map_merging::KeyframeGate& gate,
                    double stamp, const linemap::Pose2& pose) const;
-  static std::size_t reregister(std::vector<Frame>& frames, const line_map_merging::ScanGapTracker& gaps,
-                                const std::vector<std::pair<double, linemap::Pose2>>& laser_poses,
-                                double tolerance);
+  /// The laser pose in the frame where it is continuous: odometry when known, else the map.
+  static linemap::Pose2 continuous(const Frame& f) { return f.odom ? *f.odom : f.pose; }
 
   EvaluatorParams params_;
   line_map_merging::KeyframeGate scan_gate_;
@@ -92,7 +95,7 @@ class MapEvaluator
   std::vector<Frame> scans_;
   std::vector<Frame> segments_;
   std::map<double, linemap::Pose2> scan_stamps_, segment_stamps_;  // stored frames: stamp -> gate pose
-  line_map_merging::ScanGapTracker scan_gaps_, segment_gaps_;      // keyed by position in scans_ / segments_
+  line_map_merging::OdometryHistory history_;  // continuous laser pose of every scan and segment set seen
   LookupTable table_;
   std::vector<linemap::Vec2> table_points_;  // the registered scan points of table_ (point coverage)
   bool table_dirty_ = true;
