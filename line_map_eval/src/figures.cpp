@@ -226,8 +226,8 @@ void drawPanel(cairo_t* cr, const MapFigure& f, const FigureLayout& l, int panel
   cairo_clip(cr);
   if (f.lookup) drawLookup(cr, *f.lookup, l, panel);
   drawScanPoints(cr, f.scan_points, l, panel, raster_scale);
-  // Uncovered points larger than the grey ones: they are few and must stand out.
-  if (f.show_coverage) drawScanPoints(cr, f.uncovered_points, l, panel, raster_scale, kUncoveredOrange, 2.0);
+  // Uncovered points as large as the grey ones, so the picture shows their true share.
+  if (f.show_coverage) drawScanPoints(cr, f.uncovered_points, l, panel, raster_scale, kUncoveredOrange);
 
   // Redundant pairs under the map: a wide translucent band over both segments of each pair.
   if (f.show_coverage && !f.redundant_pairs.empty())
