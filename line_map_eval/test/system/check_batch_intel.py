@@ -39,6 +39,13 @@ class CheckBatchIntel(unittest.TestCase):
                 problems.append("%s: quality %.2f %% < %.2f %%" % (name, r["quality_pct"], b["min_quality_pct"]))
             if r["error_mm"] > b["max_error_mm"]:
                 problems.append("%s: error %.2f mm > %.2f mm" % (name, r["error_mm"], b["max_error_mm"]))
+            # A map must not score by leaving walls out.
+            for key in ("point_coverage_pct", "length_coverage_pct"):
+                if not band["min_" + key] <= r[key] <= 100.0:
+                    problems.append("%s: %s %.2f outside [%.1f, 100]" % (name, key, r[key], band["min_" + key]))
+            for key in ("redundant_pairs", "unassigned_originals"):
+                if not isinstance(r.get(key), int) or r[key] < 0:
+                    problems.append("%s: %s missing or negative: %r" % (name, key, r.get(key)))
         self.assertFalse(problems, "\n".join(problems))
 
 
