@@ -150,8 +150,10 @@ void loadTruth(Dataset& d, const Options& o)
   {
     throw std::runtime_error(file + ": cannot read ground truth: " + e.what());
   }
-  if (field<std::string>(root, "format", file) != "linemap_truth/1")
-    throw std::runtime_error(file + ": 'format' is not linemap_truth/1");
+  // Only the scans' poses and visible pieces are read: the same in /1 and /2 (whose `walls` are faces).
+  const std::string format = field<std::string>(root, "format", file);
+  if (format != "linemap_truth/2" && format != "linemap_truth/1")
+    throw std::runtime_error(file + ": 'format' is not linemap_truth/2");
   const YAML::Node scans = root["scans"];
   if (!scans || !scans.IsSequence()) throw std::runtime_error(file + ": missing 'scans'");
   if (scans.size() != d.ranges.size())

@@ -1,4 +1,4 @@
-// Ground truth: visible wall pieces per scan and the linemap_truth/1 YAML file.
+// Ground truth: visible face pieces per scan and the linemap_truth/2 YAML file.
 #include "line_map_eval/ground_truth.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -157,6 +157,11 @@ class TruthParser
   {
     if (!root.IsMap()) fail("(top level)", "expected a mapping", root);
     const YAML::Node format = require(root, "format", "format");
+    if (format.IsScalar() && format.Scalar() == "linemap_truth/1")
+      fail("format",
+           "linemap_truth/1 (thin, undirected walls) is no longer read: simulate the world again to write " +
+               std::string(kTruthFormat),
+           format);
     if (!format.IsScalar() || format.Scalar() != kTruthFormat)
       fail("format",
            std::string("expected ") + kTruthFormat + ", got '" + (format.IsScalar() ? format.Scalar() : "") +
@@ -175,6 +180,19 @@ class TruthParser
     t.laser.spurious = number(require(laser, "spurious", "laser/spurious"), "laser/spurious");
     t.base_to_laser = pose(require(root, "base_to_laser", "base_to_laser"), "base_to_laser");
     if (root["min_beams"]) t.min_beams = count(root["min_beams"], "min_beams");
+
+    const YAML::Node solids = require(root, "solids", "solids");
+    if (!solids.IsSequence()) fail("solids", "expected a list", solids);
+    for (std::size_t i = 0; i < solids.size(); ++i)
+    {
+      const std::string key = "solids[" + std::to_string(i) + "]";
+      if (!solids[i].IsMap()) fail(key, "expected a mapping with segment, thickness", solids[i]);
+      Wall w;
+      w.segment = segment(require(solids[i], "segment", key + "/segment"), key + "/segment");
+      w.thickness = number(require(solids[i], "thickness", key + "/thickness"), key + "/thickness");
+      if (!(w.thickness >= 0.0)) fail(key + "/thickness", "must be >= 0", solids[i]["thickness"]);
+      t.solids.push_back(w);
+    }
 
     const YAML::Node walls = require(root, "walls", "walls");
     if (!walls.IsSequence()) fail("walls", "expected a list", walls);
@@ -230,6 +248,13 @@ void writeGroundTruth(const GroundTruth& t, const std::string& path)
       << ", spurious: " << num(t.laser.spurious) << "}\n";
   out << "base_to_laser: " << list({t.base_to_laser.x, t.base_to_laser.y, t.base_to_laser.theta}) << "\n";
   out << "min_beams: " << t.min_beams << "\n";
+  out << "# the world's walls: centre line and thickness (0: thin, seen from both sides)\n";
+  out << "solids:" << (t.solids.empty() ? " []" : "") << "\n";
+  for (const auto& w : t.solids)
+    out << "  - {segment: "
+        << list({w.segment.start.x(), w.segment.start.y(), w.segment.end.x(), w.segment.end.y()})
+        << ", thickness: " << num(w.thickness) << "}\n";
+  out << "# the true lines: faces of the solids, directed with free space on the left\n";
   out << "walls:" << (t.walls.empty() ? " []" : "") << "\n";
   for (const auto& w : t.walls)
     out << "  - " << list({w.start.x(), w.start.y(), w.end.x(), w.end.y()}) << "\n";

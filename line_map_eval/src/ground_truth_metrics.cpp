@@ -1,6 +1,8 @@
+// Ground-truth metrics of a line map over the seen parts of the true faces.
 #include "line_map_eval/ground_truth_metrics.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -20,6 +22,11 @@ double undirectedAngle(const Segment2& a, const Segment2& b)
   return std::min(d, linemap::kPi - d);
 }
 
+double headingDifference(const Segment2& a, const Segment2& b, bool directed)
+{
+  return directed ? std::abs(linemap::normalizeAngle(a.heading() - b.heading())) : undirectedAngle(a, b);
+}
+
 void requirePositive(double v, const char* key)
 {
   if (!(v > 0.0) || !std::isfinite(v))
@@ -34,6 +41,41 @@ void checkFinite(const std::vector<Segment2>& segments, const char* what)
       throw std::invalid_argument(std::string("ground truth metrics: ") + what + " " + std::to_string(i) +
                                   " has non-finite coordinates");
 }
+
+/// A true corner and the face ends that meet there (end 0: a face's start, 1: its end).
+struct Corner
+{
+  Vec2 point = Vec2::Zero();
+  struct Meeting
+  {
+    std::size_t face_a, end_a, face_b, end_b;
+  };
+  std::vector<Meeting> meetings;
+};
+
+std::vector<Corner> cornersOf(const std::vector<Segment2>& walls, const GroundTruthParams& params)
+{
+  std::vector<Corner> corners;
+  for (std::size_t i = 0; i < walls.size(); ++i)
+    for (std::size_t j = i + 1; j < walls.size(); ++j)
+    {
+      if (undirectedAngle(walls[i], walls[j]) < params.corner_min_angle) continue;
+      for (std::size_t ea = 0; ea < 2; ++ea)
+        for (std::size_t eb = 0; eb < 2; ++eb)
+        {
+          const Vec2& a = ea == 0 ? walls[i].start : walls[i].end;
+          const Vec2& b = eb == 0 ? walls[j].start : walls[j].end;
+          if ((a - b).norm() > params.corner_tolerance) continue;
+          const Vec2 c = 0.5 * (a + b);
+          auto known =
+              std::find_if(corners.begin(), corners.end(),
+                           [&](const Corner& k) { return (k.point - c).norm() <= params.corner_tolerance; });
+          if (known == corners.end()) known = corners.insert(corners.end(), Corner{c, {}});
+          known->meetings.push_back({i, ea, j, eb});
+        }
+    }
+  return corners;
+}
 }  // namespace
 
 GroundTruthParams GroundTruthParams::fromParams(const linemap::ParamSet& params)
@@ -44,6 +86,8 @@ GroundTruthParams GroundTruthParams::fromParams(const linemap::ParamSet& params)
   p.sample_spacing = params.getDouble("eval/gt_sample_spacing", p.sample_spacing);
   p.association_angle = deg * params.getDouble("eval/gt_association_angle_deg", p.association_angle / deg);
   p.association_distance = params.getDouble("eval/gt_association_distance", p.association_distance);
+  p.directed = params.getBool("eval/gt_directed", p.directed);
+  p.min_seen_length = params.getDouble("eval/gt_min_seen_length", p.min_seen_length);
   p.corner_tolerance = params.getDouble("eval/gt_corner_tolerance", p.corner_tolerance);
   p.corner_min_angle = deg * params.getDouble("eval/gt_corner_min_angle_deg", p.corner_min_angle / deg);
   p.vertex_radius = params.getDouble("eval/gt_vertex_radius", p.vertex_radius);
@@ -58,103 +102,163 @@ void GroundTruthParams::validate() const
   requirePositive(association_distance, "eval/gt_association_distance");
   requirePositive(corner_tolerance, "eval/gt_corner_tolerance");
   requirePositive(vertex_radius, "eval/gt_vertex_radius");
-  if (!(association_angle >= 0.0) || association_angle > 0.5 * linemap::kPi)
-    throw linemap::ParameterError("parameter 'eval/gt_association_angle_deg' must be in [0, 90]");
+  const double max_angle = directed ? linemap::kPi : 0.5 * linemap::kPi;
+  if (!(association_angle >= 0.0) || association_angle > max_angle)
+    throw linemap::ParameterError(std::string("parameter 'eval/gt_association_angle_deg' must be in [0, ") +
+                                  (directed ? "180" : "90") + "]");
   if (!(corner_min_angle >= 0.0) || corner_min_angle > 0.5 * linemap::kPi)
     throw linemap::ParameterError("parameter 'eval/gt_corner_min_angle_deg' must be in [0, 90]");
+  if (!(min_seen_length >= 0.0) || !std::isfinite(min_seen_length))
+    throw linemap::ParameterError("parameter 'eval/gt_min_seen_length' must be >= 0, got " +
+                                  std::to_string(min_seen_length));
+}
+
+SeenParts seenParts(const GroundTruth& truth, double min_piece_length)
+{
+  SeenParts seen(truth.walls.size());
+  for (std::size_t k = 0; k < truth.scans.size(); ++k)
+    for (const VisibleWall& v : truth.scans[k].visible)
+    {
+      if (v.wall >= truth.walls.size())
+        throw std::invalid_argument("ground truth: scans[" + std::to_string(k) + "] sees wall " +
+                                    std::to_string(v.wall) + " of " + std::to_string(truth.walls.size()));
+      const Segment2& face = truth.walls[v.wall];
+      const double length = face.length();
+      const Vec2 u = (face.end - face.start) / length;
+      double a = u.dot(v.segment.start - face.start), b = u.dot(v.segment.end - face.start);
+      if (a > b) std::swap(a, b);
+      a = std::clamp(a, 0.0, length);
+      b = std::clamp(b, 0.0, length);
+      if (b - a >= min_piece_length && b > a) seen[v.wall].emplace_back(a, b);
+    }
+  for (auto& parts : seen)
+  {
+    std::sort(parts.begin(), parts.end());
+    std::size_t n = 0;
+    for (const auto& p : parts)
+      if (n > 0 && p.first <= parts[n - 1].second)
+        parts[n - 1].second = std::max(parts[n - 1].second, p.second);
+      else
+        parts[n++] = p;
+    parts.resize(n);
+  }
+  return seen;
 }
 
 std::vector<Vec2> findCorners(const std::vector<Segment2>& walls, const GroundTruthParams& params)
 {
-  std::vector<Vec2> corners;
-  for (std::size_t i = 0; i < walls.size(); ++i)
-    for (std::size_t j = i + 1; j < walls.size(); ++j)
-    {
-      if (undirectedAngle(walls[i], walls[j]) < params.corner_min_angle) continue;
-      for (const Vec2& a : {walls[i].start, walls[i].end})
-        for (const Vec2& b : {walls[j].start, walls[j].end})
-        {
-          if ((a - b).norm() > params.corner_tolerance) continue;
-          const Vec2 c = 0.5 * (a + b);
-          const bool known =
-              std::any_of(corners.begin(), corners.end(),
-                          [&](const Vec2& k) { return (k - c).norm() <= params.corner_tolerance; });
-          if (!known) corners.push_back(c);
-        }
-    }
-  return corners;
+  std::vector<Vec2> out;
+  for (const Corner& c : cornersOf(walls, params)) out.push_back(c.point);
+  return out;
 }
 
-GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
+GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls, const SeenParts& seen,
                                              const std::vector<Segment2>& map,
                                              const GroundTruthParams& params)
 {
   params.validate();
-  checkFinite(walls, "wall");
+  checkFinite(walls, "face");
   checkFinite(map, "map segment");
+  if (seen.size() != walls.size())
+    throw std::invalid_argument("ground truth metrics: seen parts for " + std::to_string(seen.size()) +
+                                " faces, but there are " + std::to_string(walls.size()));
   GroundTruthResult r;
-  double covered_length = 0.0, total_length = 0.0, vertex_sum = 0.0;
-  std::vector<const Segment2*> assoc;
+  double covered_length = 0.0, seen_total = 0.0, endpoint_sum = 0.0, vertex_sum = 0.0;
+  std::size_t endpoint_count = 0;
+  std::vector<std::vector<std::size_t>> assoc(walls.size());
+  // seen_end[face][0 / 1]: the face's start / end was seen.
+  std::vector<std::array<bool, 2>> seen_end(walls.size(), {false, false});
   for (std::size_t w = 0; w < walls.size(); ++w)
   {
     const Segment2& wall = walls[w];
-    WallScore score;
-    score.length = wall.length();
-    if (!(score.length > 0.0))
-      throw std::invalid_argument("ground truth metrics: wall " + std::to_string(w) + " has zero length");
-    assoc.clear();
-    for (const Segment2& m : map)
-      if (undirectedAngle(m, wall) <= params.association_angle &&
-          linemap::distanceToSegment(m.midpoint(), wall.start, wall.end) <= params.association_distance)
-        assoc.push_back(&m);
-    score.associated = assoc.size();
-
-    const std::size_t steps = static_cast<std::size_t>(std::ceil(score.length / params.sample_spacing));
-    std::size_t covered = 0;
-    for (std::size_t k = 0; k <= steps; ++k)
+    const double length = wall.length();
+    if (!(length > 0.0))
+      throw std::invalid_argument("ground truth metrics: face " + std::to_string(w) + " has zero length");
+    if (seen[w].empty())
     {
-      const Vec2 p =
-          wall.start + (static_cast<double>(k) / static_cast<double>(steps)) * (wall.end - wall.start);
-      for (const Segment2* m : assoc)
-        if (linemap::distanceToSegment(p, m->start, m->end) <= params.coverage_tolerance)
-        {
-          ++covered;
-          break;
-        }
+      ++r.unseen_walls;
+      continue;
     }
-    score.coverage = static_cast<double>(covered) / static_cast<double>(steps + 1);
+    WallScore score;
+    score.face = w;
+    score.length = length;
+    for (std::size_t m = 0; m < map.size(); ++m)
+      if (headingDifference(map[m], wall, params.directed) <= params.association_angle &&
+          linemap::distanceToSegment(map[m].midpoint(), wall.start, wall.end) <= params.association_distance)
+        assoc[w].push_back(m);
+    score.associated = assoc[w].size();
 
-    if (assoc.empty())
+    std::size_t samples = 0, covered = 0;
+    const Vec2 u = (wall.end - wall.start) / length;
+    for (const auto& [from, to] : seen[w])
+    {
+      score.seen_length += to - from;
+      const std::size_t steps = static_cast<std::size_t>(std::ceil((to - from) / params.sample_spacing));
+      for (std::size_t k = 0; k <= steps; ++k)
+      {
+        const double t =
+            steps == 0 ? from : from + (to - from) * static_cast<double>(k) / static_cast<double>(steps);
+        const Vec2 p = wall.start + t * u;
+        ++samples;
+        for (const std::size_t m : assoc[w])
+          if (linemap::distanceToSegment(p, map[m].start, map[m].end) <= params.coverage_tolerance)
+          {
+            ++covered;
+            break;
+          }
+      }
+    }
+    score.coverage = static_cast<double>(covered) / static_cast<double>(samples);
+
+    seen_end[w] = {seen[w].front().first <= params.coverage_tolerance,
+                   seen[w].back().second >= length - params.coverage_tolerance};
+    score.seen_endpoints = std::size_t(seen_end[w][0]) + std::size_t(seen_end[w][1]);
+    if (assoc[w].empty())
     {
       score.endpoint_error = std::numeric_limits<double>::infinity();
       ++r.undetected_walls;
     }
     else
-    {
-      for (const Vec2& end : {wall.start, wall.end})
+      for (std::size_t e = 0; e < 2; ++e)
       {
+        if (!seen_end[w][e]) continue;
+        const Vec2& end = e == 0 ? wall.start : wall.end;
         double nearest = std::numeric_limits<double>::infinity();
-        for (const Segment2* m : assoc)
-          nearest = std::min({nearest, (m->start - end).norm(), (m->end - end).norm()});
+        for (const std::size_t m : assoc[w])
+          nearest = std::min({nearest, (map[m].start - end).norm(), (map[m].end - end).norm()});
         score.endpoint_error = std::max(score.endpoint_error, nearest);
+        r.max_endpoint_error = std::max(r.max_endpoint_error, nearest);
+        endpoint_sum += nearest;
+        ++endpoint_count;
       }
-      r.max_endpoint_error = std::max(r.max_endpoint_error, score.endpoint_error);
-    }
-    covered_length += score.coverage * score.length;
-    total_length += score.length;
+    covered_length += score.coverage * score.seen_length;
+    seen_total += score.seen_length;
     r.walls.push_back(score);
   }
-  if (total_length > 0.0) r.coverage = covered_length / total_length;
+  if (seen_total > 0.0) r.coverage = covered_length / seen_total;
+  if (endpoint_count > 0) r.mean_endpoint_error = endpoint_sum / static_cast<double>(endpoint_count);
 
   std::size_t corners_with_endpoints = 0;
-  for (const Vec2& c : findCorners(walls, params))
+  std::vector<std::size_t> faces;
+  for (const Corner& c : cornersOf(walls, params))
   {
+    faces.clear();
+    for (const Corner::Meeting& m : c.meetings)
+      if (seen_end[m.face_a][m.end_a] && seen_end[m.face_b][m.end_b])
+        for (const std::size_t f : {m.face_a, m.face_b})
+          if (std::find(faces.begin(), faces.end(), f) == faces.end()) faces.push_back(f);
+    if (faces.empty()) continue;  // not seen
     CornerScore cs;
-    cs.corner = c;
-    for (const Segment2& m : map)
-      for (const Vec2& e : {m.start, m.end})
+    cs.corner = c.point;
+    // Each map endpoint once, however many of the corner's faces its segment is associated with.
+    std::vector<std::size_t> segments;
+    for (const std::size_t f : faces) segments.insert(segments.end(), assoc[f].begin(), assoc[f].end());
+    std::sort(segments.begin(), segments.end());
+    segments.erase(std::unique(segments.begin(), segments.end()), segments.end());
+    for (const std::size_t m : segments)
+      for (const Vec2& e : {map[m].start, map[m].end})
       {
-        const double d = (e - c).norm();
+        const double d = (e - c.point).norm();
         if (d > params.vertex_radius) continue;
         cs.vertex_error += d;
         ++cs.endpoints;
@@ -171,6 +275,22 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
   if (corners_with_endpoints > 0)
     r.mean_vertex_error = vertex_sum / static_cast<double>(corners_with_endpoints);
   return r;
+}
+
+GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth, const std::vector<Segment2>& map,
+                                             const GroundTruthParams& params)
+{
+  params.validate();
+  return evaluateAgainstGroundTruth(truth.walls, seenParts(truth, params.min_seen_length), map, params);
+}
+
+GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
+                                             const std::vector<Segment2>& map,
+                                             const GroundTruthParams& params)
+{
+  SeenParts all(walls.size());
+  for (std::size_t w = 0; w < walls.size(); ++w) all[w].emplace_back(0.0, walls[w].length());
+  return evaluateAgainstGroundTruth(walls, all, map, params);
 }
 
 }  // namespace line_map_eval

@@ -52,17 +52,19 @@ double Random::normal()
   return r * std::cos(phi);
 }
 
-RayHit castRay(const std::vector<Segment2>& walls, const Vec2& origin, double angle)
+RayHit castRay(const std::vector<Segment2>& faces, const Vec2& origin, double angle)
 {
   const Vec2 u(std::cos(angle), std::sin(angle));
   RayHit best{kInf, -1};
-  for (std::size_t i = 0; i < walls.size(); ++i)
+  for (std::size_t i = 0; i < faces.size(); ++i)
   {
     // Solve origin + t u = start + s e for (t, s) by Cramer's rule.
-    const Vec2 e = walls[i].end - walls[i].start;
+    const Vec2 e = faces[i].end - faces[i].start;
     const double denom = cross(u, e);
-    if (std::abs(denom) <= 1e-12 * e.norm()) continue;  // parallel: grazing rays see nothing
-    const Vec2 w = walls[i].start - origin;
+    // Seen from the left only: the ray must run against the outward normal, cross(u, e) > 0.
+    // Parallel: grazing rays see nothing.
+    if (denom <= 1e-12 * e.norm()) continue;
+    const Vec2 w = faces[i].start - origin;
     const double t = cross(w, e) / denom;
     const double s = cross(w, u) / denom;
     if (t > 1e-12 && s >= 0.0 && s <= 1.0 && t < best.range) best = {t, static_cast<int>(i)};
@@ -70,13 +72,13 @@ RayHit castRay(const std::vector<Segment2>& walls, const Vec2& origin, double an
   return best;
 }
 
-std::vector<RayHit> castScan(const std::vector<Segment2>& walls, const Pose2& laser_pose,
+std::vector<RayHit> castScan(const std::vector<Segment2>& faces, const Pose2& laser_pose,
                              const LaserModel& laser)
 {
   std::vector<RayHit> hits(laser.beams);
   const double a0 = laser_pose.theta + laser.angleMin(), da = laser.angleIncrement();
   for (std::size_t i = 0; i < laser.beams; ++i)
-    hits[i] = castRay(walls, laser_pose.translation(), a0 + static_cast<double>(i) * da);
+    hits[i] = castRay(faces, laser_pose.translation(), a0 + static_cast<double>(i) * da);
   return hits;
 }
 
@@ -248,7 +250,8 @@ SimulationResult simulate(const World& input, const SimulationOptions& options)
               laser.range_max, laser.sigma,      laser.spurious};
   gt.base_to_laser = laser.mounting;
   gt.min_beams = w.min_visible_beams;
-  gt.walls = w.walls;
+  gt.solids = w.walls;
+  gt.walls = faceSegments(wallFaces(w.walls));
 
   Random laser_rng(w.seed, 1);
   std::vector<int> hit_wall(laser.beams);
@@ -257,7 +260,7 @@ SimulationResult simulate(const World& input, const SimulationOptions& options)
   {
     const double stamp = options.start_time + static_cast<double>(k) * period;
     const Pose2 laser_pose = truth_base[k] * laser.mounting;
-    const std::vector<RayHit> hits = castScan(w.walls, laser_pose, laser);
+    const std::vector<RayHit> hits = castScan(gt.walls, laser_pose, laser);
     const std::vector<double> ranges = measureScan(hits, laser, laser_rng);
 
     RecordedScan scan;
@@ -271,12 +274,12 @@ SimulationResult simulate(const World& input, const SimulationOptions& options)
     for (std::size_t i = 0; i < laser.beams; ++i)
     {
       const bool valid =
-          hits[i].wall >= 0 && hits[i].range >= laser.range_min && hits[i].range < laser.range_max;
-      hit_wall[i] = valid ? hits[i].wall : -1;
+          hits[i].face >= 0 && hits[i].range >= laser.range_min && hits[i].range < laser.range_max;
+      hit_wall[i] = valid ? hits[i].face : -1;
       hit_range[i] = hits[i].range;
     }
     gt.scans.push_back({stamp, laser_pose,
-                        visibleWallPieces(w.walls, laser_pose, laser.angleMin(), laser.angleIncrement(),
+                        visibleWallPieces(gt.walls, laser_pose, laser.angleMin(), laser.angleIncrement(),
                                           hit_wall, hit_range, w.min_visible_beams)});
     if (options.on_scan) options.on_scan(k + 1, count);
   }

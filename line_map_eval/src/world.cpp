@@ -98,7 +98,8 @@ class WorldParser
     World w;
     w.source = source_;
     if (!root.IsDefined() || root.IsNull()) fail("(top level)", "the file is empty", root);
-    checkKeys(root, "", {"name", "seed", "walls", "path", "laser", "odometry", "min_visible_beams"});
+    checkKeys(root, "",
+              {"name", "seed", "walls", "wall_thickness", "path", "laser", "odometry", "min_visible_beams"});
 
     if (root["name"]) w.name = root["name"].as<std::string>();
     if (w.name.empty())
@@ -123,17 +124,36 @@ class WorldParser
       w.min_visible_beams = static_cast<std::size_t>(m);
     }
 
+    if (root["wall_thickness"])
+    {
+      w.wall_thickness = number(root["wall_thickness"], "wall_thickness");
+      if (w.wall_thickness < 0.0)
+        fail("wall_thickness", "must be >= 0, got " + toString(w.wall_thickness), root["wall_thickness"]);
+    }
     const YAML::Node walls = root["walls"];
-    if (!walls) fail("walls", "missing key (a list of [x1, y1, x2, y2] segments)", root);
+    if (!walls)
+      fail("walls", "missing key (a list of [x1, y1, x2, y2] or {segment: [x1, y1, x2, y2], thickness: t})",
+           root);
     if (!walls.IsSequence() || walls.size() == 0)
-      fail("walls", "expected a non-empty list of [x1, y1, x2, y2]", walls);
+      fail("walls", "expected a non-empty list of [x1, y1, x2, y2] or {segment: [...], thickness: t}", walls);
     for (std::size_t i = 0; i < walls.size(); ++i)
     {
       const std::string key = "walls[" + std::to_string(i) + "]";
-      const auto v = numbers(walls[i], key, 4, "[x1, y1, x2, y2]");
-      linemap::Segment2 s(Vec2(v[0], v[1]), Vec2(v[2], v[3]));
-      if (s.length() <= 1e-9) fail(key, "the wall has zero length", walls[i]);
-      w.walls.push_back(s);
+      Wall wall;
+      wall.thickness = w.wall_thickness;
+      const bool with_thickness = walls[i].IsMap();
+      if (with_thickness)
+      {
+        checkKeys(walls[i], key, {"segment", "thickness"});
+        if (!walls[i]["segment"]) fail(key + "/segment", "missing key ([x1, y1, x2, y2])", walls[i]);
+        optionalNumber(walls[i], key, "thickness", wall.thickness, 0.0, false);
+      }
+      // (A new Node, not an assignment: assigning a yaml-cpp Node overwrites the node it refers to.)
+      const YAML::Node at = with_thickness ? walls[i]["segment"] : walls[i];
+      const auto v = numbers(at, with_thickness ? key + "/segment" : key, 4, "[x1, y1, x2, y2]");
+      wall.segment = linemap::Segment2(Vec2(v[0], v[1]), Vec2(v[2], v[3]));
+      if (wall.segment.length() <= 1e-9) fail(key, "the wall has zero length", walls[i]);
+      w.walls.push_back(wall);
     }
 
     const YAML::Node path = root["path"];
@@ -261,6 +281,10 @@ void validateWorld(const World& w)
   const auto fail = [&](const std::string& key, const std::string& problem)
   { throw std::runtime_error(w.source + ": " + key + ": " + problem); };
   if (w.walls.empty()) fail("walls", "no walls");
+  if (!(w.wall_thickness >= 0.0)) fail("wall_thickness", "must be >= 0");
+  for (std::size_t k = 0; k < w.walls.size(); ++k)
+    if (!(w.walls[k].thickness >= 0.0) || !std::isfinite(w.walls[k].thickness))
+      fail("walls[" + std::to_string(k) + "]/thickness", "must be finite and >= 0");
   if (w.path.waypoints.size() < 2) fail("path/waypoints", "at least 2 waypoints are needed");
   if (!(w.path.speed > 0.0) || !(w.path.turn_rate > 0.0) || !(w.path.scan_period > 0.0))
     fail("path", "speed, turn_rate and scan_period must be > 0");
@@ -276,12 +300,14 @@ void validateWorld(const World& w)
     const std::size_t j = (i + 1) % wp.size();
     for (std::size_t k = 0; k < w.walls.size(); ++k)
     {
-      const double d = segmentDistance(wp[i], wp[j], w.walls[k].start, w.walls[k].end);
+      const Wall& wall = w.walls[k];
+      const double d =
+          segmentDistance(wp[i], wp[j], wall.segment.start, wall.segment.end) - 0.5 * wall.thickness;
       if (d < w.path.clearance)
       {
         std::ostringstream msg;
-        msg << "the leg from waypoint " << i << " to waypoint " << j << " passes " << d << " m from walls["
-            << k << "] (path/clearance is " << w.path.clearance << " m)";
+        msg << "the leg from waypoint " << i << " to waypoint " << j << " passes " << d
+            << " m from the surface of walls[" << k << "] (path/clearance is " << w.path.clearance << " m)";
         fail("path/waypoints[" + std::to_string(i) + "]", msg.str());
       }
     }

@@ -1,4 +1,5 @@
-// Coverage, endpoint error and vertex accuracy against true walls, on a hand-made case.
+// Coverage, endpoint error and vertex accuracy against true faces, on hand-made cases: every face
+// seen in full, and faces seen only in part (what a robot glimpses through a door).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +11,7 @@ using line_map_eval::evaluateAgainstGroundTruth;
 using line_map_eval::findCorners;
 using line_map_eval::GroundTruthParams;
 using line_map_eval::GroundTruthResult;
+using line_map_eval::SeenParts;
 using linemap::Segment2;
 using linemap::Vec2;
 
@@ -112,4 +114,97 @@ TEST(GroundTruthMetrics, BadInput)
   const GroundTruthParams p = GroundTruthParams::fromParams(ps);
   EXPECT_DOUBLE_EQ(p.vertex_radius, 0.5);
   EXPECT_NEAR(p.association_angle, 5.0 * linemap::kPi / 180.0, 1e-15);
+}
+
+TEST(GroundTruthMetrics, OnlyTheSeenPartsCount)
+{
+  // Face F: 10 m along x (free side up, +y on its left). The scans saw [2, 5] and [6, 10]; face G,
+  // 3 m up from F's end, was seen in full; face H never. Map: M1 over [2, 5], M2 over [6, 9.8]
+  // 2 cm off, both directed like F; M3 on F's line but directed the other way (the far face of a
+  // wall drawn onto this one) and M4 along G.
+  const std::vector<Segment2> faces = {Segment2(Vec2(0, 0), Vec2(10, 0)), Segment2(Vec2(10, 0), Vec2(10, 3)),
+                                       Segment2(Vec2(20, 0), Vec2(25, 0))};
+  const SeenParts seen = {{{2.0, 5.0}, {6.0, 10.0}}, {{0.0, 3.0}}, {}};
+  const std::vector<Segment2> map = {
+      Segment2(Vec2(2, 0), Vec2(5, 0)),            // M1
+      Segment2(Vec2(6, 0.02), Vec2(9.8, 0.02)),    // M2
+      Segment2(Vec2(5, 0), Vec2(0, 0)),            // M3: opposite direction
+      Segment2(Vec2(10, 0.105), Vec2(10, 2.895)),  // M4 on G
+  };
+  const GroundTruthResult r = evaluateAgainstGroundTruth(faces, seen, map, defaults());
+  ASSERT_EQ(r.walls.size(), 2u);  // H is not scored
+  EXPECT_EQ(r.unseen_walls, 1u);
+  EXPECT_EQ(r.undetected_walls, 0u);
+
+  // F: M1 and M2 associated (directed), M3 not. Samples: [2, 5] every 1 cm, 301, all within M1;
+  // [6, 10], 401, within 5 cm of M2 while x <= 9.8 + sqrt(0.05^2 - 0.02^2) = 9.8458: x = 6 .. 9.84,
+  // 385. Only F's end is seen (the first seen part begins 2 m from its start): error 0.2 m to M2's
+  // end, at distance hypot(0.2, 0.02).
+  const auto& f = r.walls[0];
+  EXPECT_EQ(f.face, 0u);
+  EXPECT_EQ(f.associated, 2u);
+  EXPECT_DOUBLE_EQ(f.seen_length, 7.0);
+  EXPECT_NEAR(f.coverage, (301.0 + 385.0) / (301.0 + 401.0), 1e-12);
+  EXPECT_EQ(f.seen_endpoints, 1u);
+  EXPECT_NEAR(f.endpoint_error, std::hypot(0.2, 0.02), 1e-12);
+
+  // G: M4 on its line, 10.5 cm short at both ends: samples y = 0.06 .. 2.94 covered, 289 of 301;
+  // both ends seen: (10, 0) to M4's start 0.105 m, (10, 3) to M4's end 0.105 m.
+  const auto& g = r.walls[1];
+  EXPECT_EQ(g.face, 1u);
+  EXPECT_NEAR(g.coverage, 289.0 / 301.0, 1e-12);
+  EXPECT_EQ(g.seen_endpoints, 2u);
+  EXPECT_NEAR(g.endpoint_error, 0.105, 1e-12);
+
+  EXPECT_NEAR(r.max_endpoint_error, std::hypot(0.2, 0.02), 1e-12);
+  EXPECT_NEAR(r.mean_endpoint_error, (std::hypot(0.2, 0.02) + 0.105 + 0.105) / 3.0, 1e-12);
+  EXPECT_NEAR(r.coverage, (7.0 * f.coverage + 3.0 * g.coverage) / 10.0, 1e-12);
+
+  // The corner (10, 0): F's end and G's start, both seen. Its vertices are the endpoints of the
+  // segments associated with F or G within 0.3 m: M2's end (0.2010 m) and M4's start (0.105 m).
+  ASSERT_EQ(r.corners.size(), 1u);
+  EXPECT_EQ(r.corners[0].endpoints, 2u);
+  EXPECT_NEAR(r.corners[0].vertex_error, std::hypot(0.2, 0.02) + 0.105, 1e-12);
+
+  // Scored over the whole faces instead, F's unseen start would cost 2 m, H would be undetected,
+  // and F's coverage would drop to the seen share: what the old metric reported.
+  const GroundTruthResult whole = evaluateAgainstGroundTruth(faces, map, defaults());
+  EXPECT_NEAR(whole.max_endpoint_error, 2.0, 1e-12);
+  EXPECT_EQ(whole.undetected_walls, 1u);
+
+  // Undirected association takes M3 in (adding nothing: the seen [2, 5] is M1's already).
+  GroundTruthParams undirected = defaults();
+  undirected.directed = false;
+  const GroundTruthResult u = evaluateAgainstGroundTruth(faces, seen, map, undirected);
+  EXPECT_EQ(u.walls[0].associated, 3u);
+  EXPECT_NEAR(u.walls[0].coverage, (301.0 + 385.0) / (301.0 + 401.0), 1e-12);  // M3 only adds [2, 5] again
+
+  // A corner whose second face was not seen at its end is no seen corner.
+  const SeenParts half = {{{6.0, 10.0}}, {{1.0, 3.0}}, {}};
+  EXPECT_TRUE(evaluateAgainstGroundTruth(faces, half, map, defaults()).corners.empty());
+  EXPECT_THROW(evaluateAgainstGroundTruth(faces, SeenParts(2), map, defaults()), std::invalid_argument);
+}
+
+TEST(GroundTruthMetrics, SeenPartsAreTheUnionOfLongEnoughPieces)
+{
+  line_map_eval::GroundTruth truth;
+  truth.walls = {Segment2(Vec2(0, 0), Vec2(10, 0)), Segment2(Vec2(0, 5), Vec2(0, 0))};
+  const auto piece = [](std::size_t wall, double x0, double y0, double x1, double y1) {
+    return line_map_eval::VisibleWall{wall, Segment2(Vec2(x0, y0), Vec2(x1, y1)), 10};
+  };
+  truth.scans.resize(2);
+  truth.scans[0].visible = {piece(0, 1, 0, 3, 0), piece(1, 0, 4, 0, 3.7)};  // the second: 0.3 m
+  truth.scans[1].visible = {piece(0, 4, 0, 2.5, 0), piece(0, 6, 0, 9, 0), piece(1, 0, 2, 0, 0)};
+  const SeenParts s = line_map_eval::seenParts(truth, 0.6);
+  ASSERT_EQ(s.size(), 2u);
+  ASSERT_EQ(s[0].size(), 2u);  // [1, 3] and [2.5, 4] overlap: [1, 4]; then [6, 9]
+  EXPECT_DOUBLE_EQ(s[0][0].first, 1.0);
+  EXPECT_DOUBLE_EQ(s[0][0].second, 4.0);
+  EXPECT_DOUBLE_EQ(s[0][1].first, 6.0);
+  EXPECT_DOUBLE_EQ(s[0][1].second, 9.0);
+  // Face 1 runs from (0, 5) down: the 0.3 m glimpse is dropped, (0, 2) -> (0, 0) is [3, 5].
+  ASSERT_EQ(s[1].size(), 1u);
+  EXPECT_DOUBLE_EQ(s[1][0].first, 3.0);
+  EXPECT_DOUBLE_EQ(s[1][0].second, 5.0);
+  EXPECT_EQ(line_map_eval::seenParts(truth, 0.0)[1].size(), 2u);  // without the minimum it stays
 }

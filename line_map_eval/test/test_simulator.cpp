@@ -67,19 +67,19 @@ TEST(RayCasting, SquareRoomHandComputedRanges)
   const Vec2 o(1.0, 0.5);
   // 0 deg: the wall x = 4 at (4, 0.5): 4 - 1 = 3.
   EXPECT_NEAR(castRay(walls, o, 0.0).range, 3.0, 1e-12);
-  EXPECT_EQ(castRay(walls, o, 0.0).wall, 1);
+  EXPECT_EQ(castRay(walls, o, 0.0).face, 1);
   // 90 deg: the wall y = 4 at (1, 4): 4 - 0.5 = 3.5.
   EXPECT_NEAR(castRay(walls, o, kPi / 2).range, 3.5, 1e-12);
-  EXPECT_EQ(castRay(walls, o, kPi / 2).wall, 2);
+  EXPECT_EQ(castRay(walls, o, kPi / 2).face, 2);
   // 180 deg: the wall x = 0 at (0, 0.5): 1.
   EXPECT_NEAR(castRay(walls, o, kPi).range, 1.0, 1e-12);
-  EXPECT_EQ(castRay(walls, o, kPi).wall, 3);
+  EXPECT_EQ(castRay(walls, o, kPi).face, 3);
   // -90 deg: the wall y = 0 at (1, 0): 0.5.
   EXPECT_NEAR(castRay(walls, o, -kPi / 2).range, 0.5, 1e-12);
-  EXPECT_EQ(castRay(walls, o, -kPi / 2).wall, 0);
+  EXPECT_EQ(castRay(walls, o, -kPi / 2).face, 0);
   // 45 deg: x = 4 is reached at t = 3 sqrt 2 (y = 3.5 < 4), before y = 4 at t = 3.5 sqrt 2.
   EXPECT_NEAR(castRay(walls, o, kPi / 4).range, 3.0 * std::sqrt(2.0), 1e-12);
-  EXPECT_EQ(castRay(walls, o, kPi / 4).wall, 1);
+  EXPECT_EQ(castRay(walls, o, kPi / 4).face, 1);
   // 135 deg: x = 0 at t = sqrt 2 (y = 1.5).
   EXPECT_NEAR(castRay(walls, o, 3 * kPi / 4).range, std::sqrt(2.0), 1e-12);
   // -45 deg: y = 0 at t = 0.5 sqrt 2 (x = 1.5).
@@ -90,7 +90,7 @@ TEST(RayCasting, SquareRoomHandComputedRanges)
   // From outside, looking away: no wall.
   const RayHit miss = castRay(walls, Vec2(5, 5), kPi / 4);
   EXPECT_TRUE(std::isinf(miss.range));
-  EXPECT_EQ(miss.wall, -1);
+  EXPECT_EQ(miss.face, -1);
 }
 
 TEST(RayCasting, ScanAnglesFollowTheLaserHeading)
@@ -137,7 +137,8 @@ TEST(Simulator, NoiselessEndpointsLieOnTheNearestWall)
     const Pose2 expected = sim.recording.keyframes[k].pose * w.laser.mounting;
     EXPECT_NEAR(pose.x, expected.x, 1e-12);
     EXPECT_NEAR(pose.y, expected.y, 1e-12);
-    const std::vector<double> ranges = measureScan(castScan(w.walls, pose, w.laser), w.laser, unused);
+    const std::vector<Segment2>& faces = sim.truth.walls;
+    const std::vector<double> ranges = measureScan(castScan(faces, pose, w.laser), w.laser, unused);
     for (std::size_t i = 0; i < ranges.size(); ++i)
     {
       const float recorded = sim.recording.scans[k].ranges[i];
@@ -150,14 +151,22 @@ TEST(Simulator, NoiselessEndpointsLieOnTheNearestWall)
       const double a = pose.theta + w.laser.angleMin() + i * w.laser.angleIncrement();
       const Vec2 end = pose.translation() + ranges[i] * Vec2(std::cos(a), std::sin(a));
       double nearest = std::numeric_limits<double>::infinity();
-      for (const auto& s : w.walls)
+      for (const auto& s : faces)
         nearest = std::min(nearest, linemap::distanceToSegment(end, s.start, s.end));
       ASSERT_LT(nearest, 1e-9) << "scan " << k << " beam " << i;
-      // Nothing in between: the beam stopped at the first wall.
+      // Nothing in between: the beam stopped at the first face, and never inside a solid wall.
       const Vec2 before = pose.translation() + (ranges[i] - 1e-6) * Vec2(std::cos(a), std::sin(a));
-      for (std::size_t j = 0; j < w.walls.size(); ++j)
-        ASSERT_FALSE(crosses(pose.translation(), before, w.walls[j].start, w.walls[j].end))
-            << "scan " << k << " beam " << i << " passes through wall " << j;
+      for (std::size_t j = 0; j < faces.size(); ++j)
+        ASSERT_FALSE(crosses(pose.translation(), before, faces[j].start, faces[j].end))
+            << "scan " << k << " beam " << i << " passes through face " << j;
+      for (const Wall& wall : w.walls)
+      {
+        const Vec2 u = (wall.segment.end - wall.segment.start).normalized(), q = before - wall.segment.start;
+        const double along = u.dot(q), across = u.x() * q.y() - u.y() * q.x();
+        ASSERT_FALSE(along > 0.0 && along < wall.segment.length() &&
+                     std::abs(across) < 0.5 * wall.thickness - 1e-9)
+            << "scan " << k << " beam " << i << " ends inside a solid wall";
+      }
       ++valid;
     }
   }
@@ -219,7 +228,7 @@ std::vector<double> rangeErrors(double sigma, double spurious)
   std::vector<double> errors;
   for (std::size_t k = 0; k < sim.truth.scans.size(); ++k)
   {
-    const auto hits = castScan(sim.world.walls, sim.truth.scans[k].pose, sim.world.laser);
+    const auto hits = castScan(sim.truth.walls, sim.truth.scans[k].pose, sim.world.laser);
     for (std::size_t i = 0; i < hits.size(); ++i)
       errors.push_back(double(sim.recording.scans[k].ranges[i]) - hits[i].range);
   }
@@ -345,7 +354,7 @@ TEST(GroundTruth, HandComputedVisiblePieces)
   std::vector<double> range;
   for (const auto& h : hits)
   {
-    wall.push_back(h.wall);
+    wall.push_back(h.face);
     range.push_back(h.range);
   }
   const auto vis = visibleWallPieces(walls, pose, laser.angleMin(), laser.angleIncrement(), wall, range, 5);
@@ -409,6 +418,13 @@ TEST(GroundTruth, FileRoundTripAndPiecesOnTheirWalls)
   EXPECT_EQ(r.base_to_laser.x, t.base_to_laser.x);
   EXPECT_EQ(r.base_to_laser.theta, t.base_to_laser.theta);
   EXPECT_EQ(r.min_beams, t.min_beams);
+  ASSERT_EQ(r.solids.size(), t.solids.size());
+  for (std::size_t i = 0; i < t.solids.size(); ++i)
+  {
+    EXPECT_EQ(r.solids[i].segment.start, t.solids[i].segment.start);
+    EXPECT_EQ(r.solids[i].segment.end, t.solids[i].segment.end);
+    EXPECT_EQ(r.solids[i].thickness, t.solids[i].thickness);
+  }
   ASSERT_EQ(r.walls.size(), t.walls.size());
   for (std::size_t i = 0; i < t.walls.size(); ++i)
   {
@@ -429,9 +445,37 @@ TEST(GroundTruth, FileRoundTripAndPiecesOnTheirWalls)
 
 TEST(GroundTruth, ReaderNamesFileAndKey)
 {
-  TempFile file("bad_truth.yaml",
-                "format: linemap_truth/1\nworld: x\nlaser: {beams: 3, angle_min: 0, angle_increment: 0.1, "
-                "range_max: 30, sigma: 0, spurious: 0}\nbase_to_laser: [0, 0]\nwalls: []\nscans: []\n");
+  const std::string laser =
+      "laser: {beams: 3, angle_min: 0, angle_increment: 0.1, range_max: 30, sigma: 0, "
+      "spurious: 0}\n";
+  // A file of the thin-wall format is refused with what to do.
+  TempFile old_format("old_truth.yaml", "format: linemap_truth/1\nworld: x\n" + laser +
+                                            "base_to_laser: [0, 0, 0]\nwalls: []\nscans: []\n");
+  try
+  {
+    readGroundTruth(old_format.path);
+    FAIL() << "accepted linemap_truth/1";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("simulate the world again"), std::string::npos) << e.what();
+  }
+  TempFile thickness("bad_thickness.yaml",
+                     "format: linemap_truth/2\nworld: x\n" + laser +
+                         "base_to_laser: [0, 0, 0]\nsolids:\n  - {segment: [0, 0, 1, 0], "
+                         "thickness: -1}\nwalls: []\nscans: []\n");
+  try
+  {
+    readGroundTruth(thickness.path);
+    FAIL() << "accepted a negative thickness";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("solids[0]/thickness"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("line 6"), std::string::npos) << e.what();
+  }
+  TempFile file("bad_truth.yaml", "format: linemap_truth/2\nworld: x\n" + laser +
+                                      "base_to_laser: [0, 0]\nsolids: []\nwalls: []\nscans: []\n");
   try
   {
     readGroundTruth(file.path);
@@ -488,6 +532,23 @@ TEST(World, ErrorsNameFileKeyAndLine)
   EXPECT_NE(blocked.find("path/waypoints[1]"), std::string::npos) << blocked;
   EXPECT_NE(blocked.find("walls[0]"), std::string::npos) << blocked;
 
+  const std::string thick = worldError(
+      std::string("walls:\n  - [0, 0, 4, 0]\n  - {segment: [0, 0, 0, 4], thickness: -0.1}\n") + kPath);
+  EXPECT_NE(thick.find("walls[1]/thickness"), std::string::npos) << thick;
+  EXPECT_NE(thick.find("line 3"), std::string::npos) << thick;
+  const std::string wall_typo =
+      worldError(std::string("walls:\n  - {segment: [0, 0, 4, 0], thicknes: 0.1}\n") + kPath);
+  EXPECT_NE(wall_typo.find("walls[0]/thicknes"), std::string::npos) << wall_typo;
+  const std::string world_thick =
+      worldError(std::string("wall_thickness: -1\nwalls: [[0, 0, 4, 0]]\n") + kPath);
+  EXPECT_NE(world_thick.find("wall_thickness"), std::string::npos) << world_thick;
+  // The path keeps its clearance from the wall's surface: 0.95 m from the centre line y = 0 of a
+  // 1.6 m thick wall is 0.15 m from its face, below the default 0.2 m.
+  const std::string close =
+      worldError(std::string("wall_thickness: 1.6\nwalls: [[0, 0, 4, 0]]\npath:\n  "
+                             "waypoints: [[1, 0.95], [3, 0.95], [3, 3]]\n"));
+  EXPECT_NE(close.find("surface of walls[0]"), std::string::npos) << close;
+
   const std::string syntax = worldError("walls: [[0, 0, 4, 0]\n");
   EXPECT_NE(syntax.find("line"), std::string::npos) << syntax;
 
@@ -505,6 +566,12 @@ TEST(World, ShippedWorldsLoad)
   const World l = loadWorld(kWorlds + "loop.yaml");
   EXPECT_GT(pathLength(l.path), 150.0);
   EXPECT_NO_THROW(squareRoomWorld());
+  // Walls are 10 cm solids unless the entry says otherwise; the furniture outlines are thin.
+  EXPECT_EQ(o.wall_thickness, 0.10);
+  EXPECT_EQ(o.walls.front().thickness, 0.10);
+  EXPECT_EQ(o.walls.back().thickness, 0.0);
+  const World plain = parseWorld(std::string("walls: [[0, 0, 4, 0]]\n") + kPath, "plain");
+  EXPECT_EQ(plain.walls.front().thickness, kDefaultWallThickness);
 }
 
 TEST(World, LoopFailsToCloseOnOdometry)

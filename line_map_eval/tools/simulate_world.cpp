@@ -27,8 +27,9 @@ Simulates one lap of the world's closed path and writes
   OUT.bag         scan (sensor_msgs/LaserScan), tf odom->base_link (drifting odometry),
                   tf_static base_link->laser, tf map->odom, optimized_trajectory (nav_msgs/Path:
                   the TRUE base poses of every scan, emitted once at the end = the loop closure)
-  OUT.truth.yaml  ground truth (format linemap_truth/1): true walls, true laser pose and the
-                  visible wall pieces of every scan
+  OUT.truth.yaml  ground truth (format linemap_truth/2): the walls (solids with thickness), the
+                  true lines (their faces, free side on the left), and per scan the true laser
+                  pose and the visible face pieces
 
 options (override the world file):
   --seed N           random seed (noise, spurious readings, odometry drift)

@@ -1,6 +1,11 @@
-// Ground truth of a simulated recording (ROS-free): the true walls and, per scan,
-// the true laser pose and the wall pieces the scan sees. Stored next to the bag as
-// OUT.truth.yaml (format linemap_truth/1) for the map metrics.
+// Ground truth of a simulated recording (ROS-free): the true lines (the faces of the walls)
+// and, per scan, the true laser pose and the face pieces the scan sees. Stored next to the bag
+// as OUT.truth.yaml (format linemap_truth/2) for the map metrics.
+//
+// linemap_truth/2 (since walls have thickness): `walls` lists the true FACES, each directed with
+// free space on its left (the project's segment orientation), and `solids` the world's walls
+// (centre line and thickness) they come from; `visible[].wall` indexes `walls`. In
+// linemap_truth/1 `walls` were the world's thin, undirected walls; such files are refused.
 #pragma once
 
 #include <cstddef>
@@ -8,18 +13,19 @@
 #include <vector>
 
 #include "line_extraction/geometry.hpp"
+#include "line_map_eval/wall_faces.hpp"
 
 namespace line_map_eval
 {
-inline constexpr const char* kTruthFormat = "linemap_truth/1";
+inline constexpr const char* kTruthFormat = "linemap_truth/2";
 
-/// The part of wall `wall` between the extreme beam hits of one scan, map frame,
-/// directed like the wall.
+/// The part of face `wall` between the extreme beam hits of one scan, map frame,
+/// directed like the face.
 struct VisibleWall
 {
   std::size_t wall = 0;
   linemap::Segment2 segment;
-  std::size_t beams = 0;  ///< beams whose true ray ends on this wall
+  std::size_t beams = 0;  ///< beams whose true ray ends on this face
 
   bool operator==(const VisibleWall& o) const
   {
@@ -51,13 +57,15 @@ struct GroundTruth
   std::string world;
   TruthLaser laser;
   linemap::Pose2 base_to_laser;
-  std::size_t min_beams = 1;  ///< hits a wall needs to be listed as visible
+  std::size_t min_beams = 1;  ///< hits a face needs to be listed as visible
+  std::vector<Wall> solids;   ///< the world's walls (centre lines and thicknesses)
+  /// The true lines: the faces of `solids` (wallFaces()), free side on the left.
   std::vector<linemap::Segment2> walls;
   std::vector<TruthScan> scans;
 };
 
-/// The wall pieces one scan sees: `hit_wall[i]` is the wall beam i's noiseless ray ends on
-/// (-1: none or beyond range) and `hit_range[i]` its true range; beam i points at
+/// The wall pieces one scan sees: `hit_wall[i]` is the wall (face) beam i's noiseless ray ends
+/// on (-1: none or beyond range) and `hit_range[i]` its true range; beam i points at
 /// laser_pose.theta + angle_min + i * angle_increment. A wall hit by >= min_beams beams is
 /// listed with the span between its extreme hit points, sorted by wall index.
 std::vector<VisibleWall> visibleWallPieces(const std::vector<linemap::Segment2>& walls,
@@ -72,7 +80,7 @@ std::string truthPathForBag(const std::string& bag_path);
 /// Throws std::runtime_error naming the file on failure.
 void writeGroundTruth(const GroundTruth& truth, const std::string& path);
 
-/// Reads a linemap_truth/1 file; throws std::runtime_error naming the file and key on bad input.
+/// Reads a linemap_truth/2 file; throws std::runtime_error naming the file and key on bad input.
 GroundTruth readGroundTruth(const std::string& path);
 
 }  // namespace line_map_eval

@@ -1,75 +1,112 @@
-// Metrics of a line map against the true walls of a simulated world (ROS-free): per wall
-// coverage and endpoint error, and the vertex accuracy at the true corners.
+// Metrics of a line map against the true lines of a simulated world (ROS-free): per face
+// coverage and endpoint error, and the vertex accuracy at the true corners -- all over what the
+// robot SAW. A map can only hold what its scans showed: the parts of a wall never in sight, the
+// back of a cabinet, the far end of an outer wall glimpsed through a door, are no map error.
 #pragma once
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 #include "line_extraction/geometry.hpp"
 #include "line_extraction/params.hpp"
+#include "line_map_eval/ground_truth.hpp"
 
 namespace line_map_eval
 {
 /// Keys "eval/gt_..." (see config/line_map_eval.yaml).
 struct GroundTruthParams
 {
-  double coverage_tolerance = 0.05;                      ///< a wall sample is covered within this [m]
-  double sample_spacing = 0.01;                          ///< distance between wall samples [m]
-  double association_angle = 10.0 * linemap::kPi / 180;  ///< map segment vs wall, undirected [rad]
-  double association_distance = 0.2;                     ///< map segment midpoint to the wall [m]
-  double corner_tolerance = 0.01;                        ///< wall endpoints this close meet [m]
-  double corner_min_angle = 20.0 * linemap::kPi / 180;   ///< walls meeting straighter are no corner [rad]
-  double vertex_radius = 0.3;                            ///< map endpoints within this of a corner [m]
+  double coverage_tolerance = 0.05;                      ///< a face sample is covered within this [m]
+  double sample_spacing = 0.01;                          ///< distance between face samples [m]
+  double association_angle = 10.0 * linemap::kPi / 180;  ///< map segment vs face [rad]
+  double association_distance = 0.2;                     ///< map segment midpoint to the face [m]
+  /// Compare directed headings (segments and faces share the free-side-left orientation), so a
+  /// segment on one face of a wall never counts for the other face 10 cm away.
+  bool directed = true;
+  double min_seen_length = 0.6;    ///< a visible piece shorter than this is no sight of the face [m]
+  double corner_tolerance = 0.01;  ///< face endpoints this close meet [m]
+  double corner_min_angle = 20.0 * linemap::kPi / 180;  ///< faces meeting straighter are no corner [rad]
+  double vertex_radius = 0.3;                           ///< map endpoints within this of a corner [m]
 
   static GroundTruthParams fromParams(const linemap::ParamSet& params);
   void validate() const;
 };
 
+/// Per face, the parts of it the scans saw: sorted, disjoint [from, to] intervals in metres from
+/// the face's start.
+using SeenParts = std::vector<std::vector<std::pair<double, double>>>;
+
+/// The union, per face of `truth.walls`, of the visible pieces of every scan that are at least
+/// `min_piece_length` long (an extractor makes no segment of a shorter glimpse).
+SeenParts seenParts(const GroundTruth& truth, double min_piece_length);
+
 struct WallScore
 {
-  double length = 0.0;  ///< [m]
-  double coverage =
-      0.0;  ///< fraction of the wall's samples within coverage_tolerance of an associated segment
-  /// Larger of the two wall endpoints' distances to the nearest endpoint of an associated map
-  /// segment [m]; +infinity when no map segment is associated.
+  std::size_t face = 0;      ///< index into the faces
+  double length = 0.0;       ///< of the face [m]
+  double seen_length = 0.0;  ///< of its seen parts [m]
+  /// Fraction of the samples of the seen parts within coverage_tolerance of an associated segment.
+  double coverage = 0.0;
+  /// Largest distance from a SEEN face endpoint to the nearest endpoint of an associated map
+  /// segment [m]; 0 when neither end was seen, +infinity when no map segment is associated.
   double endpoint_error = 0.0;
-  std::size_t associated = 0;  ///< map segments associated with the wall
+  std::size_t seen_endpoints = 0;  ///< 0, 1 or 2
+  std::size_t associated = 0;      ///< map segments associated with the face
 };
 
 struct CornerScore
 {
   linemap::Vec2 corner = linemap::Vec2::Zero();
   double vertex_error = 0.0;  ///< sum of distances from the corner to the map endpoints near it [m]
-  std::size_t endpoints = 0;  ///< map endpoints within vertex_radius
+  std::size_t endpoints = 0;  ///< endpoints within vertex_radius of segments associated with its faces
 };
 
 struct GroundTruthResult
 {
-  std::vector<WallScore> walls;
-  std::vector<CornerScore> corners;
-  double coverage = 0.0;             ///< length-weighted mean wall coverage in [0, 1]
-  double max_endpoint_error = 0.0;   ///< over the walls with an associated segment [m]
-  std::size_t undetected_walls = 0;  ///< walls without any associated map segment
+  std::vector<WallScore> walls;      ///< the seen faces
+  std::vector<CornerScore> corners;  ///< the seen corners
+  double coverage = 0.0;             ///< seen-length-weighted mean face coverage in [0, 1]
+  double max_endpoint_error = 0.0;   ///< over the seen endpoints of detected faces [m]
+  double mean_endpoint_error = 0.0;  ///< same, mean [m]
+  std::size_t undetected_walls = 0;  ///< seen faces without any associated map segment
+  std::size_t unseen_walls = 0;      ///< faces no scan saw (not scored)
   double mean_vertex_error = 0.0;    ///< mean over the corners with endpoints of their vertex_error [m]
-  std::size_t missed_corners = 0;    ///< corners without any map endpoint within vertex_radius
+  std::size_t missed_corners = 0;    ///< seen corners without any map endpoint within vertex_radius
 };
 
-/// A map segment is associated with a wall when their undirected heading difference is at
-/// most association_angle and its midpoint lies within association_distance of the wall
-/// segment. Coverage samples the wall every <= sample_spacing (both ends included) and counts
-/// the samples within coverage_tolerance of an associated map segment, so a perpendicular wall's
-/// segment ending at a corner does not count as covering it. A corner is a point where the
-/// endpoints of two walls lie within corner_tolerance and the walls' undirected headings differ
-/// by at least corner_min_angle (collinear continuations are not corners); its position is the
-/// mean of those endpoints, and corners closer than corner_tolerance are one. Vertex accuracy
-/// (the three-criteria paper's measure): per corner, the sum of the distances from the corner to
-/// every map segment endpoint within vertex_radius. Throws std::invalid_argument naming the wall
-/// or segment for non-finite coordinates or a zero-length wall.
+/// Scores `map` against the faces `walls`, over their seen parts `seen` (one entry per face; a
+/// face without seen parts is not scored). A map segment is associated with a face when their
+/// heading difference (directed, or undirected with directed = false) is at most
+/// association_angle and its midpoint lies within association_distance of the face segment.
+/// Coverage samples each seen interval every <= sample_spacing (both ends included) and counts
+/// the samples within coverage_tolerance of an associated segment, so a perpendicular face's
+/// segment ending at a corner does not count as covering it. A face endpoint is seen when a seen
+/// interval reaches within coverage_tolerance of it; its error is the distance to the nearest
+/// endpoint of an associated segment. A corner is a point where the endpoints of two faces lie
+/// within corner_tolerance and their undirected headings differ by at least corner_min_angle
+/// (collinear continuations are not corners); its position is the mean of those endpoints, and
+/// corners closer than corner_tolerance are one. It is seen when the ends of two of its faces
+/// that meet there are both seen. Vertex accuracy (the three-criteria paper's measure): per seen
+/// corner, the sum of the distances from the corner to every endpoint within vertex_radius of a
+/// map segment associated with one of its faces (a segment on the other side of a 10 cm wall is
+/// not a vertex of this corner). Throws std::invalid_argument naming the face or segment for
+/// non-finite coordinates or a zero-length face, or when `seen` does not have one entry per face.
+GroundTruthResult evaluateAgainstGroundTruth(const std::vector<linemap::Segment2>& walls,
+                                             const SeenParts& seen, const std::vector<linemap::Segment2>& map,
+                                             const GroundTruthParams& params);
+
+/// Against a simulation's ground truth: its faces over seenParts(truth, params.min_seen_length).
+GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth,
+                                             const std::vector<linemap::Segment2>& map,
+                                             const GroundTruthParams& params);
+
+/// Every face seen in full (hand-made cases).
 GroundTruthResult evaluateAgainstGroundTruth(const std::vector<linemap::Segment2>& walls,
                                              const std::vector<linemap::Segment2>& map,
                                              const GroundTruthParams& params);
 
-/// The corners of a set of walls as defined above.
+/// The corners of a set of faces as defined above.
 std::vector<linemap::Vec2> findCorners(const std::vector<linemap::Segment2>& walls,
                                        const GroundTruthParams& params);
 

@@ -1,4 +1,4 @@
-// Scan simulator (ROS-free): exact ray casting against the walls of a World, a
+// Scan simulator (ROS-free): exact ray casting against the wall faces of a World, a
 // laser with Gaussian noise and spurious readings, a robot driving the world's
 // closed path and drifting odometry. Deterministic for a given seed on every
 // toolchain: std::mt19937 (fully specified) with our own uniform and normal draws.
@@ -32,19 +32,21 @@ class Random
   bool has_spare_ = false;
 };
 
-/// Where one ray ends: the nearest wall crossing in front of the origin.
+/// Where one ray ends: the nearest face crossing in front of the origin.
 struct RayHit
 {
-  double range = 0.0;  ///< +inf when the ray hits no wall
-  int wall = -1;       ///< index into the walls, -1 for none
+  double range = 0.0;  ///< +inf when the ray hits no face
+  int face = -1;       ///< index into the faces, -1 for none
 };
 
 /// Exact nearest intersection of the ray origin + t (cos angle, sin angle), t > 0, with the
-/// walls. Rays parallel to a wall do not hit it.
-RayHit castRay(const std::vector<linemap::Segment2>& walls, const linemap::Vec2& origin, double angle);
+/// faces (wallFaces(): directed, free side on the left). A face is seen only from its left, as
+/// the surface of a solid is only seen from outside: this is what makes the two coincident faces
+/// of a thin wall each visible from one side only. Rays parallel to a face do not hit it.
+RayHit castRay(const std::vector<linemap::Segment2>& faces, const linemap::Vec2& origin, double angle);
 
 /// Noiseless hits of every beam of `laser` at `laser_pose` (map frame), no range limit.
-std::vector<RayHit> castScan(const std::vector<linemap::Segment2>& walls, const linemap::Pose2& laser_pose,
+std::vector<RayHit> castScan(const std::vector<linemap::Segment2>& faces, const linemap::Pose2& laser_pose,
                              const LaserModel& laser);
 
 /// Measured ranges from true hits. Each beam is, with probability `laser.spurious`, a

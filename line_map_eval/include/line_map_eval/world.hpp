@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "line_extraction/geometry.hpp"
+#include "line_map_eval/wall_faces.hpp"
 
 namespace line_map_eval
 {
@@ -53,11 +54,17 @@ struct PathModel
   double clearance = 0.2;    ///< [m] minimum distance of the path from every wall (checked on load)
 };
 
+/// Thickness of a wall whose entry gives none, when the world file has no `wall_thickness` [m]:
+/// an interior partition (drywall on studs) is 10-15 cm; the laser then sees both faces of a wall
+/// as two lines 10 cm apart, as in a real building.
+inline constexpr double kDefaultWallThickness = 0.10;
+
 struct World
 {
   std::string name;    ///< YAML `name`, else the file's base name
   std::string source;  ///< the file it came from (for messages)
-  std::vector<linemap::Segment2> walls;
+  std::vector<Wall> walls;
+  double wall_thickness = kDefaultWallThickness;  ///< YAML `wall_thickness`: of walls without their own [m]
   PathModel path;
   LaserModel laser;
   OdometryModel odometry;
@@ -72,8 +79,9 @@ World loadWorld(const std::string& path);
 /// Same from YAML text; `source` names it in error messages.
 World parseWorld(const std::string& yaml_text, const std::string& source);
 
-/// Checks the values and that every leg of the path keeps `clearance` from every wall;
-/// throws std::runtime_error naming `world.source` and the offending key.
+/// Checks the values and that every leg of the path keeps `clearance` from every wall's surface
+/// (its centre line less half its thickness); throws std::runtime_error naming `world.source`
+/// and the offending key.
 void validateWorld(const World& world);
 
 /// Length of the closed path [m] (including the leg back to the start).
