@@ -3,16 +3,18 @@
 checks the evaluator's outputs before and after the loop closure."""
 import os
 import subprocess
+import sys
 import tempfile
-import time
 import unittest
 
 import rospkg
 import rospy
 import rostest
-from line_map_msgs.msg import LineMap, MapQuality
 from line_map_msgs.srv import Evaluate
-from nav_msgs.msg import OccupancyGrid, Path
+from nav_msgs.msg import OccupancyGrid
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "system"))
+import linemap_testing as lt  # noqa: E402
 
 
 class CheckEval(unittest.TestCase):
@@ -25,25 +27,16 @@ class CheckEval(unittest.TestCase):
                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=120)
         self.assertEqual(sim.returncode, 0, sim.stdout.decode(errors="replace"))
 
-        qualities, grids, paths, maps = [], [], [], []
-        rospy.Subscriber("line_map", LineMap, maps.append)
-        rospy.Subscriber("map_quality", MapQuality, lambda m: qualities.append((len(paths), m)))
+        grids = []
         rospy.Subscriber("lookup_table", OccupancyGrid, grids.append)
-        rospy.Subscriber("optimized_trajectory", Path, paths.append)
-        time.sleep(1.0)
-        play = subprocess.run(["rosbag", "play", "--clock", "--quiet", "--rate", "8", bag],
-                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=240)
-        self.assertEqual(play.returncode, 0, play.stdout.decode(errors="replace"))
-        deadline = time.time() + 30.0
-        while time.time() < deadline and not (paths and any(n > 0 for n, _ in qualities)):
-            time.sleep(0.1)
-
-        self.assertTrue(paths, "no optimized_trajectory in the bag")
-        self.assertTrue(qualities, "no map_quality published")
-        before = [m for n, m in qualities if n == 0]
-        after = [m for n, m in qualities if n > 0]
-        self.assertTrue(after, "no map_quality after the optimized_trajectory")
-        final = after[-1]
+        # Plays the sensor topics, waits until the merger has finished with the last scan, then
+        # publishes the bag's trajectory itself (a message at the very end of a bag can be lost when
+        # rosbag play exits) and waits for the adjusted map and its map_quality: events, not windows.
+        run = lt.BagRun(bag, 8)
+        map_before = run.play()
+        before = run.quality_of(map_before)
+        adjusted = run.close_loop()
+        final = run.quality_of(adjusted)
         self.assertEqual(final.header.frame_id, "map")
         self.assertGreater(final.segment_count, 10)
         self.assertGreater(final.quality, 50.0)
@@ -52,34 +45,32 @@ class CheckEval(unittest.TestCase):
         self.assertLess(final.error, 0.05)
         self.assertGreater(final.longest_length, final.mean_length)
         self.assertGreater(final.mean_length, final.shortest_length)
-        if before:
-            rospy.loginfo("quality before the loop closure %.2f %%, after %.2f %%", before[-1].quality, final.quality)
+        rospy.loginfo("quality before the loop closure %.2f %%, after %.2f %%", before.quality, final.quality)
 
-        self.assertTrue(grids, "no lookup_table published")
+        lt.wait_until(lambda: any(g.header.stamp == adjusted.header.stamp for g in grids),
+                      "the lookup_table published with the adjusted map's map_quality",
+                      lambda: "%d lookup_table messages" % len(grids), run.limit)
         grid = grids[-1]
         self.assertEqual(grid.header.frame_id, "map")
         self.assertEqual(len(grid.data), grid.info.width * grid.info.height)
         self.assertEqual(max(grid.data), 100, "cells holding a scan point must be certain")
         self.assertGreaterEqual(min(grid.data), 0)
 
-        rospy.wait_for_service("line_map_eval/evaluate", timeout=10.0)
+        rospy.wait_for_service("line_map_eval/evaluate", timeout=run.limit)
         evaluate = rospy.ServiceProxy("line_map_eval/evaluate", Evaluate)
         res = evaluate()
         self.assertTrue(res.success, res.message)
         self.assertAlmostEqual(res.quality.quality, final.quality, delta=1e-6)
         # A given map is scored against the same scans: the latest map scores the same, and the map
         # from before the loop closure scores lower against the corrected scans.
-        self.assertTrue(maps, "no line_map received")
-        given = evaluate(use_given_map=True, map=maps[-1])
+        given = evaluate(use_given_map=True, map=adjusted)
         self.assertTrue(given.success, given.message)
         self.assertAlmostEqual(given.quality.quality, final.quality, delta=1e-6)
-        before_closure = [m for m in maps if m.header.stamp < paths[-1].header.stamp]
-        if before_closure:
-            old = evaluate(use_given_map=True, map=before_closure[-1])
-            self.assertTrue(old.success, old.message)
-            rospy.loginfo("map before the loop closure against the corrected scans: %.2f %%", old.quality.quality)
-            self.assertGreater(final.quality, old.quality.quality + 20.0,
-                               "the loop closure must make the map fit the corrected scans far better")
+        old = evaluate(use_given_map=True, map=map_before)
+        self.assertTrue(old.success, old.message)
+        rospy.loginfo("map before the loop closure against the corrected scans: %.2f %%", old.quality.quality)
+        self.assertGreater(final.quality, old.quality.quality + 20.0,
+                           "the loop closure must make the map fit the corrected scans far better")
 
 
 if __name__ == "__main__":

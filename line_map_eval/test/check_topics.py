@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import tempfile
 import threading
+import time
 import unittest
 
 import rospkg
@@ -57,10 +58,11 @@ class PlayBag(unittest.TestCase):
         cls.play = subprocess.run(
             ["rosbag", "play", "--clock", "--quiet", "--wait-for-subscribers", "--rate=50", cls.bag],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=120)
-        deadline = rospy.Time.now() + rospy.Duration(10.0)
-        while rospy.Time.now() < deadline and (len(cls.scans) < SCANS or not cls.paths):
-            rospy.sleep(0.1)
-        rospy.sleep(0.5)  # anything late would show up as an extra message
+        # Until every scan and the trajectory arrived (the event), at most 60 s of wall time.
+        deadline = time.time() + 60.0
+        while time.time() < deadline and (len(cls.scans) < SCANS or not cls.paths):
+            time.sleep(0.1)
+        time.sleep(0.5)  # anything late would show up as an extra message
         for s in subs:
             s.unregister()
 

@@ -15,7 +15,7 @@ from line_map_msgs.msg import LineMap
 from nav_msgs.msg import Path
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from check_merging import STEP, connect_to_merger, segments_seen_from, transform  # noqa: E402
+from check_merging import LIMIT, STEP, connect_to_merger, segments_seen_from, transform  # noqa: E402
 
 
 def pose(stamp, x, y=0.0, w=1.0):
@@ -35,7 +35,7 @@ class CheckBadInput(unittest.TestCase):
         rospy.Subscriber("/diagnostics", DiagnosticArray, self.diagnostics.append)
         connect_to_merger(self)
 
-    def counters(self, wait_for=None, timeout=8.0):
+    def counters(self, wait_for=None, timeout=LIMIT):
         """The latest merger diagnostics as a dict; waits until `wait_for(dict)` holds."""
         deadline = time.time() + timeout
         c = {}
@@ -88,7 +88,7 @@ class CheckBadInput(unittest.TestCase):
                 time.sleep(0.05)
                 self.pub.publish(msg)
             time.sleep(0.2)
-        deadline = time.time() + 10.0
+        deadline = time.time() + LIMIT
         while time.time() < deadline and not (self.maps and self.maps[-1].keyframes == 3):
             time.sleep(0.05)
         self.assertTrue(self.maps and self.maps[-1].keyframes == 3,
@@ -106,7 +106,7 @@ class CheckBadInput(unittest.TestCase):
         path.poses.append(pose(base + rospy.Duration(500.0), 9.0))  # matches no keyframe
         path.poses.append(pose(stamps[1], 0.0, 0.0, w=3.0))  # not a rotation
         self.path_pub.publish(path)
-        deadline = time.time() + 10.0
+        deadline = time.time() + LIMIT
         while time.time() < deadline and len(self.maps) == n:
             time.sleep(0.05)
         self.assertGreater(len(self.maps), n, "no line_map after the trajectory")
@@ -135,7 +135,7 @@ class CheckBadInput(unittest.TestCase):
             ys = sorted(0.5 * (s.segment.start.y + s.segment.end.y) for s in self.maps[-1].segments)
             return len(ys) == 2 and abs(ys[0] - (-2.0 + dy)) < 1e-6 and abs(ys[1] - (2.0 + dy)) < 1e-6
 
-        deadline = time.time() + 10.0
+        deadline = time.time() + LIMIT
         while time.time() < deadline and not walls_moved_by(1.0):
             time.sleep(0.05)
         self.assertTrue(walls_moved_by(1.0), "the last trajectory of a burst did not decide the map: %s" %

@@ -20,6 +20,10 @@ from visualization_msgs.msg import MarkerArray
 MOUNT_X = 0.1  # base_link -> laser
 STEP = 0.3     # m between scans (above the 0.2 m keyframe gate)
 SCANS = 20
+# Bound of every wait (wall time): each wait ends on its event (a map, a subscriber, a report).
+# The .test files raise the merger's tf_timeout (a wall-clock wait here, no sim time) to 10 s, so
+# that a segments message whose tf comes late on a loaded machine is not dropped.
+LIMIT = 60.0
 WALLS = [((-5.0, 2.0), (30.0, 2.0)), ((30.0, -2.0), (-5.0, -2.0))]  # opposite directions
 
 
@@ -59,9 +63,11 @@ def connect_to_merger(test):
     test.static_tf.sendTransform(transform("base_link", "laser", rospy.Time(0), MOUNT_X, 0.0, 0.0))
     test.pub = rospy.Publisher("line_segments", LineSegmentArray, queue_size=50)
     test.path_pub = rospy.Publisher("optimized_trajectory", Path, queue_size=5)
-    deadline = time.time() + 10.0
+    deadline = time.time() + LIMIT
     while test.pub.get_num_connections() == 0 or test.path_pub.get_num_connections() == 0:
-        test.assertLess(time.time(), deadline, "the merging nodelet does not subscribe")
+        test.assertLess(time.time(), deadline, "waited %.0f s for the merging nodelet to subscribe; line_segments "
+                        "subscribers %d, optimized_trajectory subscribers %d" % (
+                            LIMIT, test.pub.get_num_connections(), test.path_pub.get_num_connections()))
         time.sleep(0.1)
 
 
@@ -73,13 +79,15 @@ class CheckMerging(unittest.TestCase):
         rospy.Subscriber("line_map_markers", MarkerArray, self.markers.append)
         connect_to_merger(self)
 
-    def wait_for(self, predicate, what, timeout=10.0):
+    def wait_for(self, predicate, what, timeout=None):
+        timeout = LIMIT if timeout is None else timeout
         deadline = time.time() + timeout
         while time.time() < deadline:
             if self.maps and predicate(self.maps[-1]):
                 return self.maps[-1]
             time.sleep(0.05)
-        self.fail("timed out waiting for %s; last map: %s" % (what, self.maps[-1] if self.maps else None))
+        self.fail("waited %.0f s for %s; arrived: %d line_map messages, the last: %s"
+                  % (timeout, what, len(self.maps), self.maps[-1] if self.maps else None))
 
     def wall_ys(self, m):
         return sorted(0.5 * (s.segment.start.y + s.segment.end.y) for s in m.segments)
@@ -108,7 +116,7 @@ class CheckMerging(unittest.TestCase):
         self.assertAlmostEqual(upper.segment.radius, 2.0, delta=1e-6)
 
         # Markers (subscribed, so published): segments, red start points, green end points.
-        deadline = time.time() + 5.0
+        deadline = time.time() + LIMIT
         while not self.markers and time.time() < deadline:
             time.sleep(0.05)
         self.assertTrue(self.markers, "no line_map_markers although subscribed")
@@ -161,7 +169,7 @@ class CheckMerging(unittest.TestCase):
 
         # Services: save, reset, load (bad then good).
         for name in ("line_map_merging/save_map", "line_map_merging/load_map", "line_map_merging/reset_map"):
-            rospy.wait_for_service(name, timeout=10.0)
+            rospy.wait_for_service(name, timeout=LIMIT)
         save = rospy.ServiceProxy("line_map_merging/save_map", SaveMap)
         load = rospy.ServiceProxy("line_map_merging/load_map", LoadMap)
         reset = rospy.ServiceProxy("line_map_merging/reset_map", ResetMap)

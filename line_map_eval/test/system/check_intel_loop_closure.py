@@ -8,13 +8,10 @@ walls must merge."""
 import os
 import sys
 import tempfile
-import time
 import unittest
 
 import rospy
 import rostest
-from line_map_msgs.msg import LineMap
-from nav_msgs.msg import Path
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import linemap_testing as lt  # noqa: E402
@@ -29,19 +26,12 @@ class CheckIntelLoopClosure(unittest.TestCase):
             self.skipTest("Intel dataset missing under " + lt.datasets_dir())
         bag = os.path.join(tempfile.mkdtemp(prefix="intel_loop_closure_"), "intel.bag")
         rc, log = lt.run(["rosrun", "line_map_eval", "carmen_to_bag", raw, bag, "--corrected", corrected,
-                          "--every", "50", "--max-scans", str(band["max_scans"])], 120)
+                          "--every", "50", "--max-scans", str(band["max_scans"])], 600)
         self.assertEqual(rc, 0, log)
-        trajectory = lt.bag_trajectories(bag)[-1]
-        maps = lt.Collector("line_map", LineMap)
-        pub = rospy.Publisher("optimized_trajectory", Path, queue_size=1, latch=True)
-        time.sleep(1.0)
-        lt.play(bag, band["rate"], timeout=240, topics=lt.SENSOR_TOPICS)
-        self.assertTrue(lt.wait_for_new_map(maps, 0), "no line_map from the bag")
+        run = lt.BagRun(bag, band["rate"])
+        map_before = run.play()
         before = lt.evaluate()
-        map_before = maps.messages[-1][1]
-        n = len(maps.messages)
-        pub.publish(trajectory)
-        self.assertTrue(lt.wait_for_new_map(maps, n, settle=2.0), "no line_map after the optimized_trajectory")
+        run.close_loop()
         after = lt.evaluate()
         before_corrected = lt.evaluate(map_before)
         print("intel (%d scans): quality against the corrected scans: map before the trajectory %.2f %% (%d "

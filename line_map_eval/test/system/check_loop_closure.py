@@ -11,13 +11,10 @@ The checker plays the sensor topics, evaluates (~evaluate), publishes the bag's 
 waits for the adjusted map and evaluates again, so every figure belongs to a settled map."""
 import os
 import sys
-import time
 import unittest
 
 import rospy
 import rostest
-from line_map_msgs.msg import LineMap
-from nav_msgs.msg import Path
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import linemap_testing as lt  # noqa: E402
@@ -27,22 +24,15 @@ class CheckLoopClosure(unittest.TestCase):
     def test_quality_rises_with_the_loop_closure(self):
         band = lt.bands()["loop_closure"]
         bag, truth_path, log = lt.simulate("loop", band["seed"], band["scans"], "loop_closure_")
-        trajectory = lt.bag_trajectories(bag)[-1]
-        maps = lt.Collector("line_map", LineMap)
-        pub = rospy.Publisher("optimized_trajectory", Path, queue_size=1, latch=True)
-        time.sleep(1.0)
-        lt.play(bag, band["rate"], topics=lt.SENSOR_TOPICS)
-        self.assertTrue(lt.wait_for_new_map(maps, 0), "no line_map from the bag")
+        run = lt.BagRun(bag, band["rate"])
+        map_before = run.play()
         before = lt.evaluate()
-        map_before = maps.messages[-1][1]
-        n = len(maps.messages)
-        pub.publish(trajectory)
-        self.assertTrue(lt.wait_for_new_map(maps, n), "no line_map after the optimized_trajectory")
+        adjusted = run.close_loop()
         after = lt.evaluate()
         before_corrected = lt.evaluate(map_before)
         truth = lt.load_truth(truth_path)
         p_before = lt.precision(truth, lt.map_segments(map_before))
-        p_after = lt.precision(truth, lt.map_segments(maps.messages[-1][1]))
+        p_after = lt.precision(truth, lt.map_segments(adjusted))
         print("loop: map length on true walls before %.1f %%, after %.1f %%" % (100 * p_before, 100 * p_after))
         print("loop: quality against the corrected scans: map before the closure %.2f %% (%d segments), after "
               "%.2f %% (%d segments, error %.2f mm); the map before against its own drifted scans %.2f %% (error "

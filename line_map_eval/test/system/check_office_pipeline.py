@@ -5,13 +5,10 @@ true wall (computed here from OUT.truth.yaml, independently of the C++ metrics) 
 the bands of test/regression_bands.yaml."""
 import os
 import sys
-import time
 import unittest
 
 import rospy
 import rostest
-from line_map_msgs.msg import LineMap, MapQuality
-from nav_msgs.msg import Path
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import linemap_testing as lt  # noqa: E402
@@ -41,16 +38,10 @@ class CheckOfficePipeline(unittest.TestCase):
     def test_office_after_loop_closure(self):
         band = lt.bands()["office_pipeline"]
         bag, truth_path, _ = lt.simulate("office", band["seed"], band["scans"], "office_pipeline_")
-        paths = lt.Collector("optimized_trajectory", Path)
-        maps = lt.Collector("line_map", LineMap, paths)
-        qualities = lt.Collector("map_quality", MapQuality, paths)
-        time.sleep(1.0)
-        lt.play(bag, band["rate"])
-        self.assertTrue(lt.wait_for(lambda: paths.messages and maps.after() and qualities.after(), 30.0),
-                        "no line_map/map_quality after the optimized_trajectory")
-        time.sleep(2.0)  # the last keyframe and its evaluation
-        final_map = maps.after()[-1]
-        quality = qualities.after()[-1]
+        run = lt.BagRun(bag, band["rate"])
+        run.play()
+        final_map = run.close_loop()
+        quality = run.quality_of(final_map)
         segments = lt.map_segments(final_map)
 
         truth = lt.load_truth(truth_path)

@@ -8,12 +8,10 @@ import signal
 import subprocess
 import sys
 import tempfile
-import time
 import unittest
 
 import rospy
 import rostest
-from line_map_msgs.msg import LineMap
 from line_map_msgs.srv import LoadMap, SaveMap
 from nav_msgs.msg import Path
 
@@ -38,8 +36,8 @@ class Pipeline:
             self.proc.kill()
             self.proc.wait()
         # The old services must be gone before the new pipeline is waited for.
-        lt.wait_for(lambda: not rospy.get_param("/line_map_merging/method", None) and
-                    not self._service_up(), 10.0)
+        lt.wait_until(lambda: not self._service_up(), "the stopped pipeline's save_map service to go",
+                      lambda: "still registered", 60.0)
 
     @staticmethod
     def _service_up():
@@ -54,11 +52,11 @@ def endpoints(m):
     return sorted((s.segment.start.x, s.segment.start.y, s.segment.end.x, s.segment.end.y) for s in m.segments)
 
 
-def publish_trajectory(trajectory):
+def publish_trajectory(trajectory, limit):
+    # Not latched: the second pipeline must not receive the first trajectory before its load_map.
     pub = rospy.Publisher("optimized_trajectory", Path, queue_size=1)
-    if not lt.wait_for(lambda: pub.get_num_connections() > 0, 20.0):
-        raise RuntimeError("nobody subscribes to optimized_trajectory")
-    time.sleep(0.5)
+    lt.wait_until(lambda: pub.get_num_connections() > 0, "a subscriber of optimized_trajectory",
+                  lambda: "none", limit)
     pub.publish(trajectory)
     return pub
 
@@ -69,19 +67,17 @@ class CheckRestart(unittest.TestCase):
         trajectory = lt.bag_trajectories(bag)[-1]
         map_file = os.path.join(os.path.dirname(bag), "saved.yaml")
         log = open(os.path.join(lt.artifact_dir(), "restart_roslaunch.log"), "w")
-        maps = lt.Collector("line_map", LineMap)
+        run = lt.BagRun(bag, 4, evaluator=False)
+        maps, limit = run.maps, run.limit
 
         first = Pipeline(log)
         try:
-            lt.play(bag, 4, topics=lt.SENSOR_TOPICS)
-            self.assertTrue(lt.wait_for_new_map(maps, 0), "no line_map from the bag")
+            saved = run.play()
             res = rospy.ServiceProxy("/line_map_merging/save_map", SaveMap)(map_file)
             self.assertTrue(res.success, res.message)
-            saved = maps.messages[-1][1]
             n = len(maps.messages)
-            publish_trajectory(trajectory)
-            self.assertTrue(lt.wait_for_new_map(maps, n), "no line_map after the optimized_trajectory")
-            live = maps.messages[-1][1]
+            publish_trajectory(trajectory, limit)
+            live = lt.wait_for_new_map(maps, n, "the line_map adjusted to the optimized_trajectory", limit)
         finally:
             first.stop()
 
@@ -90,13 +86,12 @@ class CheckRestart(unittest.TestCase):
             n = len(maps.messages)
             res = rospy.ServiceProxy("/line_map_merging/load_map", LoadMap)(map_file)
             self.assertTrue(res.success, res.message)
-            self.assertTrue(lt.wait_for_new_map(maps, n), "no line_map after load_map")
-            loaded = maps.messages[-1][1]
+            loaded = lt.wait_for_new_map(maps, n, "the line_map of load_map", limit)
             self.assertEqual(len(loaded.segments), len(saved.segments), "load_map did not restore the map")
             n = len(maps.messages)
-            publish_trajectory(trajectory)
-            self.assertTrue(lt.wait_for_new_map(maps, n), "no line_map after the optimized_trajectory (restarted)")
-            restarted = maps.messages[-1][1]
+            publish_trajectory(trajectory, limit)
+            restarted = lt.wait_for_new_map(maps, n, "the line_map adjusted to the optimized_trajectory "
+                                            "(restarted)", limit)
         finally:
             second.stop()
 

@@ -8,13 +8,11 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 import unittest
 
 import rospy
 import rostest
 import yaml
-from line_map_msgs.msg import LineMap
 from visualization_msgs.msg import MarkerArray
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
@@ -63,6 +61,13 @@ def read_ppm(data):
     return int(fields[1]), int(fields[2]), data[pos + 1:]
 
 
+def subscribers(topic):
+    """Names of the nodes subscribed to `topic`, from the master."""
+    import rosgraph
+    _, subs, _ = rosgraph.Master("/check_rviz_screenshot").getSystemState()
+    return next((nodes for name, nodes in subs if name == topic), [])
+
+
 def count_colours(width, height, pixels, x_min):
     red = green = 0
     for y in range(height):
@@ -96,30 +101,48 @@ class CheckRvizScreenshot(unittest.TestCase):
         env = dict(os.environ, DISPLAY=display)
         self.procs.append(subprocess.Popen(["Xvfb", display, "-screen", "0", "1280x800x24", "-nolisten", "tcp"],
                                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-        self.assertTrue(lt.wait_for(lambda: os.path.exists("/tmp/.X11-unix/X" + display[1:]), 10.0),
-                        "Xvfb did not start on " + display)
+        run = lt.BagRun(bag, 8)
+        lt.wait_until(lambda: os.path.exists("/tmp/.X11-unix/X" + display[1:]), "Xvfb's socket on " + display,
+                      lambda: "none", run.limit)
         log = open(os.path.join(lt.artifact_dir(), "rviz_screenshot_rviz.log"), "w")
         self.procs.append(subprocess.Popen(["rviz", "-d", marker_only_config(os.path.dirname(bag)),
                                             "__name:=rviz_screenshot_rviz"], env=env, stdout=log,
                                            stderr=subprocess.STDOUT))
         markers = lt.Collector("line_map_markers", MarkerArray)
-        maps = lt.Collector("line_map", LineMap)
-        time.sleep(8.0)  # RViz up and subscribed: the merger publishes its markers lazily
+        # RViz up and subscribed (the merger publishes its markers only while someone subscribes).
+        lt.wait_until(lambda: self.procs[-1].poll() is not None or "/rviz_screenshot_rviz" in subscribers(
+            "/line_map_markers"), "RViz to subscribe to line_map_markers",
+            lambda: "subscribers %s" % subscribers("/line_map_markers"), run.limit)
         self.assertIsNone(self.procs[-1].poll(), "rviz exited, see rviz_screenshot_rviz.log")
-        lt.play(bag, 8)
-        self.assertTrue(lt.wait_for_new_map(maps, 0), "no line_map")
-        self.assertTrue(markers.messages, "no line_map_markers")
-        time.sleep(3.0)  # rendering at 30 Hz
+        final_map = run.play()
+        lt.wait_until(lambda: any(m.markers and m.markers[0].header.stamp == final_map.header.stamp
+                                  for _, m in markers.messages[-3:]),
+                      "the line_map_markers of the final map", lambda: "%d line_map_markers messages"
+                      % len(markers.messages), run.limit)
 
+        # RViz renders at 30 Hz: screenshots until the markers show (the event), within the limit.
         png = os.path.join(lt.artifact_dir(), "rviz_linemap.png")
-        rc, out = lt.run(["import", "-display", display, "-window", "root", png], 60)
-        self.assertEqual(rc, 0, out)
+        shot = {"red": 0, "green": 0, "size": (0, 0), "n": 0}
+
+        def markers_visible():
+            rc, out = lt.run(["import", "-display", display, "-window", "root", png], 60)
+            self.assertEqual(rc, 0, out)
+            ppm = subprocess.run(["convert", png, "ppm:-"], stdout=subprocess.PIPE, check=True, timeout=60).stdout
+            width, height, pixels = read_ppm(ppm)
+            shot["red"], shot["green"] = count_colours(width, height, pixels, PANEL_WIDTH)
+            shot["size"], shot["n"] = (width, height), shot["n"] + 1
+            return shot["red"] >= MIN_PIXELS and shot["green"] >= MIN_PIXELS
+
+        try:
+            lt.wait_until(markers_visible, "%d red and %d green marker pixels in the screenshot" % (
+                MIN_PIXELS, MIN_PIXELS), lambda: "%d red, %d green in screenshot %d" % (
+                shot["red"], shot["green"], shot["n"]), run.limit, step=0.5)
+        except AssertionError:
+            pass  # the assertions below say which colour is missing
+        red, green = shot["red"], shot["green"]
         print("RViz screenshot: " + png)
-        ppm = subprocess.run(["convert", png, "ppm:-"], stdout=subprocess.PIPE, check=True, timeout=60).stdout
-        width, height, pixels = read_ppm(ppm)
-        red, green = count_colours(width, height, pixels, PANEL_WIDTH)
         print("RViz screenshot %dx%d: %d red (start point) and %d green (end point) pixels right of x=%d"
-              % (width, height, red, green, PANEL_WIDTH))
+              % (shot["size"][0], shot["size"][1], red, green, PANEL_WIDTH))
         self.assertGreaterEqual(red, MIN_PIXELS, "no start point markers visible in " + png)
         self.assertGreaterEqual(green, MIN_PIXELS, "no end point markers visible in " + png)
 

@@ -20,7 +20,7 @@ import rospy
 import rostest
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray
-from line_map_msgs.msg import LineMap
+from line_map_msgs.msg import LineMap, LineSegmentArray
 from sensor_msgs.msg import LaserScan
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
@@ -114,27 +114,33 @@ class CheckSoak(unittest.TestCase):
         t_start = time.time()
         bag = os.path.join(tempfile.mkdtemp(prefix="soak_"), "intel.bag")
         rc, log = lt.run(["rosrun", "line_map_eval", "carmen_to_bag", raw, bag, "--no-progress",
-                          "--max-scans", str(band["max_scans"])], 60)
+                          "--max-scans", str(band["max_scans"])], 600)
         self.assertEqual(rc, 0, log)
         with rosbag.Bag(bag) as b:
             bag_s = b.get_end_time() - b.get_start_time()
             scans = b.get_message_count(topic_filters=["/scan"])
         mon = Monitor()
-        self.assertTrue(lt.wait_for(lambda: manager_pid() is not None, 30.0), "no nodelet manager")
+        diag = lt.Diagnostics()
+        segments = lt.Collector("line_segments", LineSegmentArray)
+        _, last_stamp, _ = lt.bag_scans(bag)
+        # Each wait ends on its event; the limit only bounds it, from the bag's length at the rate.
+        limit = lt.work_limit(bag_s, rate)
+        lt.wait_until(lambda: manager_pid() is not None, "the nodelet manager", lambda: "none", limit)
         pid = manager_pid()
-        time.sleep(1.0)
+        diag.wait_up(lt.Diagnostics.TASKS, limit)
         rss, keyframes, eval_scans, play_wall = [], [], [], 0.0
         for p in range(3):
             mon.scan_wall.clear()
             before = mon.last_map.keyframes if mon.last_map else 0
+            since = len(segments.messages)
             t0 = time.time()
-            lt.play(bag, rate, timeout=120, topics=lt.SENSOR_TOPICS)
+            lt.play(bag, rate, topics=lt.SENSOR_TOPICS)
             play_wall += time.time() - t0
-            self.assertTrue(self._settle(mon),
-                            "no line_map in pass %d" % (p + 1))
+            diag.wait_merged(segments, last_stamp, limit, since)
+            self.assertIsNotNone(mon.last_map, "no line_map in pass %d" % (p + 1))
             self.assertEqual(manager_pid(), pid, "the nodelet manager died or restarted in pass %d" % (p + 1))
             self.assertTrue(os.path.exists("/proc/%d" % pid), "the nodelet manager process is gone")
-            # Read with the pipeline idle (no line_map for 1.5 s): the 10 samples of 2 s agree to the kB;
+            # Read with the pipeline idle (the merger finished with the pass): the 10 samples of 2 s agree to the kB;
             # the smallest guards against an autosave running in the window.
             samples = []
             for _ in range(10):
@@ -142,8 +148,14 @@ class CheckSoak(unittest.TestCase):
                 time.sleep(0.2)
             rss.append(min(samples))
             keyframes.append(mon.last_map.keyframes - before)
-            eval_scans.append(mon.counter("keyframe scans", mon.evaluator))  # diagnostics of the last second
-        time.sleep(1.5)  # one more diagnostics period
+            n = diag.received.get("evaluator", 0) + 1
+            lt.wait_until(lambda: diag.received.get("evaluator", 0) > n, "the evaluator's next diagnostics",
+                          lambda: "none", limit)
+            eval_scans.append(mon.counter("keyframe scans", mon.evaluator))
+        # Counters sent after the last pass was finished with.
+        n = diag.received.get("line map merging", 0) + 1
+        lt.wait_until(lambda: diag.received.get("line map merging", 0) > n, "the merger's next diagnostics",
+                      lambda: "none", limit)
         dropped, jumps = mon.counter("dropped scans"), mon.counter("time jumps")
         eval_jumps = mon.counter("time jumps", mon.evaluator)
         lat = sorted(mon.latencies)
@@ -196,16 +208,6 @@ class CheckSoak(unittest.TestCase):
         self.assertEqual(saved["keyframe_count"], sum(keyframes))
         os.remove(path)
 
-    @staticmethod
-    def _settle(mon, settle=1.5, timeout=30.0):
-        """Waits until no line_map came for `settle` s (the pipeline has caught up)."""
-        deadline = time.time() + timeout
-        while time.time() < deadline:
-            n = mon.maps
-            time.sleep(settle)
-            if mon.maps == n:
-                return mon.last_map is not None
-        return False
 
 
 if __name__ == "__main__":

@@ -58,11 +58,36 @@ def simulate(world, seed, scans, prefix="system_", extra=()):
     return bag, bag[:-len(".bag")] + ".truth.yaml", out
 
 
-def play(bag, rate, timeout=240, topics=None):
-    """rosbag play --clock; raises with its output on failure."""
+def bag_scans(bag, topic="/scan"):
+    """(number of scans, stamp of the last scan, seconds between the first and the last scan) of a bag."""
+    import rosbag
+    stamps = []
+    with rosbag.Bag(bag) as b:
+        for _, msg, _ in b.read_messages(topics=[topic, topic.lstrip("/")]):
+            stamps.append(msg.header.stamp.to_sec())
+    if not stamps:
+        raise RuntimeError("%s: no %s messages" % (bag, topic))
+    return len(stamps), max(stamps), max(stamps) - min(stamps)
+
+
+def work_limit(bag_seconds, rate, margin=10.0, floor=60.0):
+    """A wall-clock limit derived from the work: the bag's duration at the playback rate, times a wide
+    margin for a loaded machine, never below `floor` s (start-up of the nodes). Only a limit: the
+    waits below end on the awaited event, so an idle machine never waits for it."""
+    return max(floor, margin * bag_seconds / float(rate))
+
+
+def play(bag, rate, timeout=None, topics=None, wait_for_subscribers=True):
+    """rosbag play --clock; raises with its output on failure. With wait_for_subscribers the player
+    starts only once every played topic has a subscriber (nothing is lost at the start however slowly
+    the nodes come up); the timeout defaults to work_limit() of the bag."""
     cmd = ["rosbag", "play", "--clock", "--quiet", "--rate", str(rate), bag]
+    if wait_for_subscribers:
+        cmd.append("--wait-for-subscribers")
     if topics:
         cmd += ["--topics"] + list(topics)
+    if timeout is None:
+        timeout = work_limit(bag_scans(bag)[2], rate)
     rc, out = run(cmd, timeout)
     if rc != 0:
         raise RuntimeError("rosbag play failed:\n" + out)
@@ -77,13 +102,134 @@ def wait_for(predicate, timeout, step=0.1):
     return predicate()
 
 
+def wait_until(predicate, awaited, arrived, limit, step=0.1, gone=None):
+    """Waits for an event; on reaching `limit` s raises AssertionError naming what was awaited and
+    what had arrived (`arrived()` describes the state). `gone()`, checked every 2 s, names a dead
+    node (or returns None): the wait then fails at once instead of at the limit."""
+    t0 = time.time()
+    deadline, next_check = t0 + limit, t0 + 2.0
+    while not predicate():
+        now = time.time()
+        if gone is not None and now >= next_check:
+            next_check = now + 2.0
+            dead = gone()
+            if dead:
+                raise AssertionError("%s while waiting for %s; arrived: %s" % (dead, awaited, arrived()))
+        if now >= deadline:
+            raise AssertionError("waited %.0f s (the limit) for %s; arrived: %s" % (now - t0, awaited, arrived()))
+        time.sleep(step)
+    return time.time() - t0
+
+
+def gone_nodes(*topics):
+    """A `gone` check for wait_until: names a node publishing one of `topics` that no longer answers
+    (a crashed nodelet manager stays registered at the master)."""
+    import xmlrpc.client
+    import rosgraph
+
+    def check():
+        master = rosgraph.Master(rospy.get_name())
+        for topic in topics:
+            for node in publishers(topic):
+                try:
+                    xmlrpc.client.ServerProxy(master.lookupNode(node)).getPid(rospy.get_name())
+                except (OSError, rosgraph.MasterError, xmlrpc.client.Error):
+                    return "node %s (publishing %s) is gone" % (node, topic)
+        return None
+    return check
+
+
+def publishers(topic):
+    """Nodes publishing `topic`, from the master."""
+    import rosgraph
+    pubs, _, _ = rosgraph.Master(rospy.get_name()).getSystemState()
+    return next((nodes for name, nodes in pubs if name == topic), [])
+
+
+class Diagnostics:
+    """The latest values of each pipeline task's diagnostics (/diagnostics, published by wall timers
+    about once a second), by task: "line extraction", "line map merging", "evaluator"."""
+
+    TASKS = ("line extraction", "line map merging", "evaluator")
+
+    def __init__(self):
+        from diagnostic_msgs.msg import DiagnosticArray
+        self.values = {}
+        self.received = {}
+        self.sub = rospy.Subscriber("/diagnostics", DiagnosticArray, self._cb, queue_size=50)
+
+    def _cb(self, msg):
+        for status in msg.status:
+            for task in self.TASKS:
+                if status.name.endswith(": " + task) or status.name == task:
+                    self.values[task] = {kv.key: kv.value for kv in status.values}
+                    self.received[task] = self.received.get(task, 0) + 1
+
+    def counter(self, task, key):
+        try:
+            return int(float(self.values.get(task, {}).get(key, "-1")))
+        except ValueError:
+            return -1
+
+    def merged(self):
+        """line_segments messages the merger has finished with (keyframe, gated, dropped, replayed)."""
+        keys = ("keyframes", "scans below the keyframe gate", "dropped scans", "replayed scans skipped",
+                "zero-stamp segments")
+        return sum(max(0, self.counter("line map merging", k)) for k in keys)
+
+    def wait_up(self, tasks, limit=60.0):
+        """Waits until each task's nodelet is initialised, so its subscriptions exist: the merger and
+        the evaluator by their diagnostics (wall timers; made after their subscriptions), the
+        extractor by its line_segments publisher at the master (its diagnostics wait for ROS time,
+        which stands still before the bag's clock)."""
+        def up(task):
+            if task == "line extraction":
+                return bool(publishers("/line_segments"))
+            return task in self.values
+
+        wait_until(lambda: all(up(t) for t in tasks), "the nodelets of %s" % ", ".join(tasks),
+                   lambda: "up: %s" % (", ".join(t for t in tasks if up(t)) or "none"), limit)
+
+    def wait_merged(self, segments, last_stamp, limit, since=0):
+        """Waits until the pipeline has finished with a played bag: this process has received the
+        line_segments of the bag's last scan (among segments.messages[since:]; a full subscriber queue
+        drops the oldest message, never the newest), and a merger diagnostics message sent after that
+        counts every line_segments message received here as finished with (keyframe, gated, dropped,
+        replayed). Should the merger have lost some in its own queue, its counters standing still over
+        three diagnostics messages (about 3 s) end the wait instead. Call wait_up() before playing, so
+        that the merger and this process count the same messages."""
+        state = {"fresh_after": None, "seen": 0, "merged": -1, "same": 0}
+        merging = "line map merging"
+
+        def done():
+            if state["fresh_after"] is None:
+                if not any(abs(m.header.stamp.to_sec() - last_stamp) < 1e-6 for _, m in segments.messages[since:]):
+                    return False
+                state["fresh_after"] = self.received.get(merging, 0)
+            seen = self.received.get(merging, 0)
+            if seen <= state["fresh_after"]:
+                return False  # the merger's counters from before the last scan reached it
+            if seen != state["seen"]:
+                state["seen"] = seen
+                merged = self.merged()
+                state["same"] = state["same"] + 1 if merged == state["merged"] else 0
+                state["merged"] = merged
+            return state["merged"] >= len(segments.messages) or state["same"] >= 3
+
+        return wait_until(done, "the merger to finish with the bag's last scan (stamp %.3f)" % last_stamp,
+                          lambda: "%d line_segments messages here (the last stamped %s); the merger finished "
+                          "with %d" % (len(segments.messages), "%.3f" % segments.messages[-1][1].header.stamp.to_sec()
+                                       if segments.messages else "-", self.merged()), limit,
+                          gone=gone_nodes("/line_segments", "/line_map"))
+
+
 class Collector:
     """Keeps every message of a topic, tagged with how many optimized_trajectory messages came before."""
 
     def __init__(self, topic, msg_type, epoch=None):
         self.messages = []
         self._epoch = epoch
-        self.sub = rospy.Subscriber(topic, msg_type, self._cb, queue_size=100)
+        self.sub = rospy.Subscriber(topic, msg_type, self._cb, queue_size=10000)
 
     def _cb(self, msg):
         self.messages.append((len(self._epoch.messages) if self._epoch else 0, msg))
@@ -189,6 +335,54 @@ def map_segments(line_map):
 
 # ---- the loop closure driven by the checker ----
 
+class BagRun:
+    """A simulated (or converted) bag through a running pipeline (linemap.launch): plays its sensor
+    topics, waits until the merger has finished with the last scan, and drives the loop closure
+    itself: it publishes the bag's last trajectory (stamped after every scan, so the adjusted map's
+    stamp is its own) and waits for the adjusted line_map and its map_quality. Every wait ends on its
+    event; the limit only bounds it, derived from the bag (work_limit)."""
+
+    def __init__(self, bag, rate, evaluator=True):
+        from line_map_msgs.msg import LineMap, LineSegmentArray, MapQuality
+        self.bag, self.rate, self.evaluator = bag, rate, evaluator
+        self.scans, self.last_stamp, span = bag_scans(bag)
+        self.limit = work_limit(span, rate)
+        self.diag = Diagnostics()
+        self.segments = Collector("line_segments", LineSegmentArray)
+        self.maps = Collector("line_map", LineMap)
+        self.qualities = Collector("map_quality", MapQuality)
+        self._pub = None
+
+    def play(self):
+        """Plays the sensor topics; returns the map once the merger has finished with the bag."""
+        self.diag.wait_up(Diagnostics.TASKS if self.evaluator else Diagnostics.TASKS[:2], self.limit)
+        play(self.bag, self.rate, topics=SENSOR_TOPICS)
+        self.diag.wait_merged(self.segments, self.last_stamp, self.limit)
+        wait_until(lambda: self.maps.messages, "a line_map from the %d scans of the bag" % self.scans,
+                   lambda: "no line_map; %d line_segments messages, the merger finished with %d" % (
+                       len(self.segments.messages), self.diag.merged()), self.limit)
+        line_map = self.maps.messages[-1][1]
+        if self.evaluator:
+            self.quality_of(line_map)  # the evaluator holds this map: ~evaluate scores it
+        return line_map
+
+    def close_loop(self, trajectory=None):
+        """Publishes the trajectory (default: the bag's last); returns the adjusted map."""
+        if trajectory is None:
+            trajectory = bag_trajectories(self.bag)[-1]
+        trajectory.header.stamp = rospy.Time.from_sec(self.last_stamp + 0.5)
+        n = len(self.maps.messages)
+        self._pub = publish_trajectory(trajectory)
+        line_map = wait_for_new_map(self.maps, n, "the line_map adjusted to the optimized_trajectory", self.limit)
+        if self.evaluator:
+            self.quality_of(line_map)
+        return line_map
+
+    def quality_of(self, line_map):
+        return wait_for_quality_of(self.qualities, line_map, "the map_quality of the line_map stamped %.3f"
+                                   % line_map.header.stamp.to_sec(), self.limit)
+
+
 SENSOR_TOPICS = ("/scan", "/tf", "/tf_static")
 
 
@@ -199,7 +393,7 @@ def bag_trajectories(bag):
         return [m for _, m, _ in b.read_messages(topics=["/optimized_trajectory", "optimized_trajectory"])]
 
 
-def evaluate(given_map=None, timeout=10.0):
+def evaluate(given_map=None, timeout=60.0):
     """Calls /line_map_eval/evaluate; returns line_map_msgs/MapQuality. With `given_map` (a
     line_map_msgs/LineMap) that map is scored against the evaluator's current (registered) scans
     instead of the latest line_map."""
@@ -212,15 +406,35 @@ def evaluate(given_map=None, timeout=10.0):
     return res.quality
 
 
-def wait_for_new_map(maps, count, timeout=20.0, settle=1.0):
-    """Waits for a line_map beyond the first `count` messages, then until none came for `settle` s."""
-    if not wait_for(lambda: len(maps.messages) > count, timeout):
-        return False
-    while True:
-        n = len(maps.messages)
-        time.sleep(settle)
-        if len(maps.messages) == n:
-            return True
+def wait_for_new_map(maps, count, what, limit=60.0):
+    """Waits for a line_map beyond the first `count` messages (the merger publishes one per keyframe,
+    trajectory and load_map); returns it. Call it once the merger has finished with the scans
+    (Diagnostics.wait_merged), so that the new map is the answer to what was sent."""
+    wait_until(lambda: len(maps.messages) > count, what,
+               lambda: "%d line_map messages, none new" % len(maps.messages), limit, gone=gone_nodes("/line_map"))
+    return maps.messages[-1][1]
+
+
+def wait_for_quality_of(qualities, line_map, what, limit=60.0):
+    """Waits for a map_quality of `line_map` (same stamp) received after it; returns the newest."""
+    stamp = line_map.header.stamp
+
+    def of_map():
+        return [m for _, m in qualities.messages if m.header.stamp == stamp]
+
+    wait_until(lambda: of_map(), what, lambda: "%d map_quality messages, the last stamped %s (awaited %.3f)" % (
+        len(qualities.messages), "%.3f" % qualities.messages[-1][1].header.stamp.to_sec() if qualities.messages
+        else "-", stamp.to_sec()), limit, gone=gone_nodes("/line_map", "/map_quality"))
+    return of_map()[-1]
+
+
+def publish_trajectory(path):
+    """Publishes a trajectory latched, so a subscriber connecting late still receives it (a message at
+    the end of a bag may be lost when `rosbag play` exits right after publishing it). Keep the
+    returned publisher alive until the answer arrived."""
+    pub = rospy.Publisher("optimized_trajectory", type(path), queue_size=1, latch=True)
+    pub.publish(path)
+    return pub
 
 
 def precision(truth, segments, distance=0.1):
