@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "line_map_eval/bag_reader.hpp"
+#include "line_map_eval/bag_replay.hpp"
 #include "line_map_eval/batch.hpp"
 #include "line_map_eval/ground_truth.hpp"
 #include "line_map_eval/progress.hpp"
@@ -51,7 +52,10 @@ void usage(std::ostream& out)
          "                    files (default: linemap_batch_out)\n"
          "  --every N         keyframes between trajectory corrections (default 50; 0: only at the end)\n"
          "  --no-progress     no progress bars\n"
-         "  --no-figures      write the reports and map files only\n";
+         "  --no-figures      write the reports and map files only\n"
+         "  --replay          (a .bag) feed the bag's messages in bag order to the online mapper and\n"
+         "                    evaluator the nodelets run (one --merger, default cae); writes "
+         "DIR/replay.json\n";
 }
 
 bool hasConfig(const fs::path& dir)
@@ -95,6 +99,7 @@ int main(int argc, char** argv)
 {
   std::string dataset_path, corrected, config_dir, out_dir = "linemap_batch_out";
   std::vector<std::string> configs, overrides;
+  bool replay = false;
   BatchOptions options;
   options.progress = isatty(STDERR_FILENO) != 0;
   try
@@ -146,6 +151,8 @@ int main(int argc, char** argv)
         options.progress = false;
       else if (arg == "--no-figures")
         options.figure_formats = 0;
+      else if (arg == "--replay")
+        replay = true;
       else if (!arg.empty() && arg[0] == '-')
         throw std::invalid_argument("unknown option " + arg);
       else if (dataset_path.empty())
@@ -187,6 +194,22 @@ int main(int argc, char** argv)
     }
     options.out_dir = out_dir;
 
+    if (replay)
+    {
+      if (fs::path(dataset_path).extension() != ".bag") throw std::invalid_argument("--replay needs a .bag");
+      ReplayOptions ro;
+      ro.params = options.params;
+      if (!options.mergers.empty()) ro.method = options.mergers.front();
+      const ReplayResult r = replayBag(readBag(dataset_path), ro);
+      fs::create_directories(out_dir);
+      writeReplayJson(r, (fs::path(out_dir) / "replay.json").string());
+      std::cout << std::fixed << std::setprecision(2) << "replay of " << r.scans << " scans, "
+                << r.trajectories << " trajectories: " << r.keyframe_stamps.size() << " keyframes, "
+                << r.map.size() << " map segments, quality " << (r.metrics ? r.metrics->quality.quality : 0.0)
+                << " %, " << r.evaluator_scans << " evaluator scans, " << r.wall_ms << " ms; wrote "
+                << (fs::path(out_dir) / "replay.json").string() << "\n";
+      return 0;
+    }
     BatchDataset dataset;
     if (!corrected.empty())
     {

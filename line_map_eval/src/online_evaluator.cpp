@@ -1,0 +1,136 @@
+#include "line_map_eval/online_evaluator.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace line_map_eval
+{
+OnlineEvaluatorParams OnlineEvaluatorParams::fromParams(const linemap::ParamSet& params)
+{
+  OnlineEvaluatorParams p;
+  p.evaluator = EvaluatorParams::fromParams(params);
+  p.min_period = params.getDouble("min_period", p.min_period);
+  p.time_jump_tolerance = params.getDouble("time_jump_tolerance", p.time_jump_tolerance);
+  if (!(p.min_period >= 0.0)) throw linemap::ParameterError("parameter 'min_period' must be >= 0");
+  if (!(p.time_jump_tolerance >= 0.0))
+    throw linemap::ParameterError("parameter 'time_jump_tolerance' must be >= 0");
+  return p;
+}
+
+OnlineEvaluator::OnlineEvaluator(const OnlineEvaluatorParams& params)
+    : params_(params), evaluator_(params.evaluator)
+{
+}
+
+bool OnlineEvaluator::observeTime(double clock, double stamp, Stream stream)
+{
+  const double tol = params_.time_jump_tolerance;
+  double& last = last_stamp_[stream];
+  const bool clock_back = last_clock_ > 0.0 && clock > 0.0 && last_clock_ - clock > tol;
+  const bool stamp_back = last > 0.0 && stamp > 0.0 && last - stamp > tol;
+  if (clock_back || stamp_back)
+  {
+    ++counters_.time_jumps;
+    last_stamp_[kScans] = last_stamp_[kSegments] = 0.0;
+  }
+  if (clock > 0.0) last_clock_ = clock;
+  if (stamp > 0.0) last = std::max(last, stamp);
+  return clock_back || stamp_back;
+}
+
+std::vector<linemap::Vec2> OnlineEvaluator::scanPoints(const ScanRanges& scan)
+{
+  std::vector<linemap::Vec2> points;
+  points.reserve(scan.ranges.size());
+  for (std::size_t i = 0; i < scan.ranges.size(); ++i)
+  {
+    const double r = scan.ranges[i];
+    if (!std::isfinite(r) || r < scan.range_min || r >= scan.range_max) continue;
+    const double a = scan.angle_min + static_cast<double>(i) * scan.angle_increment;
+    points.emplace_back(r * std::cos(a), r * std::sin(a));
+  }
+  return points;
+}
+
+bool OnlineEvaluator::addScan(double stamp, const ScanRanges& scan, const linemap::Pose2& laser,
+                              const std::optional<linemap::Pose2>& odom)
+{
+  if (!std::isfinite(scan.angle_increment) || scan.angle_increment == 0.0)
+  {
+    ++counters_.rejected_scans;
+    return false;
+  }
+  const bool stored = evaluator_.addScan(stamp, laser, scanPoints(scan), odom);
+  dirty_ = dirty_ || stored;
+  return stored;
+}
+
+bool OnlineEvaluator::addSegments(double stamp, std::vector<linemap::Segment2> segments,
+                                  const linemap::Pose2& laser, const std::optional<linemap::Pose2>& odom)
+{
+  return evaluator_.addSegments(stamp, laser, std::move(segments), odom);
+}
+
+void OnlineEvaluator::addTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses)
+{
+  std::vector<std::pair<double, linemap::Pose2>> valid;
+  valid.reserve(laser_poses.size());
+  for (const auto& [stamp, p] : laser_poses)
+    if (std::isfinite(stamp) && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta))
+      valid.emplace_back(stamp, p);
+  counters_.rejected_poses += laser_poses.size() - valid.size();
+  if (valid.empty()) return;
+  counters_.unmatched_poses += evaluator_.applyTrajectory(valid);
+  dirty_ = true;
+}
+
+void OnlineEvaluator::setMap(std::vector<linemap::Segment2> map, double stamp)
+{
+  map_ = std::move(map);
+  map_stamp_ = stamp;
+  have_map_ = true;
+  dirty_ = true;
+}
+
+std::optional<MapMetrics> OnlineEvaluator::evaluateIfDue(double now, bool force)
+{
+  if (!have_map_ || !dirty_ || (!force && now - last_evaluation_ < params_.min_period)) return std::nullopt;
+  last_evaluation_ = now;
+  const auto start = std::chrono::steady_clock::now();
+  MapMetrics m = evaluator_.evaluate(map_);
+  counters_.last_eval_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  counters_.last_quality = m.quality.quality;
+  dirty_ = false;
+  return m;
+}
+
+MapMetrics OnlineEvaluator::evaluate(const std::vector<linemap::Segment2>& map)
+{
+  return evaluator_.evaluate(map);
+}
+
+std::vector<std::pair<std::string, std::string>> OnlineEvaluator::diagnostics() const
+{
+  auto n = [](std::size_t v) { return std::to_string(v); };
+  auto d = [](double v)
+  {
+    std::ostringstream out;
+    out << v;
+    return out.str();
+  };
+  const EvaluatorCounters& c = counters_;
+  return {{"keyframe scans", n(evaluator_.scanCount())},
+          {"original segments", n(evaluator_.originalCount())},
+          {"dropped scans (tf)", n(c.dropped_scans)},
+          {"rejected scans", n(c.rejected_scans)},
+          {"rejected trajectory poses", n(c.rejected_poses)},
+          {"unmatched trajectory poses", n(c.unmatched_poses)},
+          {"time jumps", n(c.time_jumps)},
+          {"last quality [%]", d(c.last_quality)},
+          {"last evaluation [ms]", d(c.last_eval_ms)}};
+}
+
+}  // namespace line_map_eval
