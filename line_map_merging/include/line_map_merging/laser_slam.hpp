@@ -1,0 +1,163 @@
+// 2D laser SLAM (ROS-free): the trajectory source for users without one. Front end: every scan is
+// matched against a local map (a likelihood field of the last keyframes' points) by correlative
+// search + Ceres refinement, from the odometry prediction when there is odometry, else from a
+// constant-velocity prediction with a wider window. Keyframes (every keyframe_distance /
+// keyframe_angle of matched motion) are the nodes of a pose graph whose chain edges are the matched
+// relative poses. Loop closures: each keyframe is matched against submaps around older keyframes
+// near its estimate, within a window that grows with the path travelled since the last closure;
+// an accepted closure adds a robust edge and the graph is optimised at once (pose_graph.hpp); a
+// closure the optimised graph cannot agree with is removed again.
+// Not thread-safe: the caller serialises the calls.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+#include "line_extraction/params.hpp"
+#include "line_map_merging/likelihood_grid.hpp"
+#include "line_map_merging/pose_graph.hpp"
+#include "line_map_merging/scan_matcher.hpp"
+
+namespace line_map_merging
+{
+struct LaserSlamParams
+{
+  // Scan points.
+  double max_range = 20.0;  ///< [m] farther points are dropped (sparse, and small angle errors grow there)
+  std::size_t min_points = 20;  ///< fewer valid points: the scan is not matched (pose predicted)
+  // Front end.
+  double resolution = 0.025;                                          ///< [m] local likelihood field
+  double sigma = 0.04;                                                ///< [m] its spread
+  SearchWindow window{0.1, 0.06, 0.05, 0.006, 2.0, 20.0};             ///< with odometry
+  SearchWindow window_no_odometry{0.3, 0.25, 0.05, 0.008, 2.0, 5.0};  ///< without (constant velocity)
+  RefinementParams refinement{2.0, 2.0, 20};
+  double min_score = 0.25;               ///< refined field score below: the prediction is kept
+  double filter_distance = 0.02;         ///< [m] with odometry, scans that moved less are not matched
+  double filter_angle = 0.01;            ///< [rad]
+  double keyframe_distance = 0.2;        ///< [m]
+  double keyframe_angle = 0.17;          ///< [rad]
+  std::size_t local_map_keyframes = 20;  ///< keyframes in the local map
+  double max_odometry_step = 0.5;        ///< [m] odometry moving more between two scans is a jump
+  double max_odometry_turn = 0.8;        ///< [rad]
+  double time_jump_tolerance = 1.0;      ///< [s]
+  // Back end.
+  double edge_sigma_xy = 0.02, edge_sigma_theta = 0.005;        ///< matched chain edges
+  double odometry_sigma_xy = 0.2, odometry_sigma_theta = 0.05;  ///< chain edges with unmatched scans
+  double loop_sigma_xy = 0.05, loop_sigma_theta = 0.01;
+  double loop_loss_scale = 1.0;           ///< Cauchy scale, in standard deviations
+  double loop_min_path = 5.0;             ///< [m] path between a keyframe and a candidate
+  double loop_radius = 0.6;               ///< [m] search radius just after a closure
+  double loop_radius_growth = 0.05;       ///< [m per m of path since the last closure]
+  double loop_max_radius = 3.0;           ///< [m]
+  double loop_angle = 0.15;               ///< [rad]
+  double loop_angle_growth = 0.01;        ///< [rad per m]
+  double loop_max_angle = 0.5;            ///< [rad]
+  double loop_resolution = 0.1;           ///< [m] coarse field of the wide search
+  double loop_angular_step = 0.015;       ///< [rad]
+  std::size_t loop_submap_keyframes = 6;  ///< on each side of the candidate
+  std::size_t loop_candidates = 2;        ///< submaps tried per keyframe
+  std::size_t loop_every = 1;             ///< keyframes between attempts
+  double loop_min_score = 0.55;
+  double loop_max_error_xy = 0.3;     ///< [m] a closure the optimised graph misses by more is removed
+  double loop_max_error_theta = 0.1;  ///< [rad]
+
+  /// Keys as in config/slam.yaml (e.g. "window/linear", "loop/min_score"); throws
+  /// linemap::ParameterError naming the key.
+  static LaserSlamParams fromParams(const linemap::ParamSet& params);
+};
+
+struct SlamScan
+{
+  double stamp = 0.0;
+  std::vector<linemap::Vec2> points;   ///< valid returns in the base frame
+  std::optional<linemap::Pose2> odom;  ///< base in the odometry frame at `stamp`
+};
+
+enum class SlamOutcome
+{
+  kMatched,    ///< matched against the local map
+  kFiltered,   ///< barely moved (odometry): posed by odometry, not matched
+  kPredicted,  ///< not matched (too few points, no map yet, match too poor): posed by the prediction
+  kRejected,   ///< stamp not after the last one: ignored
+};
+
+struct SlamCounters
+{
+  std::size_t scans = 0, matched = 0, filtered = 0, predicted = 0, rejected = 0;
+  std::size_t few_points = 0, poor_matches = 0, odometry_jumps = 0, without_odometry = 0, time_jumps = 0;
+  std::size_t keyframes = 0, loop_attempts = 0, loops_accepted = 0, loops_rejected_score = 0,
+              loops_rejected_graph = 0, optimizations = 0;
+  double last_optimization_ms = 0.0, total_optimization_ms = 0.0, last_match_ms = 0.0;
+};
+
+struct SlamKeyframe
+{
+  double stamp = 0.0;
+  std::size_t scan = 0;               ///< index among the scans accepted (not rejected)
+  linemap::Pose2 local;               ///< front-end pose
+  std::vector<linemap::Vec2> points;  ///< base frame
+  double path = 0.0;                  ///< [m] front-end path length up to here
+};
+
+class LaserSlam
+{
+ public:
+  explicit LaserSlam(const LaserSlamParams& params = {});
+
+  SlamOutcome addScan(const SlamScan& scan);
+  /// Whether the last addScan made a keyframe, and whether it changed the optimised poses.
+  bool keyframeAdded() const { return keyframe_added_; }
+  bool graphOptimized() const { return graph_optimized_; }
+
+  /// Optimised base poses of the keyframes in the map frame, with their scans' stamps.
+  std::vector<std::pair<double, linemap::Pose2>> trajectory() const;
+  /// Optimised base pose of every accepted scan (its keyframe's pose composed with the front end's
+  /// motion from it), in order; with its stamp.
+  std::vector<std::pair<double, linemap::Pose2>> scanPoses() const;
+  /// Base pose of the last accepted scan in the map frame.
+  linemap::Pose2 currentPose() const;
+  /// The last accepted scan's front-end pose, and its odometry (if it had any).
+  const linemap::Pose2& currentLocal() const { return last_local_; }
+  std::optional<linemap::Pose2> currentOdom() const { return last_odom_; }
+
+  const std::vector<SlamKeyframe>& keyframes() const { return keyframes_; }
+  const PoseGraph& graph() const { return graph_; }
+  const SlamCounters& counters() const { return counters_; }
+  const LaserSlamParams& params() const { return params_; }
+  std::vector<std::pair<std::string, std::string>> diagnostics() const;
+  /// Forgets everything but the counters (a new trajectory starts at the origin).
+  void reset();
+
+ private:
+  void addKeyframe(const SlamScan& scan, std::size_t scan_index, bool chain_matched);
+  void rebuildLocalMap();
+  void closeLoops();
+  std::optional<MatchResult> matchLoop(std::size_t candidate, std::size_t current,
+                                       const linemap::Pose2& guess, double radius, double angle);
+
+  LaserSlamParams params_;
+  PoseGraph graph_;
+  std::vector<SlamKeyframe> keyframes_;
+  LikelihoodGrid local_map_;
+  struct ScanRecord
+  {
+    double stamp;
+    std::size_t keyframe;
+    linemap::Pose2 relative;  ///< keyframe local^-1 * scan local
+  };
+  std::vector<ScanRecord> scans_;
+  bool have_scan_ = false;
+  double last_stamp_ = 0.0;
+  linemap::Pose2 last_local_, last_matched_local_, velocity_;  ///< velocity: last matched motion per scan
+  std::optional<linemap::Pose2> last_odom_, last_matched_odom_;
+  double path_ = 0.0, path_at_closure_ = 0.0;
+  bool chain_matched_ = true;  ///< every scan since the last keyframe was matched
+  bool keyframe_added_ = false, graph_optimized_ = false;
+  SlamCounters counters_;
+};
+
+}  // namespace line_map_merging

@@ -1,0 +1,49 @@
+// A smoothed occupancy likelihood field for scan matching (ROS-free): every cell holds
+// exp(-d^2 / 2 sigma^2) of the distance d from its centre to the nearest map point, so a scan
+// point's score falls off smoothly with its distance to the map. The correlative search reads it
+// at the nearest cell; the refinement reads it through Ceres' bicubic interpolator, which needs
+// the smooth field (a binary grid has no gradient).
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+
+namespace line_map_merging
+{
+class LikelihoodGrid
+{
+ public:
+  LikelihoodGrid() = default;
+  /// Field of `points` at `resolution` [m] with spread `sigma` [m]; the grid covers the points'
+  /// bounding box plus `margin` [m] (so a scan overhanging the map still reads zero, not garbage).
+  LikelihoodGrid(const std::vector<linemap::Vec2>& points, double resolution, double sigma, double margin);
+
+  bool empty() const { return cells_.empty(); }
+  double resolution() const { return resolution_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  /// Centre of cell (0, 0).
+  const linemap::Vec2& origin() const { return origin_; }
+  /// Row-major (row = y index) cell values in [0, 1].
+  const std::vector<double>& cells() const { return cells_; }
+
+  /// Value of the cell containing p; 0 outside the grid.
+  double nearest(double x, double y) const
+  {
+    const long ix = std::lround((x - origin_.x()) * inv_resolution_);
+    const long iy = std::lround((y - origin_.y()) * inv_resolution_);
+    if (ix < 0 || iy < 0 || ix >= width_ || iy >= height_) return 0.0;
+    return cells_[static_cast<std::size_t>(iy) * width_ + ix];
+  }
+
+ private:
+  double resolution_ = 0.05, inv_resolution_ = 20.0;
+  linemap::Vec2 origin_ = linemap::Vec2::Zero();
+  int width_ = 0, height_ = 0;
+  std::vector<double> cells_;
+};
+
+}  // namespace line_map_merging

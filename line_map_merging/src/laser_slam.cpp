@@ -1,0 +1,461 @@
+#include "line_map_merging/laser_slam.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace line_map_merging
+{
+namespace
+{
+using linemap::Pose2;
+using linemap::Vec2;
+
+double now_ms()
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+void readWindow(const linemap::ParamSet& p, const std::string& block, SearchWindow& w)
+{
+  w.linear = p.getDouble(block + "/linear", w.linear);
+  w.angular = p.getDouble(block + "/angular", w.angular);
+  w.linear_step = p.getDouble(block + "/linear_step", w.linear_step);
+  w.angular_step = p.getDouble(block + "/angular_step", w.angular_step);
+  w.translation_penalty = p.getDouble(block + "/translation_penalty", w.translation_penalty);
+  w.rotation_penalty = p.getDouble(block + "/rotation_penalty", w.rotation_penalty);
+  if (!(w.linear >= 0.0) || !(w.angular >= 0.0) || !(w.angular_step > 0.0))
+    throw linemap::ParameterError(block + "/linear, /angular must be >= 0 and /angular_step > 0");
+}
+
+std::size_t getCount(const linemap::ParamSet& p, const std::string& key, std::size_t fallback, int min)
+{
+  const int v = p.getInt(key, static_cast<int>(fallback));
+  if (v < min) throw linemap::ParameterError(key + " must be >= " + std::to_string(min));
+  return static_cast<std::size_t>(v);
+}
+
+double getPositive(const linemap::ParamSet& p, const std::string& key, double fallback)
+{
+  const double v = p.getDouble(key, fallback);
+  if (!(v > 0.0) || !std::isfinite(v)) throw linemap::ParameterError(key + " must be a positive number");
+  return v;
+}
+}  // namespace
+
+LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
+{
+  LaserSlamParams s;
+  s.max_range = getPositive(p, "front_end/max_range", s.max_range);
+  s.min_points = getCount(p, "front_end/min_points", s.min_points, 3);
+  s.resolution = getPositive(p, "front_end/resolution", s.resolution);
+  s.sigma = getPositive(p, "front_end/sigma", s.sigma);
+  readWindow(p, "front_end/window", s.window);
+  readWindow(p, "front_end/window_no_odometry", s.window_no_odometry);
+  s.refinement.translation_weight =
+      p.getDouble("front_end/refinement/translation_weight", s.refinement.translation_weight);
+  s.refinement.rotation_weight =
+      p.getDouble("front_end/refinement/rotation_weight", s.refinement.rotation_weight);
+  s.refinement.max_iterations = static_cast<int>(getCount(
+      p, "front_end/refinement/max_iterations", static_cast<std::size_t>(s.refinement.max_iterations), 1));
+  s.min_score = p.getDouble("front_end/min_score", s.min_score);
+  s.filter_distance = p.getDouble("front_end/filter_distance", s.filter_distance);
+  s.filter_angle = p.getDouble("front_end/filter_angle", s.filter_angle);
+  s.keyframe_distance = getPositive(p, "front_end/keyframe_distance", s.keyframe_distance);
+  s.keyframe_angle = getPositive(p, "front_end/keyframe_angle", s.keyframe_angle);
+  s.local_map_keyframes = getCount(p, "front_end/local_map_keyframes", s.local_map_keyframes, 1);
+  s.max_odometry_step = getPositive(p, "front_end/max_odometry_step", s.max_odometry_step);
+  s.max_odometry_turn = getPositive(p, "front_end/max_odometry_turn", s.max_odometry_turn);
+  s.time_jump_tolerance = getPositive(p, "front_end/time_jump_tolerance", s.time_jump_tolerance);
+  s.edge_sigma_xy = getPositive(p, "graph/edge_sigma_xy", s.edge_sigma_xy);
+  s.edge_sigma_theta = getPositive(p, "graph/edge_sigma_theta", s.edge_sigma_theta);
+  s.odometry_sigma_xy = getPositive(p, "graph/odometry_sigma_xy", s.odometry_sigma_xy);
+  s.odometry_sigma_theta = getPositive(p, "graph/odometry_sigma_theta", s.odometry_sigma_theta);
+  s.loop_sigma_xy = getPositive(p, "graph/loop_sigma_xy", s.loop_sigma_xy);
+  s.loop_sigma_theta = getPositive(p, "graph/loop_sigma_theta", s.loop_sigma_theta);
+  s.loop_loss_scale = getPositive(p, "graph/loop_loss_scale", s.loop_loss_scale);
+  s.loop_min_path = p.getDouble("loop/min_path", s.loop_min_path);
+  s.loop_radius = getPositive(p, "loop/radius", s.loop_radius);
+  s.loop_radius_growth = p.getDouble("loop/radius_growth", s.loop_radius_growth);
+  s.loop_max_radius = getPositive(p, "loop/max_radius", s.loop_max_radius);
+  s.loop_angle = getPositive(p, "loop/angle", s.loop_angle);
+  s.loop_angle_growth = p.getDouble("loop/angle_growth", s.loop_angle_growth);
+  s.loop_max_angle = getPositive(p, "loop/max_angle", s.loop_max_angle);
+  s.loop_resolution = getPositive(p, "loop/resolution", s.loop_resolution);
+  s.loop_angular_step = getPositive(p, "loop/angular_step", s.loop_angular_step);
+  s.loop_submap_keyframes = getCount(p, "loop/submap_keyframes", s.loop_submap_keyframes, 0);
+  s.loop_candidates = getCount(p, "loop/candidates", s.loop_candidates, 0);
+  s.loop_every = getCount(p, "loop/every", s.loop_every, 1);
+  s.loop_min_score = p.getDouble("loop/min_score", s.loop_min_score);
+  s.loop_max_error_xy = getPositive(p, "loop/max_error_xy", s.loop_max_error_xy);
+  s.loop_max_error_theta = getPositive(p, "loop/max_error_theta", s.loop_max_error_theta);
+  return s;
+}
+
+LaserSlam::LaserSlam(const LaserSlamParams& params)
+    : params_(params), graph_(PoseGraphParams{params.loop_loss_scale, 50})
+{
+}
+
+void LaserSlam::reset()
+{
+  graph_.clear();
+  keyframes_.clear();
+  local_map_ = LikelihoodGrid();
+  scans_.clear();
+  have_scan_ = false;
+  last_local_ = last_matched_local_ = velocity_ = Pose2();
+  last_odom_.reset();
+  last_matched_odom_.reset();
+  path_ = path_at_closure_ = 0.0;
+  chain_matched_ = true;
+}
+
+SlamOutcome LaserSlam::addScan(const SlamScan& in)
+{
+  keyframe_added_ = graph_optimized_ = false;
+  ++counters_.scans;
+  if (have_scan_ && !(in.stamp > last_stamp_))
+  {
+    ++counters_.rejected;
+    if (in.stamp < last_stamp_ - params_.time_jump_tolerance) ++counters_.time_jumps;
+    return SlamOutcome::kRejected;
+  }
+  const double start = now_ms();
+  SlamScan scan;
+  scan.stamp = in.stamp;
+  scan.odom = in.odom;
+  if (scan.odom &&
+      !(std::isfinite(scan.odom->x) && std::isfinite(scan.odom->y) && std::isfinite(scan.odom->theta)))
+    scan.odom.reset();
+  const double max2 = params_.max_range * params_.max_range;
+  scan.points.reserve(in.points.size());
+  for (const auto& p : in.points)
+    if (p.allFinite() && p.squaredNorm() <= max2) scan.points.push_back(p);
+  if (!scan.odom) ++counters_.without_odometry;
+
+  // Prediction: odometry since the last scan, unless it jumped or is missing (then constant velocity).
+  Pose2 predicted = last_local_;
+  bool odometry_usable = false;
+  if (have_scan_)
+  {
+    if (scan.odom && last_odom_)
+    {
+      const Pose2 step = last_odom_->inverse() * *scan.odom;
+      if (std::hypot(step.x, step.y) <= params_.max_odometry_step &&
+          std::fabs(step.theta) <= params_.max_odometry_turn)
+      {
+        odometry_usable = true;
+        predicted = last_local_ * step;
+      }
+      else
+        ++counters_.odometry_jumps;
+    }
+    if (!odometry_usable) predicted = last_local_ * velocity_;
+  }
+
+  SlamOutcome outcome = SlamOutcome::kPredicted;
+  Pose2 pose = predicted;
+  if (have_scan_ && odometry_usable && last_matched_odom_ && !keyframes_.empty())
+  {
+    // Barely moved since the last match: odometry is better than a fresh match over the same map.
+    const Pose2 moved = last_matched_odom_->inverse() * *scan.odom;
+    if (std::hypot(moved.x, moved.y) < params_.filter_distance &&
+        std::fabs(moved.theta) < params_.filter_angle)
+      outcome = SlamOutcome::kFiltered;
+  }
+  if (outcome != SlamOutcome::kFiltered)
+  {
+    if (scan.points.size() < params_.min_points)
+      ++counters_.few_points;
+    else if (!local_map_.empty())
+    {
+      const SearchWindow& window = odometry_usable ? params_.window : params_.window_no_odometry;
+      const auto found = correlativeSearch(local_map_, scan.points, predicted, window, 1);
+      if (!found.empty())
+      {
+        const MatchResult refined =
+            refineMatch(local_map_, scan.points, found.front().pose, found.front().pose, params_.refinement);
+        if (refined.score >= params_.min_score)
+        {
+          pose = refined.pose;
+          outcome = SlamOutcome::kMatched;
+        }
+        else
+          ++counters_.poor_matches;
+      }
+    }
+  }
+  switch (outcome)
+  {
+    case SlamOutcome::kMatched:
+      ++counters_.matched;
+      break;
+    case SlamOutcome::kFiltered:
+      ++counters_.filtered;
+      break;
+    default:
+      ++counters_.predicted;
+      if (!keyframes_.empty()) chain_matched_ = false;
+  }
+
+  if (have_scan_)
+  {
+    const Pose2 step = last_local_.inverse() * pose;
+    path_ += std::hypot(step.x, step.y);
+    if (outcome == SlamOutcome::kMatched)
+    {
+      // Per-scan motion for the constant-velocity prediction (scans arrive at a steady rate).
+      velocity_ = last_matched_local_.inverse() * pose;
+      const std::size_t since = 1;  // matched scans are consecutive when there is no odometry
+      (void)since;
+    }
+  }
+  if (outcome == SlamOutcome::kMatched || !have_scan_)
+  {
+    last_matched_local_ = pose;
+    last_matched_odom_ = scan.odom;
+  }
+  last_local_ = pose;
+  last_odom_ = scan.odom;
+  last_stamp_ = scan.stamp;
+  const bool first = !have_scan_;
+  have_scan_ = true;
+
+  const std::size_t index = scans_.size();
+  bool make_keyframe = false;
+  if (scan.points.size() >= params_.min_points)
+  {
+    if (keyframes_.empty())
+      make_keyframe = true;
+    else
+    {
+      const Pose2 since = keyframes_.back().local.inverse() * pose;
+      make_keyframe = std::hypot(since.x, since.y) >= params_.keyframe_distance ||
+                      std::fabs(since.theta) >= params_.keyframe_angle;
+    }
+  }
+  (void)first;
+  if (make_keyframe) addKeyframe(scan, index, chain_matched_);
+  if (keyframes_.empty())
+  {
+    // No keyframe yet (the first scans were empty): nothing to hang the scan on.
+    scans_.push_back({scan.stamp, static_cast<std::size_t>(-1), pose});
+  }
+  else
+    scans_.push_back({scan.stamp, keyframes_.size() - 1, keyframes_.back().local.inverse() * pose});
+  counters_.last_match_ms = now_ms() - start;
+  return outcome;
+}
+
+void LaserSlam::addKeyframe(const SlamScan& scan, std::size_t scan_index, bool chain_matched)
+{
+  SlamKeyframe kf;
+  kf.stamp = scan.stamp;
+  kf.scan = scan_index;
+  kf.local = last_local_;
+  kf.points = scan.points;
+  kf.path = path_;
+  if (keyframes_.empty())
+    graph_.addNode(kf.local);
+  else
+  {
+    const Pose2 relative = keyframes_.back().local.inverse() * kf.local;
+    const std::size_t prev = keyframes_.size() - 1;
+    graph_.addNode(graph_.node(prev) * relative);
+    PoseGraphEdge e;
+    e.from = prev;
+    e.to = prev + 1;
+    e.measurement = relative;
+    e.sigma_xy = chain_matched ? params_.edge_sigma_xy : params_.odometry_sigma_xy;
+    e.sigma_theta = chain_matched ? params_.edge_sigma_theta : params_.odometry_sigma_theta;
+    graph_.addEdge(e);
+  }
+  keyframes_.push_back(std::move(kf));
+  chain_matched_ = true;
+  ++counters_.keyframes;
+  keyframe_added_ = true;
+  rebuildLocalMap();
+  if (params_.loop_candidates > 0 && (keyframes_.size() - 1) % params_.loop_every == 0) closeLoops();
+}
+
+void LaserSlam::rebuildLocalMap()
+{
+  std::vector<Vec2> points;
+  const std::size_t n = std::min(params_.local_map_keyframes, keyframes_.size());
+  for (std::size_t i = keyframes_.size() - n; i < keyframes_.size(); ++i)
+    for (const auto& p : keyframes_[i].points) points.push_back(keyframes_[i].local.apply(p));
+  local_map_ = LikelihoodGrid(points, params_.resolution, params_.sigma, 0.5);
+}
+
+std::optional<MatchResult> LaserSlam::matchLoop(std::size_t candidate, std::size_t current,
+                                                const Pose2& guess, double radius, double angle)
+{
+  // Submap: the candidate and its neighbours in the candidate's frame, by their optimised poses.
+  const Pose2 inv = graph_.node(candidate).inverse();
+  const std::size_t s = params_.loop_submap_keyframes;
+  const std::size_t lo = candidate >= s ? candidate - s : 0;
+  std::vector<Vec2> points;
+  for (std::size_t i = lo; i <= candidate + s && i < keyframes_.size(); ++i)
+  {
+    if (keyframes_[current].path - keyframes_[i].path < 0.5 * params_.loop_min_path)
+      continue;  // too recent: part of the chain being checked
+    const Pose2 rel = inv * graph_.node(i);
+    for (const auto& p : keyframes_[i].points) points.push_back(rel.apply(p));
+  }
+  if (points.size() < params_.min_points) return std::nullopt;
+  const auto& scan = keyframes_[current].points;
+  const LikelihoodGrid coarse(points, params_.loop_resolution, params_.loop_resolution, 0.5);
+  SearchWindow wide{radius, angle, params_.loop_resolution, params_.loop_angular_step, 0.0, 0.0};
+  const auto candidates = correlativeSearch(coarse, scan, guess, wide, 3);
+  if (candidates.empty()) return std::nullopt;
+  const LikelihoodGrid fine(points, params_.resolution, params_.sigma, 0.5);
+  SearchWindow narrow{params_.loop_resolution,
+                      params_.loop_angular_step,
+                      params_.resolution,
+                      params_.loop_angular_step / 3.0,
+                      0.0,
+                      0.0};
+  std::optional<MatchResult> best;
+  for (const auto& c : candidates)
+  {
+    const auto local = correlativeSearch(fine, scan, c.pose, narrow, 1);
+    if (local.empty()) continue;
+    const MatchResult refined =
+        refineMatch(fine, scan, local.front().pose, local.front().pose, params_.refinement);
+    if (!best || refined.score > best->score) best = refined;
+  }
+  return best;
+}
+
+void LaserSlam::closeLoops()
+{
+  const std::size_t k = keyframes_.size() - 1;
+  const SlamKeyframe& kf = keyframes_[k];
+  const double since = kf.path - path_at_closure_;
+  const double radius =
+      std::min(params_.loop_max_radius, params_.loop_radius + params_.loop_radius_growth * since);
+  const double angle =
+      std::min(params_.loop_max_angle, params_.loop_angle + params_.loop_angle_growth * since);
+  const Pose2 here = graph_.node(k);
+  // Nearest older keyframes first, at most one per submap's span.
+  std::vector<std::pair<double, std::size_t>> near;
+  for (std::size_t j = 0; j < k; ++j)
+  {
+    if (kf.path - keyframes_[j].path < params_.loop_min_path)
+      break;  // paths only grow: the rest are recent too
+    const Pose2 there = graph_.node(j);
+    const double d = std::hypot(there.x - here.x, there.y - here.y);
+    if (d <= radius) near.push_back({d, j});
+  }
+  std::sort(near.begin(), near.end());
+  std::vector<std::size_t> chosen;
+  for (const auto& [d, j] : near)
+  {
+    if (chosen.size() >= params_.loop_candidates) break;
+    bool overlaps = false;
+    for (std::size_t c : chosen) overlaps |= (j > c ? j - c : c - j) <= params_.loop_submap_keyframes;
+    if (!overlaps) chosen.push_back(j);
+  }
+  for (std::size_t j : chosen)
+  {
+    ++counters_.loop_attempts;
+    const Pose2 guess = graph_.node(j).inverse() * graph_.node(k);
+    const auto match = matchLoop(j, k, guess, radius, angle);
+    if (!match || match->score < params_.loop_min_score)
+    {
+      ++counters_.loops_rejected_score;
+      continue;
+    }
+    PoseGraphEdge e;
+    e.from = j;
+    e.to = k;
+    e.measurement = match->pose;
+    e.sigma_xy = params_.loop_sigma_xy;
+    e.sigma_theta = params_.loop_sigma_theta;
+    e.loop = true;
+    std::vector<Pose2> before(graph_.nodeCount());
+    for (std::size_t i = 0; i < before.size(); ++i) before[i] = graph_.node(i);
+    const std::size_t edge = graph_.addEdge(e);
+    const OptimizationStats stats = graph_.optimize();
+    ++counters_.optimizations;
+    counters_.last_optimization_ms = stats.milliseconds;
+    counters_.total_optimization_ms += stats.milliseconds;
+    const Pose2 error = graph_.edgeError(edge);
+    if (std::hypot(error.x, error.y) > params_.loop_max_error_xy ||
+        std::fabs(error.theta) > params_.loop_max_error_theta)
+    {
+      // The rest of the graph disagrees: a false closure the robust loss only damped. Undo it.
+      graph_.removeEdge(edge);
+      for (std::size_t i = 0; i < before.size(); ++i) graph_.setNode(i, before[i]);
+      ++counters_.loops_rejected_graph;
+      continue;
+    }
+    ++counters_.loops_accepted;
+    graph_optimized_ = true;
+    path_at_closure_ = kf.path;
+  }
+}
+
+std::vector<std::pair<double, Pose2>> LaserSlam::trajectory() const
+{
+  std::vector<std::pair<double, Pose2>> out;
+  out.reserve(keyframes_.size());
+  for (std::size_t i = 0; i < keyframes_.size(); ++i) out.emplace_back(keyframes_[i].stamp, graph_.node(i));
+  return out;
+}
+
+std::vector<std::pair<double, Pose2>> LaserSlam::scanPoses() const
+{
+  std::vector<std::pair<double, Pose2>> out;
+  out.reserve(scans_.size());
+  for (const auto& s : scans_)
+  {
+    if (s.keyframe < keyframes_.size())
+      out.emplace_back(s.stamp, graph_.node(s.keyframe) * s.relative);
+    else
+      out.emplace_back(s.stamp, s.relative);
+  }
+  return out;
+}
+
+Pose2 LaserSlam::currentPose() const
+{
+  if (keyframes_.empty()) return last_local_;
+  const std::size_t k = keyframes_.size() - 1;
+  return graph_.node(k) * (keyframes_[k].local.inverse() * last_local_);
+}
+
+std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
+{
+  const auto& c = counters_;
+  auto n = [](std::size_t v) { return std::to_string(v); };
+  std::ostringstream opt;
+  opt.precision(3);
+  opt << c.last_optimization_ms;
+  std::ostringstream total;
+  total.precision(4);
+  total << c.total_optimization_ms;
+  return {{"scans", n(c.scans)},
+          {"matched scans", n(c.matched)},
+          {"scans posed by odometry (barely moved)", n(c.filtered)},
+          {"scans posed by prediction (not matched)", n(c.predicted)},
+          {"scans with too few points", n(c.few_points)},
+          {"poor matches", n(c.poor_matches)},
+          {"scans without odometry", n(c.without_odometry)},
+          {"odometry jumps", n(c.odometry_jumps)},
+          {"scans out of order (ignored)", n(c.rejected)},
+          {"time jumps back", n(c.time_jumps)},
+          {"keyframes", n(c.keyframes)},
+          {"loop closure attempts", n(c.loop_attempts)},
+          {"loop closures accepted", n(c.loops_accepted)},
+          {"loop closures rejected (score)", n(c.loops_rejected_score)},
+          {"loop closures rejected (graph)", n(c.loops_rejected_graph)},
+          {"optimizations", n(c.optimizations)},
+          {"last optimization [ms]", opt.str()},
+          {"total optimization [ms]", total.str()}};
+}
+
+}  // namespace line_map_merging
