@@ -27,6 +27,23 @@ double headingDifference(const Segment2& a, const Segment2& b, bool directed)
   return directed ? std::abs(linemap::normalizeAngle(a.heading() - b.heading())) : undirectedAngle(a, b);
 }
 
+/// Whether map segment m lies along the face: headings within the angle, an overlap of positive
+/// length along the face, and within association_distance of the face's line over that overlap.
+/// (Not by the midpoint alone: a segment running on over two collinear faces belongs to both.)
+bool associated(const Segment2& m, const Segment2& face, const GroundTruthParams& params)
+{
+  if (headingDifference(m, face, params.directed) > params.association_angle) return false;
+  const double length = face.length();
+  const Vec2 u = (face.end - face.start) / length, n(-u.y(), u.x());
+  const double a = u.dot(m.start - face.start), b = u.dot(m.end - face.start);
+  const double lo = std::max(std::min(a, b), 0.0), hi = std::min(std::max(a, b), length);
+  if (!(hi > lo)) return false;
+  const double da = n.dot(m.start - face.start), db = n.dot(m.end - face.start);
+  const auto offset = [&](double t) { return da + (db - da) * (t - a) / (b - a); };
+  return std::abs(offset(lo)) <= params.association_distance &&
+         std::abs(offset(hi)) <= params.association_distance;
+}
+
 void requirePositive(double v, const char* key)
 {
   if (!(v > 0.0) || !std::isfinite(v))
@@ -88,6 +105,9 @@ GroundTruthParams GroundTruthParams::fromParams(const linemap::ParamSet& params)
   p.association_distance = params.getDouble("eval/gt_association_distance", p.association_distance);
   p.directed = params.getBool("eval/gt_directed", p.directed);
   p.min_seen_length = params.getDouble("eval/gt_min_seen_length", p.min_seen_length);
+  const int beams = params.getInt("eval/gt_min_seen_beams", static_cast<int>(p.min_seen_beams));
+  if (beams < 0) throw linemap::ParameterError("parameter 'eval/gt_min_seen_beams' must be >= 0");
+  p.min_seen_beams = static_cast<std::size_t>(beams);
   p.corner_tolerance = params.getDouble("eval/gt_corner_tolerance", p.corner_tolerance);
   p.corner_min_angle = deg * params.getDouble("eval/gt_corner_min_angle_deg", p.corner_min_angle / deg);
   p.vertex_radius = params.getDouble("eval/gt_vertex_radius", p.vertex_radius);
@@ -113,7 +133,7 @@ void GroundTruthParams::validate() const
                                   std::to_string(min_seen_length));
 }
 
-SeenParts seenParts(const GroundTruth& truth, double min_piece_length)
+SeenParts seenParts(const GroundTruth& truth, double min_piece_length, std::size_t min_piece_beams)
 {
   SeenParts seen(truth.walls.size());
   for (std::size_t k = 0; k < truth.scans.size(); ++k)
@@ -129,7 +149,7 @@ SeenParts seenParts(const GroundTruth& truth, double min_piece_length)
       if (a > b) std::swap(a, b);
       a = std::clamp(a, 0.0, length);
       b = std::clamp(b, 0.0, length);
-      if (b - a >= min_piece_length && b > a) seen[v.wall].emplace_back(a, b);
+      if (b - a >= min_piece_length && b > a && v.beams >= min_piece_beams) seen[v.wall].emplace_back(a, b);
     }
   for (auto& parts : seen)
   {
@@ -183,9 +203,7 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
     score.face = w;
     score.length = length;
     for (std::size_t m = 0; m < map.size(); ++m)
-      if (headingDifference(map[m], wall, params.directed) <= params.association_angle &&
-          linemap::distanceToSegment(map[m].midpoint(), wall.start, wall.end) <= params.association_distance)
-        assoc[w].push_back(m);
+      if (associated(map[m], wall, params)) assoc[w].push_back(m);
     score.associated = assoc[w].size();
 
     std::size_t samples = 0, covered = 0;
@@ -281,7 +299,8 @@ GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth, const std
                                              const GroundTruthParams& params)
 {
   params.validate();
-  return evaluateAgainstGroundTruth(truth.walls, seenParts(truth, params.min_seen_length), map, params);
+  return evaluateAgainstGroundTruth(
+      truth.walls, seenParts(truth, params.min_seen_length, params.min_seen_beams), map, params);
 }
 
 GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,

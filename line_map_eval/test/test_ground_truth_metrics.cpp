@@ -207,4 +207,32 @@ TEST(GroundTruthMetrics, SeenPartsAreTheUnionOfLongEnoughPieces)
   EXPECT_DOUBLE_EQ(s[1][0].first, 3.0);
   EXPECT_DOUBLE_EQ(s[1][0].second, 5.0);
   EXPECT_EQ(line_map_eval::seenParts(truth, 0.0)[1].size(), 2u);  // without the minimum it stays
+  // Sights need beams too: the [6, 9] piece hit by 4 beams is no sight with a minimum of 5.
+  truth.scans[1].visible[1].beams = 4;
+  EXPECT_EQ(line_map_eval::seenParts(truth, 0.6, 5)[0].size(), 1u);
+  EXPECT_EQ(line_map_eval::seenParts(truth, 0.6, 4)[0].size(), 2u);
+}
+
+TEST(GroundTruthMetrics, ASegmentAcrossAPartitionBelongsToBothFaces)
+{
+  // Faces P (6 m) and Q (1.9 m) on the line y = 0, 10 cm apart where a partition meets the wall;
+  // the map bridges them with one segment 1 cm off. Its midpoint (4, 0.01) is 2.1 m from Q, yet it
+  // runs along Q: it covers both, and what it gets wrong is where they end: P's end (6, 0) and Q's
+  // start (6.1, 0) are 2 and 1.9 m from the nearest map endpoint.
+  const std::vector<Segment2> faces = {Segment2(Vec2(0, 0), Vec2(6, 0)), Segment2(Vec2(6.1, 0), Vec2(8, 0))};
+  const std::vector<Segment2> map = {Segment2(Vec2(0, 0.01), Vec2(8, 0.01))};
+  const GroundTruthResult r = evaluateAgainstGroundTruth(faces, map, defaults());
+  ASSERT_EQ(r.walls.size(), 2u);
+  EXPECT_EQ(r.undetected_walls, 0u);
+  EXPECT_EQ(r.walls[1].associated, 1u);
+  EXPECT_DOUBLE_EQ(r.walls[0].coverage, 1.0);
+  EXPECT_DOUBLE_EQ(r.walls[1].coverage, 1.0);
+  EXPECT_NEAR(r.walls[0].endpoint_error, std::hypot(2.0, 0.01), 1e-12);
+  EXPECT_NEAR(r.walls[1].endpoint_error, std::hypot(1.9, 0.01), 1e-12);
+  EXPECT_NEAR(r.max_endpoint_error, std::hypot(2.0, 0.01), 1e-12);
+  EXPECT_NEAR(r.mean_endpoint_error, (0.01 + std::hypot(2.0, 0.01) + std::hypot(1.9, 0.01) + 0.01) / 4.0,
+              1e-12);
+  // Off the line by more than association_distance over the overlap: not associated.
+  const std::vector<Segment2> off = {Segment2(Vec2(0, 0.25), Vec2(8, 0.25))};
+  EXPECT_EQ(evaluateAgainstGroundTruth(faces, off, defaults()).undetected_walls, 2u);
 }

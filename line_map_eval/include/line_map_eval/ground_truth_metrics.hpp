@@ -20,12 +20,16 @@ struct GroundTruthParams
   double coverage_tolerance = 0.05;                      ///< a face sample is covered within this [m]
   double sample_spacing = 0.01;                          ///< distance between face samples [m]
   double association_angle = 10.0 * linemap::kPi / 180;  ///< map segment vs face [rad]
-  double association_distance = 0.2;                     ///< map segment midpoint to the face [m]
+  double association_distance = 0.2;                     ///< map segment to the face's line [m]
   /// Compare directed headings (segments and faces share the free-side-left orientation), so a
   /// segment on one face of a wall never counts for the other face 10 cm away.
   bool directed = true;
-  double min_seen_length = 0.6;    ///< a visible piece shorter than this is no sight of the face [m]
-  double corner_tolerance = 0.01;  ///< face endpoints this close meet [m]
+  /// A visible piece is a sight of its face when at least this long [m] and hit by at least
+  /// min_seen_beams beams: the default extractor's minimums (srg/min_length, srg/min_points), as in
+  /// the extraction benchmark; a shorter or sparser glimpse gives no segment to map.
+  double min_seen_length = 0.6;
+  std::size_t min_seen_beams = 10;
+  double corner_tolerance = 0.01;                       ///< face endpoints this close meet [m]
   double corner_min_angle = 20.0 * linemap::kPi / 180;  ///< faces meeting straighter are no corner [rad]
   double vertex_radius = 0.3;                           ///< map endpoints within this of a corner [m]
 
@@ -38,8 +42,8 @@ struct GroundTruthParams
 using SeenParts = std::vector<std::vector<std::pair<double, double>>>;
 
 /// The union, per face of `truth.walls`, of the visible pieces of every scan that are at least
-/// `min_piece_length` long (an extractor makes no segment of a shorter glimpse).
-SeenParts seenParts(const GroundTruth& truth, double min_piece_length);
+/// `min_piece_length` long and hit by at least `min_piece_beams` beams.
+SeenParts seenParts(const GroundTruth& truth, double min_piece_length, std::size_t min_piece_beams = 0);
 
 struct WallScore
 {
@@ -78,7 +82,9 @@ struct GroundTruthResult
 /// Scores `map` against the faces `walls`, over their seen parts `seen` (one entry per face; a
 /// face without seen parts is not scored). A map segment is associated with a face when their
 /// heading difference (directed, or undirected with directed = false) is at most
-/// association_angle and its midpoint lies within association_distance of the face segment.
+/// association_angle, it overlaps the face along the face's direction, and over that overlap it
+/// stays within association_distance of the face's line (so a segment running on over two
+/// collinear faces, e.g. across a 10 cm partition, belongs to both).
 /// Coverage samples each seen interval every <= sample_spacing (both ends included) and counts
 /// the samples within coverage_tolerance of an associated segment, so a perpendicular face's
 /// segment ending at a corner does not count as covering it. A face endpoint is seen when a seen
@@ -96,7 +102,8 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<linemap::Segment2
                                              const SeenParts& seen, const std::vector<linemap::Segment2>& map,
                                              const GroundTruthParams& params);
 
-/// Against a simulation's ground truth: its faces over seenParts(truth, params.min_seen_length).
+/// Against a simulation's ground truth: its faces over their parts seen in sights (seenParts with
+/// min_seen_length and min_seen_beams).
 GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth,
                                              const std::vector<linemap::Segment2>& map,
                                              const GroundTruthParams& params);
