@@ -1,5 +1,6 @@
 #include "line_map_eval/carmen_log.hpp"
 
+#include <algorithm>
 #include <boost/iostreams/copy.hpp>
 #include <boost/iostreams/device/array.hpp>
 #include <boost/iostreams/device/back_inserter.hpp>
@@ -12,6 +13,8 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <functional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
@@ -361,6 +364,28 @@ std::vector<std::size_t> pairKeyframes(const CarmenLog& raw, const CarmenLog& co
     pairs.push_back(best);
   }
   return pairs;
+}
+
+double carmenNoReturnFloor(const CarmenLog& log)
+{
+  float largest = 0.0f;
+  for (const CarmenScan& s : log.scans)
+    for (const float r : s.ranges)
+      if (std::isfinite(r)) largest = std::max(largest, r);
+  if (!(largest > 0.0f)) return 0.0;
+  const double lowest_code = static_cast<double>(largest) * (1.0 - kNoReturnSpan);
+  std::set<float, std::greater<float>> near_top;  // distinct readings within the span, largest first
+  for (const CarmenScan& s : log.scans)
+    for (const float r : s.ranges)
+      if (std::isfinite(r) && r >= lowest_code) near_top.insert(r);
+  float floor = largest;
+  for (const float r : near_top)
+  {
+    // The margin absorbs float rounding: 81.89f - 81.87f is 0.0200005 m.
+    if (static_cast<double>(floor - r) > kNoReturnStep + 1e-4) break;
+    floor = r;
+  }
+  return floor;
 }
 
 ScanGeometry carmenBeamGeometry(std::size_t beam_count, double no_return, double range_min)

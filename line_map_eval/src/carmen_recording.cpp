@@ -48,19 +48,17 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
   CarmenRecordingReport info;
   const CarmenScan& first = raw.scans.front();
   const std::size_t beams = first.ranges.size();
-  float max_reading = 0.0f;
   for (const CarmenScan& s : raw.scans)
   {
     if (s.ranges.size() != beams)
       throw std::runtime_error(raw.path + ":" + std::to_string(s.line) + ": scan has " +
                                std::to_string(s.ranges.size()) + " readings, the log's first scan " +
                                std::to_string(beams));
-    for (const float r : s.ranges) max_reading = std::max(max_reading, r);
   }
 
   Recording rec;
   rec.source = raw.path;
-  info.no_return_range = options.no_return_range > 0.0 ? options.no_return_range : max_reading;
+  info.no_return_range = options.no_return_range > 0.0 ? options.no_return_range : carmenNoReturnFloor(raw);
   if (first.type == CarmenScanType::RobotLaser1)
   {
     if (options.no_return_range <= 0.0 && first.max_range > 0.0) info.no_return_range = first.max_range;
@@ -76,6 +74,8 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
   {
     rec.geometry = carmenBeamGeometry(beams, info.no_return_range, options.range_min);
   }
+  if (options.max_usable_range > 0.0)
+    rec.geometry.range_max = std::min(rec.geometry.range_max, options.max_usable_range);
 
   // Laser mounting on base_link.
   if (parseOffset(raw, rec.base_to_laser))

@@ -349,6 +349,50 @@ TEST(CarmenLog, BeamGeometry)
   EXPECT_THROW(carmenBeamGeometry(1, 10.0), std::invalid_argument);
 }
 
+/// A 3-beam FLASER line with the given readings at time t.
+std::string flaserRanges(double t, double a, double b, double c)
+{
+  std::ostringstream s;
+  s << "FLASER 3 " << a << " " << b << " " << c << " 0 0 0 0 0 0 " << t << " host " << t;
+  return s.str();
+}
+
+TEST(CarmenRecording, NoReturnCodesThatVaryAreAllInvalid)
+{
+  // No-return written as 81.87, 81.89 and 81.91 m: all three are codes (range_max 5 mm below the
+  // lowest, 81.865 m); 81.0 m lies more than 1 % (0.82 m) below the largest and stays a reading.
+  TempDir dir;
+  const CarmenLog log = readCarmenLog(dir.file(
+      "jitter.clf", flaserRanges(1.0, 2.5, 81.91, 7.0) + "\n" + flaserRanges(2.0, 81.87, 3.0, 81.89) + "\n" +
+                        flaserRanges(3.0, 81.89, 81.91, 10.0) + "\n" + flaserRanges(4.0, 81.0, 4.0, 81.87) +
+                        "\n"));
+  EXPECT_DOUBLE_EQ(carmenNoReturnFloor(log), static_cast<double>(81.87f));
+  const Recording rec = fromCarmen(log, nullptr);
+  EXPECT_NEAR(rec.geometry.range_max, 81.865, 1e-5);
+  std::size_t valid = 0, codes = 0;
+  for (const RecordedScan& scan : rec.scans)
+    for (const float r : scan.ranges)
+    {
+      const bool is_code = r > 81.5f;
+      if (r <= rec.geometry.range_max) ++valid;
+      if (is_code) ++codes;
+      EXPECT_EQ(r <= rec.geometry.range_max, !is_code) << r;
+    }
+  EXPECT_EQ(codes, 6u);
+  EXPECT_EQ(valid, 6u);
+
+  // ACES: 50.0 for no return, real readings up to 49.91 m (9 cm apart: no code).
+  const CarmenLog aces = readCarmenLog(dir.file("aces.clf", flaserRanges(1.0, 50.0, 49.91, 3.0) + "\n"));
+  EXPECT_DOUBLE_EQ(carmenNoReturnFloor(aces), static_cast<double>(50.0f));
+  EXPECT_GE(fromCarmen(aces, nullptr).geometry.range_max, 49.91);
+  EXPECT_LT(fromCarmen(aces, nullptr).geometry.range_max, 50.0);
+
+  // A usable range below the sensor's maximum caps range_max.
+  CarmenRecordingOptions options;
+  options.max_usable_range = 40.0;
+  EXPECT_DOUBLE_EQ(fromCarmen(log, nullptr, options).geometry.range_max, 40.0);
+}
+
 TEST(CarmenRecording, StampsBecomeStrictlyIncreasing)
 {
   TempDir dir;

@@ -34,10 +34,13 @@ options:
   --compression C   bag chunk compression: none, lz4 or bz2 (default none)
   --min-step S      minimum time between consecutive scans [s]: stamps that do not increase
                     by at least S are moved to the previous stamp + S (default 0.001)
+  --max-range R     readings beyond R metres are invalid too (range_max at most R)
   --help            this text
 
 Beams: n readings span 180 degrees centred on the heading (increment pi/n for even n,
-pi/(n-1) for odd n); range_max is 5 mm below the log's no-return value (its largest reading).
+pi/(n-1) for odd n). No return: sensors write their maximum, printed with a jitter of a few
+centimetres (81.87, 81.89, 81.91 m): the largest reading and the distinct readings below it in steps
+of at most 5 cm, within 1 % of it, are no-return codes; range_max is 5 mm below the lowest of them.
 Exit code 1 on bad input.)";
 
 std::size_t parseCount(const std::string& option, const std::string& value, std::size_t min)
@@ -123,6 +126,8 @@ int main(int argc, char** argv)
         bag_options.compression = value();
       else if (arg == "--min-step")
         rec_options.min_stamp_step = parsePositive(arg, value());
+      else if (arg == "--max-range")
+        rec_options.max_usable_range = parsePositive(arg, value());
       else if (arg == "--frames")
       {
         const std::vector<std::string> f = split(value(), ',');

@@ -103,4 +103,17 @@ std::vector<std::size_t> pairKeyframes(const CarmenLog& raw, const CarmenLog& co
 /// r is valid iff range_min <= r <= range_max (sensor_msgs/LaserScan semantics).
 ScanGeometry carmenBeamGeometry(std::size_t beam_count, double no_return, double range_min = 0.0);
 
+/// Readings within this fraction below the largest reading of a log may be no-return codes.
+constexpr double kNoReturnSpan = 0.01;
+/// Largest step between neighbouring distinct no-return codes [m]: logs print the sensor maximum
+/// with a jitter of a few centimetres (81.87, 81.89 and 81.91 m in one log).
+constexpr double kNoReturnStep = 0.05;
+
+/// The lowest value a log writes for "no return" (0 when it holds no reading). Sensors write their
+/// maximum for beams without a return, not always exactly the same value: the distinct readings
+/// from the largest one downwards, each within kNoReturnStep of the next larger one and all within
+/// kNoReturnSpan of the largest, are taken as no-return codes. A real reading stands apart (ACES:
+/// 50.0 written for no return, real readings up to 49.91 m) and stays valid.
+double carmenNoReturnFloor(const CarmenLog& log);
+
 }  // namespace line_map_eval

@@ -15,9 +15,12 @@ struct CarmenRecordingOptions
 {
   /// Stamps are made strictly increasing: t_i = max(t_i, t_{i-1} + min_stamp_step) [s].
   double min_stamp_step = 1e-3;
-  /// Value the sensor writes for "no return" [m]; 0 = the largest reading of the log.
+  /// Value the sensor writes for "no return" [m]; 0 = found in the log (carmenNoReturnFloor: the
+  /// largest reading and the codes printed within a few centimetres below it).
   /// range_max is set 5 mm below it (see carmenBeamGeometry).
   double no_return_range = 0.0;
+  /// Readings beyond this are invalid too [m] (0 = no such limit).
+  double max_usable_range = 0.0;
   /// Readings below this are invalid [m].
   double range_min = 0.0;
   /// Keep only the first this many scans (0 = all); keyframes beyond are dropped.
@@ -31,7 +34,7 @@ struct CarmenRecordingReport
   double max_stamp_shift = 0.0;     ///< largest such move [s]
   std::string odometry_source;      ///< "scan odometry fields", "ODOM lines" or "scan laser poses"
   std::string mounting_source;      ///< where base_link->laser came from
-  double no_return_range = 0.0;     ///< value taken as "no return"
+  double no_return_range = 0.0;     ///< lowest value taken as "no return"
 };
 
 /// Every raw scan becomes a RecordedScan (stamp, ranges, odometry of base_link).
