@@ -17,7 +17,8 @@ namespace line_map_merging
 {
 namespace
 {
-// 2: parameters gained 'weighting' and 'map_merge'. Version 1 files still load (see load()).
+// 2: parameters gained 'weighting', 'map_merge' and 'regroup_on_adjust'. Version 1 files still load (see
+// load()).
 constexpr int kFormatVersion = 2;
 constexpr int kOldestFormatVersion = 1;
 
@@ -127,6 +128,7 @@ void CaeRlsm::save(const std::string& path) const
   out << YAML::Key << "weighting" << YAML::Value
       << (params_.fusion.weighting == FusionWeighting::length ? "length" : "count");
   out << YAML::Key << "map_merge" << YAML::Value << params_.map_merge;
+  out << YAML::Key << "regroup_on_adjust" << YAML::Value << params_.regroup_on_adjust;
   out << YAML::EndMap;
   out << YAML::Key << "next_id" << YAML::Value << next_id_;
   out << YAML::Key << "keyframe_count" << YAML::Value << keyframes_.size();
@@ -183,8 +185,8 @@ void CaeRlsm::load(const std::string& path)
   const int version = read<int>(path, require(path, root, "format_version"), "format_version");
   if (version < kOldestFormatVersion || version > kFormatVersion)
     throw MapFileError("map file '" + path + "': format_version " + std::to_string(version) +
-                       " is not supported (this build reads " + std::to_string(kOldestFormatVersion) + " to " +
-                       std::to_string(kFormatVersion) + ")");
+                       " is not supported (this build reads " + std::to_string(kOldestFormatVersion) +
+                       " to " + std::to_string(kFormatVersion) + ")");
   const std::string method = read<std::string>(path, require(path, root, "method"), "method");
   if (method != name())
     throw MapFileError("map file '" + path + "': field 'method' is '" + method + "', expected '" + name() +
@@ -199,8 +201,8 @@ void CaeRlsm::load(const std::string& path)
   params.fusion.min_overlap = readFinite(path, require(path, p, "min_overlap"), "parameters/min_overlap");
   params.consistent_adjustment =
       read<bool>(path, require(path, p, "consistent_adjustment"), "parameters/consistent_adjustment");
-  // Version 1 files were made with the paper's count weighting and no map-level merge: they load
-  // as such, so a saved map adjusts as it would have.
+  // Version 1 files were made with the paper's count weighting, no map-level merge and no regrouping:
+  // they load as such, so a saved map adjusts as it would have.
   const std::string weighting =
       p["weighting"] ? read<std::string>(path, p["weighting"], "parameters/weighting") : std::string("count");
   if (weighting != "length" && weighting != "count")
@@ -208,6 +210,9 @@ void CaeRlsm::load(const std::string& path)
                        "', expected 'length' or 'count'");
   params.fusion.weighting = weighting == "length" ? FusionWeighting::length : FusionWeighting::count;
   params.map_merge = p["map_merge"] ? read<bool>(path, p["map_merge"], "parameters/map_merge") : false;
+  params.regroup_on_adjust = p["regroup_on_adjust"]
+                                 ? read<bool>(path, p["regroup_on_adjust"], "parameters/regroup_on_adjust")
+                                 : false;
   try
   {
     params.fusion.validate();

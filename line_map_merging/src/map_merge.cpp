@@ -3,6 +3,8 @@
 // would stay apart for ever; here each map segment a keyframe touched is merged with every map
 // segment it meets the fusion conditions with, either way round, until none is left.
 #include <algorithm>
+#include <unordered_map>
+#include <vector>
 
 #include "line_map_merging/cae_rlsm.hpp"
 
@@ -47,6 +49,66 @@ std::size_t CaeRlsm::mergeMapSegments(std::set<std::uint64_t> pending)
     pending.insert(candidates.front());
   }
   return merged;
+}
+
+std::size_t CaeRlsm::regroup()
+{
+  const std::size_t before = nodes_.size();
+  std::vector<std::uint64_t> old_id(leaves_.size(), UINT64_MAX);
+  for (const auto& [id, node] : nodes_)
+    for (std::uint32_t l : node.leaves) old_id[l] = id;
+  const std::uint64_t first_fresh = next_id_;
+  nodes_.clear();
+  index_.clear();
+  index_stale_ = false;
+  // OTM-ILSM over every leaf in arrival order, keyframe by keyframe, as if merged on these poses.
+  std::set<std::uint64_t> touched;
+  for (std::uint32_t l = 0; l < leaves_.size(); ++l)
+  {
+    if (params_.map_merge && l > 0 && leaves_[l].slot != leaves_[l - 1].slot)
+    {
+      mergeMapSegments(std::move(touched));
+      touched.clear();
+    }
+    touched.insert(insertSegment(worldLeaf(l), l));
+  }
+  if (params_.map_merge) mergeMapSegments(std::move(touched));
+
+  // Ids follow the leaves: in order of their smallest old id, each new segment takes the smallest
+  // old id of its leaves that no segment took before it; a segment whose old ids are all taken (a
+  // group that split) gets a fresh one.
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> order;  // (smallest old id, temporary id)
+  for (auto& [id, node] : nodes_)
+  {
+    std::sort(node.leaves.begin(), node.leaves.end());
+    std::uint64_t smallest = UINT64_MAX;
+    for (std::uint32_t l : node.leaves) smallest = std::min(smallest, old_id[l]);
+    order.emplace_back(smallest, id);
+  }
+  std::sort(order.begin(), order.end());
+  std::unordered_map<std::uint64_t, Node> renamed;
+  std::set<std::uint64_t> taken;
+  next_id_ = first_fresh;
+  for (const auto& [smallest, temporary] : order)
+  {
+    Node& node = nodes_.at(temporary);
+    std::vector<std::uint64_t> mine;
+    for (std::uint32_t l : node.leaves) mine.push_back(old_id[l]);
+    std::sort(mine.begin(), mine.end());
+    std::uint64_t id = UINT64_MAX;
+    for (std::uint64_t candidate : mine)
+      if (candidate != UINT64_MAX && !taken.count(candidate))
+      {
+        id = candidate;
+        break;
+      }
+    if (id == UINT64_MAX) id = next_id_++;
+    taken.insert(id);
+    renamed.emplace(id, std::move(node));
+  }
+  nodes_ = std::move(renamed);
+  rebuildIndex();
+  return before > nodes_.size() ? before - nodes_.size() : 0;
 }
 
 }  // namespace line_map_merging

@@ -227,6 +227,11 @@ AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap:
                 transforms_[i] << c, -s, p.x, s, c, p.y;
               });
 
+  if (params_.consistent_adjustment && params_.regroup_on_adjust)
+  {
+    result.merged = regroup();
+    return result;
+  }
   std::vector<Node*> nodes;
   nodes.reserve(nodes_.size());
   for (auto& entry : nodes_) nodes.push_back(&entry.second);

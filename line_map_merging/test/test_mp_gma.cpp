@@ -240,3 +240,39 @@ TEST(MpGma, MergingContinuesAfterAnAdjustmentIndexAndLinearAlike)
     if (consistent) EXPECT_EQ(ma.size(), 8u) << "true poses from the adjustment on: one segment per wall";
   }
 }
+
+TEST(MpGma, RegroupGivesExactlyTheTruePoseMapAndKeepsIds)
+{
+  // Regrouping replays OTM-ILSM over the leaves in arrival order: under the true poses it is the
+  // same computation as merging on them, so the maps are identical (not only within 1 mm).
+  const LoopData d = makeLoop(6);
+  CaeRlsm reference;
+  for (Keyframe k : d.keyframes)
+  {
+    k.pose = d.truth[k.index];
+    reference.addKeyframe(k);
+  }
+  CaeRlsm merger;
+  ASSERT_TRUE(merger.params().regroup_on_adjust);
+  for (const Keyframe& k : d.keyframes) merger.addKeyframe(k);
+  merger.adjust(truePoses(d));
+  const auto ref = reference.map(), adjusted = merger.map();
+  ASSERT_EQ(adjusted.size(), ref.size());
+  EXPECT_EQ(maxEndpointDifference(adjusted, ref), 0.0);
+  std::size_t leaves = 0;
+  for (const MapSegment& s : adjusted) leaves += s.merged_count;
+  EXPECT_EQ(leaves, merger.leafCount()) << "every leaf belongs to exactly one map segment";
+
+  // Adjusting to the poses it already has replays the same merges: same segments under the same ids.
+  std::vector<std::pair<std::uint64_t, linemap::Pose2>> same;
+  for (const auto& k : merger.keyframes()) same.emplace_back(k.index, k.pose);
+  merger.adjust(same);
+  const auto again = merger.map();
+  ASSERT_EQ(again.size(), adjusted.size());
+  for (std::size_t i = 0; i < again.size(); ++i)
+  {
+    EXPECT_EQ(again[i].id, adjusted[i].id);
+    EXPECT_EQ(again[i].merged_count, adjusted[i].merged_count);
+    EXPECT_EQ((again[i].segment.start - adjusted[i].segment.start).norm(), 0.0);
+  }
+}

@@ -33,6 +33,10 @@ struct CaeParams
   /// the consistency pass after MP-GMA uses the same symmetric test. Off = the paper's behaviour,
   /// where two map segments born apart stay apart unless one scan segment bridges them.
   bool map_merge = true;
+  /// After MP-GMA (with consistent_adjustment): regroup the leaves from scratch, OTM-ILSM over every
+  /// leaf in arrival order under the new poses, instead of re-fusing each map segment's own leaves;
+  /// ids carry over by the leaves. Groups formed on drifted poses otherwise stay as formed.
+  bool regroup_on_adjust = true;
 
   /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge".
   static CaeParams fromParams(const linemap::ParamSet& params);
@@ -98,6 +102,9 @@ class CaeRlsm : public Merger
   /// the conditions with, either way round, re-queueing the result, until none is left; the smallest
   /// id survives and takes the others' leaves. Returns how many map segments were merged away.
   std::size_t mergeMapSegments(std::set<std::uint64_t> pending);
+  /// Rebuilds the map from the leaves under the current poses (map_merge.cpp); each new map segment
+  /// keeps the smallest old id among its leaves' not taken by a segment before it. Returns the count.
+  std::size_t regroup();
   Box paddedBox(const Segment2& s) const;  // padded by the fusion conditions' reach
   static Box boundingBox(const Segment2& s, double pad = 0.0);
   void indexInsert(std::uint64_t id, Node& node);
