@@ -257,6 +257,8 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
   // One extraction shared by every merger.
   const Pose2& mount = rec.base_to_laser;
   std::vector<Segment2> originals_world;
+  double fit_rms_sum = 0.0, line_sigma_sum = 0.0;
+  std::size_t fitted = 0;
   {
     ProgressBar bar("extract " + result.extractor, frames.size(), options.progress);
     const auto start = Clock::now();
@@ -266,7 +268,24 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
       try
       {
         const auto& extracted = extractor.extract(scanInput(rec.geometry, scan.ranges));
-        for (const auto& s : extracted.segments) frames[k].segments.emplace_back(s.start, s.end);
+        const auto& points = extractor.preparedScan().points;
+        for (const auto& s : extracted.segments)
+        {
+          frames[k].segments.emplace_back(s.start, s.end);
+          double squares = 0.0;
+          const Vec2 normal(std::cos(s.angle), std::sin(s.angle));
+          for (int i = s.index_begin; i < s.index_end; ++i)
+          {
+            const double d = normal.dot(points[extracted.point_indices[i]]) - s.radius;
+            squares += d * d;
+          }
+          const int n = s.index_end - s.index_begin;
+          if (n <= 0) continue;
+          const double rms = std::sqrt(squares / n);
+          fit_rms_sum += rms;
+          line_sigma_sum += rms / std::sqrt(static_cast<double>(n));
+          ++fitted;
+        }
       }
       catch (const line_extraction::ScanError& e)
       {
@@ -278,6 +297,11 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
     }
     result.extraction_ms = msSince(start);
     bar.finish();
+  }
+  if (fitted > 0)
+  {
+    result.original_fit_rms = fit_rms_sum / static_cast<double>(fitted);
+    result.original_line_sigma = line_sigma_sum / static_cast<double>(fitted);
   }
   result.originals = lengthStatistics(originals_world);
 
@@ -416,7 +440,8 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
       figure.scan_points = scan_points;
       figure.caption = caption;
       figure.show_coverage = true;
-      for (const std::size_t i : run.point_coverage.uncovered) figure.uncovered_points.push_back(scan_points[i]);
+      for (const std::size_t i : run.point_coverage.uncovered)
+        figure.uncovered_points.push_back(scan_points[i]);
       for (const auto& [i, j] : run.redundancy.pair_indices)
         figure.redundant_pairs.emplace_back(run.final_map[i], run.final_map[j]);
       if (figures)

@@ -265,6 +265,10 @@ std::string toJson(const BatchResult& result)
   number(out, result.originals.longest * kMm);
   key(out, "original_mean_length_mm");
   number(out, result.originals.mean * kMm);
+  key(out, "original_fit_rms_mm");
+  number(out, result.original_fit_rms * kMm);
+  key(out, "original_line_sigma_mm");
+  number(out, result.original_line_sigma * kMm);
   key(out, "scan_points");
   out << result.scan_points;
   key(out, "extraction_ms");
@@ -313,6 +317,11 @@ std::string toMarkdown(const BatchResult& result)
      << "\n";
   md << "- extractor: " << result.extractor << "; " << result.keyframes << " keyframes after gating of "
      << result.candidate_scans << " candidates; extraction " << fixed(result.extraction_ms, 1) << " ms\n";
+  md << "- accuracy at the source: the originals fit their own points with an RMS residual of "
+     << fixed(result.original_fit_rms * kMm, 2) << " mm on average (line position standard error "
+     << fixed(result.original_line_sigma * kMm, 2)
+     << " mm); the error column measures them against their map segment, so what it adds beyond these "
+        "comes from registration (the poses) and merging\n";
   md << "- lookup table: " << result.scan_points << " registered scan points under the final poses, built in "
      << fixed(result.table_ms, 1) << " ms\n\n";
 

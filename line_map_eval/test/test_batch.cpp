@@ -104,6 +104,15 @@ TEST(Batch, EveryMergerProducesEveryColumn)
   writeReports(result, out.string());
   const YAML::Node json = YAML::LoadFile((out / "report.json").string());
   EXPECT_EQ(json["extractor"].as<std::string>(), result.extractor);
+  // Accuracy at the source: the room's range noise is sigma = 1 cm; a point's distance to its line is
+  // that noise times the cosine of the incidence angle, so the RMS residual lies below 1 cm and well
+  // above 0 (walls are seen from mostly steep angles in a 4 m room); the line's position error is the
+  // residual over the square root of at least 10 points.
+  EXPECT_GT(result.original_fit_rms, 0.005);
+  EXPECT_LT(result.original_fit_rms, 0.0105);
+  EXPECT_LT(result.original_line_sigma, result.original_fit_rms / std::sqrt(10.0));
+  EXPECT_NEAR(json["original_fit_rms_mm"].as<double>(), result.original_fit_rms * 1e3, 1e-3);
+  EXPECT_NEAR(json["original_line_sigma_mm"].as<double>(), result.original_line_sigma * 1e3, 1e-3);
   EXPECT_EQ(json["dataset"].as<std::string>(), "square_room");
   ASSERT_TRUE(json["parameters"].IsMap());
   EXPECT_EQ(json["parameters"]["algorithm"].as<std::string>(), result.extractor);

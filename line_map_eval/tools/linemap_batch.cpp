@@ -14,9 +14,13 @@
 #include "line_map_eval/bag_reader.hpp"
 #include "line_map_eval/bag_replay.hpp"
 #include "line_map_eval/batch.hpp"
+#include "line_map_eval/carmen_log.hpp"
+#include "line_map_eval/carmen_recording.hpp"
 #include "line_map_eval/ground_truth.hpp"
 #include "line_map_eval/progress.hpp"
+#include "line_map_eval/relations.hpp"
 #include "line_map_eval/report.hpp"
+#include "line_map_eval/slam_recording.hpp"
 #include "line_map_merging/merger.hpp"
 
 namespace fs = std::filesystem;
@@ -28,7 +32,8 @@ const char* const kConfigFiles[] = {"line_extraction.yaml", "line_map_merging.ya
 
 void usage(std::ostream& out)
 {
-  out << "usage: linemap_batch DATASET [--corrected LOG] [--extractor NAME] [--merger NAME]...\n"
+  out << "usage: linemap_batch DATASET [--corrected LOG | --slam [--relations FILE]] [--extractor NAME]\n"
+         "                     [--merger NAME]...\n"
          "                     [--param key=value]... [--config FILE]... [--config-dir DIR] [--out DIR]\n"
          "                     [--every N] [--no-progress] [--no-figures] [--help]\n"
          "\n"
@@ -38,6 +43,9 @@ void usage(std::ostream& out)
          "\n"
          "  --corrected LOG   corrected keyframes of the raw log: online mergers merge on the raw odometry\n"
          "                    and receive the corrected trajectory every N keyframes and at the end\n"
+         "  --slam            (a raw CARMEN log) the trajectory of our laser SLAM (config/slam.yaml) in\n"
+         "                    place of --corrected: its keyframes are the merger's keyframes\n"
+         "  --relations FILE  with --slam: print the relations error of its trajectory against FILE\n"
          "  --extractor NAME  extraction algorithm (default: parameter 'algorithm')\n"
          "  --merger NAME     merger to run; repeatable (default: all of ";
   for (std::size_t i = 0; i < line_map_merging::mergerNames().size(); ++i)
@@ -99,7 +107,8 @@ int main(int argc, char** argv)
 {
   std::string dataset_path, corrected, config_dir, out_dir = "linemap_batch_out";
   std::vector<std::string> configs, overrides;
-  bool replay = false;
+  bool replay = false, slam = false;
+  std::string relations;
   BatchOptions options;
   options.progress = isatty(STDERR_FILENO) != 0;
   try
@@ -151,6 +160,10 @@ int main(int argc, char** argv)
         options.progress = false;
       else if (arg == "--no-figures")
         options.figure_formats = 0;
+      else if (arg == "--slam")
+        slam = true;
+      else if (arg == "--relations")
+        relations = value();
       else if (arg == "--replay")
         replay = true;
       else if (!arg.empty() && arg[0] == '-')
@@ -185,9 +198,18 @@ int main(int argc, char** argv)
                     << " not found; its defaults are built in\n";
     files.insert(files.end(), configs.begin(), configs.end());
     options.params = loadParameterFiles(files);
+    // The SLAM's parameters apart: its frame names are the nodelet's, not the merger's.
+    linemap::ParamSet slam_params;
+    if (slam && !dir.empty() && fs::exists(dir / "slam.yaml"))
+      slam_params = loadParameterFiles({(dir / "slam.yaml").string()});
     for (const auto& o : overrides)
     {
       const std::string key = o.substr(0, o.find('='));
+      if (slam_params.has(key))
+      {
+        applyOverride(slam_params, o);
+        continue;
+      }
       if (!options.params.has(key))
         std::cerr << "linemap_batch: warning: --param " << key << " is in none of the parameter files\n";
       applyOverride(options.params, o);
@@ -211,7 +233,35 @@ int main(int argc, char** argv)
       return 0;
     }
     BatchDataset dataset;
-    if (!corrected.empty())
+    if (slam)
+    {
+      if (!corrected.empty() || isWorldFile(dataset_path) || fs::path(dataset_path).extension() == ".bag")
+        throw std::invalid_argument("--slam goes with a raw CARMEN log alone, not with --corrected or " +
+                                    dataset_path);
+      const CarmenLog raw = readCarmenLog(dataset_path);
+      Recording recording = fromCarmen(raw, nullptr);
+      const SlamRecordingResult run =
+          runSlam(recording, line_map_merging::LaserSlamParams::fromParams(slam_params));
+      const auto& c = run.counters;
+      std::cout << std::fixed << std::setprecision(1) << "laser SLAM: " << recording.scans.size()
+                << " scans in " << run.cpu_seconds << " s CPU, " << c.keyframes << " keyframes, "
+                << c.loops_accepted << " loop closures (" << c.loops_rejected_score + c.loops_rejected_graph
+                << " rejected), " << c.poor_matches << " poor matches\n";
+      if (!relations.empty())
+      {
+        std::vector<std::pair<double, Pose2>> poses;
+        for (std::size_t i = 0; i < run.scan_poses.size() && i < raw.scans.size(); ++i)
+          poses.push_back({raw.scans[i].timestamp, run.scan_poses[i]});
+        const RelationsError e = relationsError(readRelations(relations), poses);
+        std::cout << std::setprecision(4) << "relations error (" << e.used << " of " << e.relations
+                  << "): translation " << e.translation_mean << " +- " << e.translation_std << " m, rotation "
+                  << std::setprecision(2) << e.rotation_mean * 180.0 / linemap::kPi << " +- "
+                  << e.rotation_std * 180.0 / linemap::kPi << " deg\n";
+      }
+      dataset = datasetFromRecording(withSlamKeyframes(std::move(recording), run), stem(dataset_path),
+                                     "carmen+slam");
+    }
+    else if (!corrected.empty())
     {
       if (isWorldFile(dataset_path) || fs::path(dataset_path).extension() == ".bag")
         throw std::invalid_argument("--corrected goes with a raw CARMEN log, not " + dataset_path);
@@ -247,7 +297,10 @@ int main(int argc, char** argv)
     std::cout << std::fixed << std::setprecision(1) << "extraction " << result.extraction_ms
               << " ms; lookup table of " << result.scan_points << " scan points " << result.table_ms
               << " ms; evaluation of one map <= " << result.table_ms + slowest_evaluation
-              << " ms (table included)\n";
+              << " ms (table included)\n"
+              << std::setprecision(2) << "originals fit their own points to " << result.original_fit_rms * 1e3
+              << " mm RMS (line position +-" << result.original_line_sigma * 1e3
+              << " mm): the error column's excess comes from the poses and the merging\n";
     writeReports(result, out_dir);
     std::cout << "wrote " << (fs::path(out_dir) / "report.json").string() << ", "
               << (fs::path(out_dir) / "report.md").string() << " and the per-merger files under " << out_dir

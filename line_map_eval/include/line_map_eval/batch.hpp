@@ -129,6 +129,11 @@ struct BatchResult
   std::size_t candidate_scans = 0;
   std::size_t keyframes = 0;  ///< after gating
   LengthStatistics originals;
+  /// Accuracy at the source: the mean over originals of the RMS distance of their member points to their
+  /// own fitted line, and of that line's position standard error (RMS / sqrt(points)) [m]. Against the
+  /// error metric (originals against their map segment) they tell extraction noise from registration.
+  double original_fit_rms = 0.0;
+  double original_line_sigma = 0.0;
   std::size_t scan_points = 0;  ///< registered points in the lookup table
   double extraction_ms = 0.0;   ///< all keyframes
   double table_ms = 0.0;        ///< lookup table of the registered scans
