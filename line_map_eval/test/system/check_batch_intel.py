@@ -46,6 +46,14 @@ class CheckBatchIntel(unittest.TestCase):
             for key in ("redundant_pairs", "unassigned_originals"):
                 if not isinstance(r.get(key), int) or r[key] < 0:
                     problems.append("%s: %s missing or negative: %r" % (name, key, r.get(key)))
+        cae = report["mergers"].get("cae")
+        if cae is not None:
+            for other in band.get("cae_not_below", []):
+                if other in report["mergers"] and cae["quality_pct"] < report["mergers"][other]["quality_pct"]:
+                    problems.append("cae: quality %.2f %% below %s's %.2f %%"
+                                    % (cae["quality_pct"], other, report["mergers"][other]["quality_pct"]))
+            if cae["redundant_pairs"] > band.get("cae_max_redundant_pairs", 0):
+                problems.append("cae: %d redundant pairs left" % cae["redundant_pairs"])
         self.assertFalse(problems, "\n".join(problems))
 
 
