@@ -87,10 +87,14 @@ const ExtractionResult& LineExtractor::extract(const ScanInput& scan)
     merger_.merge(prepared_, raw_, merged_, prepared_.full_circle);
     source = &merged_;
   }
-  // Size filters; copying keeps the index lists compact and in segment order.
+  // Size filters; copying keeps the index lists compact and in segment order. A fit whose ends lie
+  // within the range noise of one spot has no direction: no line, even with min_length 0.
+  const double degenerate = PipelineParams::kDegenerateSigmas * params_.range_sigma;
   for (const Segment& seg : source->segments)
   {
-    if (seg.num_points < params_.min_points || seg.length() < params_.min_length) continue;
+    if (seg.num_points < params_.min_points || seg.length() < params_.min_length ||
+        seg.length() <= degenerate)
+      continue;
     Segment copy = seg;
     orientFreeSideLeft(copy);
     copy.index_begin = static_cast<int>(result_.point_indices.size());

@@ -25,8 +25,12 @@ struct PipelineParams
   bool merge = true;
   /// Merge gate 2.77, largest bridged gap 0.5 m (a doorway stays open).
   CollinearMergeParams merge_params{2.77, 0.01, 0.5};
-  int min_points = 5;       ///< per output segment
-  double min_length = 0.0;  ///< per output segment [m]
+  int min_points = 5;  ///< per output segment
+  /// Per output segment [m]: at 1 cm range noise a shorter segment's direction is uncertain by
+  /// more than 0.3 rad. Whatever it is set to, a segment no longer than kDegenerateSigmas *
+  /// range_sigma (its points within the noise of one spot) is no line and never emitted.
+  double min_length = 0.05;
+  static constexpr double kDegenerateSigmas = 3.0;
 
   /// Reads and checks every pipeline key; throws linemap::ParameterError naming a bad one.
   static PipelineParams fromParams(const linemap::ParamSet& params);
