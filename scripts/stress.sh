@@ -40,7 +40,8 @@ setsid stress-ng --cpu "$cpus" --cpu-load "$load" --timeout "${STRESS_TIMEOUT:-4
 stress_pid=$!
 # The workers are up when stress-ng has forked them (its children exist).
 for _ in $(seq 100); do
-  [ "$(pgrep -c -P "$stress_pid" 2>/dev/null || echo 0)" -ge "$cpus" ] && break
+  workers="$(pgrep -c -P "$stress_pid" 2>/dev/null || true)"
+  [ "${workers:-0}" -ge "$cpus" ] && break
   kill -0 "$stress_pid" 2>/dev/null || { echo "stress.sh: stress-ng exited at start" >&2; exit 1; }
   sleep 0.1
 done
