@@ -37,6 +37,40 @@ struct Bounds
   bool empty() const { return !(min_x <= max_x); }
 };
 
+/// The scan points' extent without its stray tails: a reading through a window or a phantom return tens of
+/// metres out would otherwise shrink the building to a corner of the figure. Per axis the frame spans the
+/// 0.2 % to 99.8 % quantiles (widened by 2 %), or every point when there are fewer than 1000; points outside
+/// are not drawn. Map segments always lie inside (they are added in full).
+void addRobustBounds(const std::vector<Vec2>& points, Bounds& b)
+{
+  std::vector<double> xs, ys;
+  xs.reserve(points.size());
+  ys.reserve(points.size());
+  for (const Vec2& p : points)
+    if (p.allFinite())
+    {
+      xs.push_back(p.x());
+      ys.push_back(p.y());
+    }
+  if (xs.empty()) return;
+  if (xs.size() < 1000)
+  {
+    for (std::size_t i = 0; i < xs.size(); ++i) b.add(Vec2(xs[i], ys[i]));
+    return;
+  }
+  const auto quantile = [](std::vector<double>& v, double q)
+  {
+    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[static_cast<std::size_t>(k)];
+  };
+  const double x0 = quantile(xs, 0.002), x1 = quantile(xs, 0.998);
+  const double y0 = quantile(ys, 0.002), y1 = quantile(ys, 0.998);
+  const double mx = 0.02 * (x1 - x0), my = 0.02 * (y1 - y0);
+  b.add(Vec2(x0 - mx, y0 - my));
+  b.add(Vec2(x1 + mx, y1 + my));
+}
+
 /// Throws for a surface in error state (destroying it first, so nothing leaks).
 void checkSurface(cairo_surface_t* s, const std::string& file)
 {
@@ -427,7 +461,7 @@ FigureLayout layoutFigure(const std::vector<const MapFigure*>& panels, const Fig
       b.add(s.start);
       b.add(s.end);
     }
-    for (const Vec2& p : f->scan_points) b.add(p);
+    addRobustBounds(f->scan_points, b);
     if (f->lookup && !f->lookup->empty())
     {
       const LookupTable& t = *f->lookup;

@@ -14,7 +14,9 @@
 using line_map_eval::drawComparison;
 using line_map_eval::drawLookupTable;
 using line_map_eval::drawMap;
+using line_map_eval::FigureLayout;
 using line_map_eval::FigureStyle;
+using line_map_eval::layoutFigure;
 using line_map_eval::MapFigure;
 using linemap::Segment2;
 using linemap::Vec2;
@@ -219,4 +221,27 @@ TEST(Figures, UncoveredPointsRedundantPairsAndLegend)
   EXPECT_LT(glyph.r, 80);
   EXPECT_GT(glyph.b, glyph.r + 40);
   cairo_surface_destroy(img);
+}
+
+TEST(Figures, StrayScanPointsDoNotStretchTheFrame)
+{
+  // 2000 points on the walls of a 10 m room and three returns 1 km away: the frame is the room's
+  // (plus padding and 2 %), not a kilometre wide; a map segment far out is always inside.
+  MapFigure f;
+  for (int i = 0; i < 2000; ++i)
+  {
+    const double t = 10.0 * i / 1999.0;
+    f.scan_points.push_back(i % 2 ? Vec2(t, 0.0) : Vec2(0.0, t));
+    f.scan_points.push_back(i % 2 ? Vec2(t, 10.0) : Vec2(10.0, t));
+  }
+  for (int i = 0; i < 3; ++i) f.scan_points.push_back(Vec2(1000.0 + i, 500.0));
+  FigureStyle style;
+  FigureLayout l = layoutFigure({&f}, style);
+  EXPECT_LT(l.max_x - l.min_x, 10.0 * 1.05 + 2.0 * style.padding);
+  EXPECT_LT(l.max_y - l.min_y, 10.0 * 1.05 + 2.0 * style.padding);
+  EXPECT_LE(l.min_x, 0.0);
+  EXPECT_GE(l.max_x, 10.0);
+  f.segments.push_back(Segment2(Vec2(0.0, 0.0), Vec2(30.0, 0.0)));
+  l = layoutFigure({&f}, style);
+  EXPECT_GE(l.max_x, 30.0);
 }
