@@ -1,5 +1,7 @@
 #include "line_map_eval/slam_recording.hpp"
 
+#include <time.h>
+
 #include <chrono>
 #include <cmath>
 
@@ -10,6 +12,13 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
 {
   SlamRecordingResult result;
   const auto start = std::chrono::steady_clock::now();
+  auto cpu = []
+  {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+  };
+  const double cpu_start = cpu();
   line_map_merging::LaserSlam slam(params);
   const ScanGeometry& g = recording.geometry;
   std::vector<std::size_t> accepted;  // recording index of each scan the SLAM accepted
@@ -29,6 +38,7 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
     }
     if (slam.addScan(scan) != line_map_merging::SlamOutcome::kRejected) accepted.push_back(i);
   }
+  result.cpu_seconds = cpu() - cpu_start;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto poses = slam.scanPoses();
   result.scan_poses.assign(recording.scans.size(), Pose2());

@@ -194,9 +194,11 @@ int main(int argc, char** argv)
         const SlamRecordingResult r = runSlam(recording, slam_params, with_odom);
         std::ostringstream extra;
         const auto& c = r.counters;
-        extra << std::setprecision(1) << std::fixed << r.seconds << " s, " << c.keyframes << " keyframes, "
-              << c.loops_accepted << " closures (" << c.loops_rejected_score << " + "
-              << c.loops_rejected_graph << " rejected), " << c.poor_matches << " poor matches";
+        extra << std::setprecision(1) << std::fixed << r.cpu_seconds << " s CPU (" << r.seconds
+              << " s wall, optimisation " << c.total_optimization_ms / 1000.0 << " s, loops "
+              << c.total_loop_ms / 1000.0 << " s), " << c.keyframes << " keyframes, " << c.loops_accepted
+              << " closures (" << c.loops_rejected_score << " + " << c.loops_rejected_graph << " rejected), "
+              << c.poor_matches << " poor matches";
         print(with_odom ? "laser SLAM" : "laser SLAM, no odometry",
               relationsError(relations, byRawStamp(r.scan_poses)), extra.str());
         if (!write.empty())

@@ -91,6 +91,8 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.loop_min_score = p.getDouble("loop/min_score", s.loop_min_score);
   s.loop_max_error_xy = getPositive(p, "loop/max_error_xy", s.loop_max_error_xy);
   s.loop_max_error_theta = getPositive(p, "loop/max_error_theta", s.loop_max_error_theta);
+  s.loop_consistent_xy = p.getDouble("loop/consistent_xy", s.loop_consistent_xy);
+  s.loop_consistent_theta = p.getDouble("loop/consistent_theta", s.loop_consistent_theta);
   return s;
 }
 
@@ -137,7 +139,9 @@ SlamOutcome LaserSlam::addScan(const SlamScan& in)
   if (!scan.odom) ++counters_.without_odometry;
 
   // Prediction: odometry since the last scan, unless it jumped or is missing (then constant velocity).
+  // A jump may also be real motion during a gap in the log: then both are tried (below).
   Pose2 predicted = last_local_;
+  std::optional<Pose2> jumped;  // the odometry prediction across a jump
   bool odometry_usable = false;
   if (have_scan_)
   {
@@ -151,7 +155,10 @@ SlamOutcome LaserSlam::addScan(const SlamScan& in)
         predicted = last_local_ * step;
       }
       else
+      {
         ++counters_.odometry_jumps;
+        jumped = last_local_ * step;
+      }
     }
     if (!odometry_usable) predicted = last_local_ * velocity_;
   }
@@ -172,20 +179,31 @@ SlamOutcome LaserSlam::addScan(const SlamScan& in)
       ++counters_.few_points;
     else if (!local_map_.empty())
     {
-      const SearchWindow& window = odometry_usable ? params_.window : params_.window_no_odometry;
-      const auto found = correlativeSearch(local_map_, scan.points, predicted, window, 1);
-      if (!found.empty())
+      // The normal window first; a poor match (odometry off by more than the window) or a prediction
+      // without usable odometry gets the wide window, around each prediction there is.
+      std::optional<MatchResult> best;
+      auto attempt = [&](const Pose2& centre, const SearchWindow& window)
       {
+        const auto found = correlativeSearch(local_map_, scan.points, centre, window, 1);
+        if (found.empty()) return;
         const MatchResult refined =
             refineMatch(local_map_, scan.points, found.front().pose, found.front().pose, params_.refinement);
-        if (refined.score >= params_.min_score)
-        {
-          pose = refined.pose;
-          outcome = SlamOutcome::kMatched;
-        }
-        else
-          ++counters_.poor_matches;
+        if (!best || refined.score > best->score) best = refined;
+      };
+      if (odometry_usable) attempt(predicted, params_.window);
+      if (!best || best->score < params_.min_score)
+      {
+        if (odometry_usable) ++counters_.wide_searches;
+        attempt(predicted, params_.window_no_odometry);
+        if (jumped) attempt(*jumped, params_.window_no_odometry);
       }
+      if (best && best->score >= params_.min_score)
+      {
+        pose = best->pose;
+        outcome = SlamOutcome::kMatched;
+      }
+      else
+        ++counters_.poor_matches;
     }
   }
   switch (outcome)
@@ -209,8 +227,6 @@ SlamOutcome LaserSlam::addScan(const SlamScan& in)
     {
       // Per-scan motion for the constant-velocity prediction (scans arrive at a steady rate).
       velocity_ = last_matched_local_.inverse() * pose;
-      const std::size_t since = 1;  // matched scans are consecutive when there is no odometry
-      (void)since;
     }
   }
   if (outcome == SlamOutcome::kMatched || !have_scan_)
@@ -221,7 +237,6 @@ SlamOutcome LaserSlam::addScan(const SlamScan& in)
   last_local_ = pose;
   last_odom_ = scan.odom;
   last_stamp_ = scan.stamp;
-  const bool first = !have_scan_;
   have_scan_ = true;
 
   const std::size_t index = scans_.size();
@@ -237,7 +252,6 @@ SlamOutcome LaserSlam::addScan(const SlamScan& in)
                       std::fabs(since.theta) >= params_.keyframe_angle;
     }
   }
-  (void)first;
   if (make_keyframe) addKeyframe(scan, index, chain_matched_);
   if (keyframes_.empty())
   {
@@ -278,7 +292,12 @@ void LaserSlam::addKeyframe(const SlamScan& scan, std::size_t scan_index, bool c
   ++counters_.keyframes;
   keyframe_added_ = true;
   rebuildLocalMap();
-  if (params_.loop_candidates > 0 && (keyframes_.size() - 1) % params_.loop_every == 0) closeLoops();
+  if (params_.loop_candidates > 0 && (keyframes_.size() - 1) % params_.loop_every == 0)
+  {
+    const double start = now_ms();
+    closeLoops();
+    counters_.total_loop_ms += now_ms() - start;
+  }
 }
 
 void LaserSlam::rebuildLocalMap()
@@ -376,9 +395,20 @@ void LaserSlam::closeLoops()
     e.sigma_xy = params_.loop_sigma_xy;
     e.sigma_theta = params_.loop_sigma_theta;
     e.loop = true;
+    const std::size_t edge = graph_.addEdge(e);
+    const Pose2 disagreement = graph_.edgeError(edge);
+    if (std::hypot(disagreement.x, disagreement.y) <= params_.loop_consistent_xy &&
+        std::fabs(disagreement.theta) <= params_.loop_consistent_theta)
+    {
+      // The estimate already agrees with it: optimising would barely move anything. It takes part in
+      // the next optimisation.
+      ++counters_.loops_accepted;
+      ++counters_.loops_consistent;
+      path_at_closure_ = kf.path;
+      continue;
+    }
     std::vector<Pose2> before(graph_.nodeCount());
     for (std::size_t i = 0; i < before.size(); ++i) before[i] = graph_.node(i);
-    const std::size_t edge = graph_.addEdge(e);
     const OptimizationStats stats = graph_.optimize();
     ++counters_.optimizations;
     counters_.last_optimization_ms = stats.milliseconds;
@@ -446,11 +476,13 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
           {"poor matches", n(c.poor_matches)},
           {"scans without odometry", n(c.without_odometry)},
           {"odometry jumps", n(c.odometry_jumps)},
+          {"wide searches (match off the odometry)", n(c.wide_searches)},
           {"scans out of order (ignored)", n(c.rejected)},
           {"time jumps back", n(c.time_jumps)},
           {"keyframes", n(c.keyframes)},
           {"loop closure attempts", n(c.loop_attempts)},
           {"loop closures accepted", n(c.loops_accepted)},
+          {"loop closures consistent (not optimised)", n(c.loops_consistent)},
           {"loop closures rejected (score)", n(c.loops_rejected_score)},
           {"loop closures rejected (graph)", n(c.loops_rejected_graph)},
           {"optimizations", n(c.optimizations)},

@@ -18,7 +18,8 @@ struct SlamRecordingResult
   /// The keyframes: index into Recording::scans and optimised base pose.
   std::vector<CorrectedKeyframe> keyframes;
   line_map_merging::SlamCounters counters;
-  double seconds = 0.0;  ///< front and back end, the whole recording
+  double seconds = 0.0;      ///< front and back end, the whole recording (wall time)
+  double cpu_seconds = 0.0;  ///< the same in CPU time of this thread
 };
 
 /// Feeds every scan (valid beams, in the base frame by the recording's mounting) with its odometry

@@ -30,10 +30,10 @@ struct LaserSlamParams
   double max_range = 20.0;  ///< [m] farther points are dropped (sparse, and small angle errors grow there)
   std::size_t min_points = 20;  ///< fewer valid points: the scan is not matched (pose predicted)
   // Front end.
-  double resolution = 0.025;                                          ///< [m] local likelihood field
-  double sigma = 0.04;                                                ///< [m] its spread
-  SearchWindow window{0.1, 0.06, 0.05, 0.006, 2.0, 20.0};             ///< with odometry
-  SearchWindow window_no_odometry{0.3, 0.25, 0.05, 0.008, 2.0, 5.0};  ///< without (constant velocity)
+  double resolution = 0.025;                                         ///< [m] local likelihood field
+  double sigma = 0.04;                                               ///< [m] its spread
+  SearchWindow window{0.1, 0.12, 0.05, 0.006, 2.0, 20.0};            ///< with odometry
+  SearchWindow window_no_odometry{0.3, 0.3, 0.05, 0.008, 2.0, 5.0};  ///< without or off the odometry
   RefinementParams refinement{2.0, 2.0, 20};
   double min_score = 0.25;               ///< refined field score below: the prediction is kept
   double filter_distance = 0.02;         ///< [m] with odometry, scans that moved less are not matched
@@ -42,7 +42,7 @@ struct LaserSlamParams
   double keyframe_angle = 0.17;          ///< [rad]
   std::size_t local_map_keyframes = 20;  ///< keyframes in the local map
   double max_odometry_step = 0.5;        ///< [m] odometry moving more between two scans is a jump
-  double max_odometry_turn = 0.8;        ///< [rad]
+  double max_odometry_turn = 0.5;        ///< [rad]
   double time_jump_tolerance = 1.0;      ///< [s]
   // Back end.
   double edge_sigma_xy = 0.02, edge_sigma_theta = 0.005;        ///< matched chain edges
@@ -64,6 +64,9 @@ struct LaserSlamParams
   double loop_min_score = 0.55;
   double loop_max_error_xy = 0.3;     ///< [m] a closure the optimised graph misses by more is removed
   double loop_max_error_theta = 0.1;  ///< [rad]
+  /// A closure the current estimate meets within these is added without optimising at once.
+  double loop_consistent_xy = 0.03;     ///< [m]
+  double loop_consistent_theta = 0.01;  ///< [rad]
 
   /// Keys as in config/slam.yaml (e.g. "window/linear", "loop/min_score"); throws
   /// linemap::ParameterError naming the key.
@@ -88,10 +91,11 @@ enum class SlamOutcome
 struct SlamCounters
 {
   std::size_t scans = 0, matched = 0, filtered = 0, predicted = 0, rejected = 0;
-  std::size_t few_points = 0, poor_matches = 0, odometry_jumps = 0, without_odometry = 0, time_jumps = 0;
+  std::size_t few_points = 0, poor_matches = 0, odometry_jumps = 0, wide_searches = 0, without_odometry = 0,
+              time_jumps = 0;
   std::size_t keyframes = 0, loop_attempts = 0, loops_accepted = 0, loops_rejected_score = 0,
-              loops_rejected_graph = 0, optimizations = 0;
-  double last_optimization_ms = 0.0, total_optimization_ms = 0.0, last_match_ms = 0.0;
+              loops_rejected_graph = 0, loops_consistent = 0, optimizations = 0;
+  double last_optimization_ms = 0.0, total_optimization_ms = 0.0, last_match_ms = 0.0, total_loop_ms = 0.0;
 };
 
 struct SlamKeyframe
