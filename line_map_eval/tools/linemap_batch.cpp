@@ -241,7 +241,8 @@ int main(int argc, char** argv)
       const CarmenLog raw = readCarmenLog(dataset_path);
       Recording recording = fromCarmen(raw, nullptr);
       const SlamRecordingResult run =
-          runSlam(recording, line_map_merging::LaserSlamParams::fromParams(slam_params));
+          runSlam(recording, line_map_merging::LaserSlamParams::fromParams(slam_params),
+                  slam_params.getBool("use_odometry", true));
       const auto& c = run.counters;
       std::cout << std::fixed << std::setprecision(1) << "laser SLAM: " << recording.scans.size()
                 << " scans in " << run.cpu_seconds << " s CPU, " << c.keyframes << " keyframes, "
