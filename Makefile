@@ -16,10 +16,12 @@ setup:
 build: setup
 	@bash scripts/build.sh
 
-test: setup
+test:
+	@LINEMAP_QUIET=1 bash scripts/setup.sh
 	@bash scripts/test.sh
 
-demo: setup
+demo:
+	@LINEMAP_QUIET=1 bash scripts/setup.sh
 	@bash scripts/demo.sh
 
 # libFuzzer targets, FUZZ_SECONDS (default 60) each; see scripts/fuzz.sh.

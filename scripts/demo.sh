@@ -9,13 +9,18 @@
 #   RATE=20        playback rate of the bag
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
-"$(dirname "$0")/build.sh" >/dev/null
-linemap_source_devel
 cd "$LINEMAP_ROOT"
+export LINEMAP_QUIET=1
+# Only what the demo runs: the three nodelets, the tools it calls and the messages (rostopic and
+# rosservice need their python side); not the benchmarks and tests of `make build` / `make test`.
+LINEMAP_BUILD_WHAT="the three nodelets and the demo's tools" "$(dirname "$0")/build.sh" line_extraction_nodelet line_map_merging_nodelet line_map_eval_nodelet \
+  simulate_world carmen_to_bag linemap_batch line_map_msgs_generate_messages
+linemap_source_devel
 
 dataset="${DATASET:-sim}"
 rate="${RATE:-20}"
 datasets="$LINEMAP_ROOT/../shared/datasets"
+rel() { echo "${1#"$LINEMAP_ROOT"/}"; }
 
 if [ "$dataset" = "intel" ]; then
   for f in intel.clf.bz2 intel-corrected.log.gz; do
@@ -25,8 +30,11 @@ if [ "$dataset" = "intel" ]; then
   bag="$out/intel.bag"
   mkdir -p "$out"
   if [ ! -f "$bag" ]; then
-    rosrun line_map_eval carmen_to_bag "$datasets/intel.clf.bz2" "$bag" \
-      --corrected "$datasets/intel-corrected.log.gz" --every 50
+    linemap_step "converting: the Intel Research Lab log (raw odometry, corrected trajectory every 50 keyframes) -> $(rel "$bag")" \
+      "$out/carmen_to_bag.log" "" rosrun line_map_eval carmen_to_bag "$datasets/intel.clf.bz2" "$bag" \
+      --corrected "$datasets/intel-corrected.log.gz" --every 50 --no-progress
+  else
+    echo "converting: $(rel "$bag") is there already"
   fi
   batch_input=("$datasets/intel.clf.bz2" --corrected "$datasets/intel-corrected.log.gz")
 else
@@ -36,14 +44,18 @@ else
   bag="$out/$name.bag"
   mkdir -p "$out"
   if [ ! -f "$bag" ] || [ "$world" -nt "$bag" ]; then
-    rosrun line_map_eval simulate_world "$world" "$bag" --seed 1
+    linemap_step "simulating: the $name world ($world; drifting odometry, the true trajectory as the loop closure) -> $(rel "$bag")" \
+      "$out/simulate_world.log" "" rosrun line_map_eval simulate_world "$world" "$bag" --seed 1 --no-progress
+  else
+    echo "simulating: $(rel "$bag") is up to date with $world"
   fi
   batch_input=("$bag")
 fi
 
 # 1. The nodelet pipeline on the bag, as a user would run it (launch/demo.launch, headless).
-echo "demo: playing $(basename "$bag") through launch/demo.launch at ${rate}x"
 log="$out/roslaunch.log"
+echo "playing: $(basename "$bag") through launch/demo.launch (the three nodelets) at ${rate}x real time (log: $(rel "$log"))"
+start=$SECONDS
 roslaunch "$LINEMAP_ROOT/launch/demo.launch" bag:="$bag" rate:="$rate" output:=log >"$log" 2>&1 &
 launch_pid=$!
 stop_ros() {
@@ -52,33 +64,43 @@ stop_ros() {
 }
 trap stop_ros EXIT
 # roslaunch reports when the player has played the whole bag.
-for _ in $(seq 1 2400); do
-  grep -q 'player-[0-9]*\] process has finished' "$log" && break
-  kill -0 "$launch_pid" 2>/dev/null || { echo "demo: roslaunch stopped early, see $log" >&2; exit 1; }
+until grep -q 'player-[0-9]*\] process has finished' "$log"; do
+  kill -0 "$launch_pid" 2>/dev/null || { echo "playing: roslaunch stopped early; the last lines of $(rel "$log"):" >&2; tail -n 30 "$log" >&2; exit 1; }
   sleep 0.5
 done
-sleep 3  # the last keyframes and the final trajectory reach the map
+# The nodelets then finish the last scans and the trajectory: the evaluator's map_quality (latched)
+# stops changing once they have; read it until two readings 2 s apart agree.
+quality_file="$out/map_quality.txt"
+previous=""
+for _ in $(seq 60); do
+  current="$(timeout 30 rostopic echo -n 1 /map_quality 2>/dev/null || true)"
+  [ -n "$current" ] && [ "$current" = "$previous" ] && break
+  previous="$current"
+  sleep 2
+done
+printf '%s\n' "$current" >"$quality_file"
 map_file="$out/map.yaml"
-if rosservice call /line_map_merging/save_map "path: '$map_file'" >"$out/save_map.log" 2>&1; then
-  echo "demo: saved the nodelet's map to ${map_file#$LINEMAP_ROOT/}"
-else
-  echo "demo: ~save_map failed (see $out/save_map.log)" >&2
+if ! rosservice call /line_map_merging/save_map "path: '$map_file'" >"$out/save_map.log" 2>&1; then
+  echo "playing: ~save_map failed (see $(rel "$out/save_map.log"))" >&2
 fi
-rostopic echo -n 1 /map_quality >"$out/map_quality.txt" 2>/dev/null &
-echo_pid=$!
-sleep 3
-kill "$echo_pid" 2>/dev/null || true
 stop_ros
 trap - EXIT
+echo "playing: done in $((SECONDS - start)) s"
 
 # 2. Every merger on the same data, with figures and the comparison table.
+echo "comparing: every merger on the same data with linemap_batch (figures and report in $(rel "$out/batch")/)"
 echo
 rosrun line_map_eval linemap_batch "${batch_input[@]}" --out "$out/batch"
-
 echo
-echo "demo: results in ${out#$LINEMAP_ROOT/}/"
-if [ -s "$out/map_quality.txt" ]; then
-  echo "  nodelet pipeline: $(grep -E '^(quality|segment_count):' "$out/map_quality.txt" | tr '\n' ' ')"
+
+field() { sed -n "s/^$1: //p" "$quality_file" | head -n 1; }
+echo "results in $(rel "$out")/:"
+if [ -n "$(field quality)" ]; then
+  printf '  the nodelet pipeline (cae, live at %sx): quality %.2f %%, %s map segments; map file %s\n' \
+    "$rate" "$(field quality)" "$(field segment_count)" "$(rel "$map_file")"
+  echo "    (live and batch figures of cae differ a little: the nodelets gate keyframes and register scans"
+  echo "     by tf as the bag plays, and the evaluator keeps its own keyframe scans; the batch tool uses"
+  echo "     the recorded poses of every scan, so keyframes and scored scans are not exactly the same)"
 fi
-echo "  ${out#$LINEMAP_ROOT/}/batch/report.md     comparison table (also report.json)"
-echo "  ${out#$LINEMAP_ROOT/}/batch/<merger>/map.{svg,pdf,png}   figures"
+echo "  $(rel "$out")/batch/report.md       the full comparison table (also report.json)"
+echo "  $(rel "$out")/batch/<merger>/map.{svg,pdf,png}   the figures, per merger"

@@ -15,3 +15,53 @@ linemap_source_devel() {
   source "${BUILD_DIR}/devel/setup.bash"
   set -u
 }
+
+# Runs one step of `make demo` / `make test` with its output in a log: prints "LABEL (log: LOG)",
+# then, on a terminal, the step's progress on that same line (PROGRESS: "build" = the build's
+# percentage, "tests" = test targets run so far, "" = none), and finally "LABEL: done in N s".
+# Without a terminal the two plain lines only. On failure: the log's last lines and its path;
+# returns the command's status.
+#   linemap_step LABEL LOG PROGRESS COMMAND [ARG...]
+linemap_step() {
+  local label="$1" log="$2" kind="$3"
+  shift 3
+  mkdir -p "$(dirname "$log")"
+  local shown="${log#"$LINEMAP_ROOT"/}" start=$SECONDS rc=0
+  if [ -t 1 ]; then
+    "$@" >"$log" 2>&1 &
+    local pid=$!
+    while kill -0 "$pid" 2>/dev/null; do
+      printf '\r\033[K%s %s(log: %s)' "$label" "$(_linemap_progress "$kind" "$log")" "$shown"
+      sleep 0.5
+    done
+    wait "$pid" || rc=$?
+    printf '\r\033[K'
+  else
+    echo "$label (log: $shown)"
+    "$@" >"$log" 2>&1 || rc=$?
+  fi
+  if [ "$rc" -ne 0 ]; then
+    echo "$label: FAILED (exit $rc) after $((SECONDS - start)) s; the last lines of $shown:" >&2
+    tail -n 40 "$log" | sed 's/^/  | /' >&2
+    echo "$label: full log: $log" >&2
+    return "$rc"
+  fi
+  echo "$label: done in $((SECONDS - start)) s"
+}
+
+_linemap_progress() {
+  case "$1" in
+    build) grep -o '^\[ *[0-9]*%\]' "$2" 2>/dev/null | tail -n 1 | tr -d '[] ' | sed 's/$/ /' ;;
+    tests) printf '%s test targets run ' "$(grep -c '^Built target run_tests_' "$2" 2>/dev/null || true)" ;;
+  esac
+}
+
+# Prints the compiler warnings of the project's own sources found in a build log (none expected).
+linemap_print_warnings() {
+  local found
+  found="$(grep -E "^${LINEMAP_ROOT}/[^ ]*:[0-9]+:[0-9]+: warning:" "$1" | sort -u || true)"
+  if [ -n "$found" ]; then
+    echo "build: $(echo "$found" | wc -l) compiler warning(s) in the project's sources:"
+    echo "$found" | sed 's/^/  /'
+  fi
+}

@@ -23,10 +23,20 @@ for p in "${PACKAGES[@]}"; do
   fi
 done
 if [ ${#missing[@]} -eq 0 ]; then
+  # Quiet for the tools' own use; one line for `make demo` / `make test`.
+  [ "${LINEMAP_QUIET:-0}" = 1 ] && echo "installing: nothing, all ${#PACKAGES[@]} Debian packages are present"
   exit 0
 fi
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-echo "setup: installing ${#missing[@]} Debian packages: ${missing[*]}"
-$SUDO apt-get update -q
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+source "$(dirname "$0")/env.sh"
+log="$BUILD_DIR/setup.log"
+mkdir -p "$BUILD_DIR"
+echo "installing: ${#missing[@]} Debian packages with apt-get (log: ${log#"$LINEMAP_ROOT"/}): ${missing[*]}"
+start=$SECONDS
+if ! { $SUDO apt-get update -q && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"; } >"$log" 2>&1; then
+  echo "installing: FAILED; the last lines of $log:" >&2
+  tail -n 30 "$log" | sed 's/^/  | /' >&2
+  exit 1
+fi
+echo "installing: done in $((SECONDS - start)) s"
