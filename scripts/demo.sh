@@ -98,9 +98,9 @@ echo "results in $(rel "$out")/:"
 if [ -n "$(field quality)" ]; then
   printf '  the nodelet pipeline (cae, live at %sx): quality %.2f %%, %s map segments; map file %s\n' \
     "$rate" "$(field quality)" "$(field segment_count)" "$(rel "$map_file")"
-  echo "    (live and batch figures of cae differ a little: the nodelets gate keyframes and register scans"
-  echo "     by tf as the bag plays, and the evaluator keeps its own keyframe scans; the batch tool uses"
-  echo "     the recorded poses of every scan, so keyframes and scored scans are not exactly the same)"
+  echo "    (not the batch table's cae figure: the nodelets pick keyframes (every 0.2 m / 10 deg) on the"
+  echo "     drifting odometry as the bag plays and get the trajectory at the end; the batch tool picks"
+  echo "     them on the final, loop-closed poses. Other keyframes: another map, other scans scored.)"
 fi
 echo "  $(rel "$out")/batch/report.md       the full comparison table (also report.json)"
 echo "  $(rel "$out")/batch/<merger>/map.{svg,pdf,png}   the figures, per merger"
