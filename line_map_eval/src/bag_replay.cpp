@@ -55,7 +55,7 @@ ReplayResult replayBag(const BagContents& bag, const ReplayOptions& options)
                             rec.geometry.range_max, scan.ranges};
     evaluator.addScan(scan.stamp, ranges, laser, odom);
     evaluator.addSegments(scan.stamp, s.segments, laser, odom);
-    if (mapper.addScan(s) == line_map_merging::ScanOutcome::kKeyframe) out.keyframe_stamps.push_back(s.stamp);
+    mapper.addScan(s);
     for (; options.trajectories && next_trajectory < bag.trajectory.size() &&
            bag.trajectory[next_trajectory].stamp <= scan.stamp;
          ++next_trajectory)
@@ -68,6 +68,7 @@ ReplayResult replayBag(const BagContents& bag, const ReplayOptions& options)
       ++out.trajectories;
     }
   }
+  out.keyframe_stamps = mapper.keyframeStamps();  // tf-gated ones and those trajectory nodes chose
   out.map = mapper.merger().map();
   out.leaves = mapper.merger().leafCount();
   out.counters = mapper.counters();

@@ -1,6 +1,7 @@
 #include "line_map_eval/map_evaluator.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <iterator>
 #include <map>
 
@@ -16,6 +17,10 @@ EvaluatorParams EvaluatorParams::fromParams(const linemap::ParamSet& params)
   if (!(p.max_gap >= 0.0)) throw linemap::ParameterError("parameter 'trajectory_max_gap' must be >= 0");
   p.correction = line_map_merging::correctionModeFromString(
       "trajectory_correction", params.getString("trajectory_correction", "nearest"));
+  p.keyframe_source = line_map_merging::keyframeSourceFromString("keyframe_source",
+                                                                 params.getString("keyframe_source", "auto"));
+  p.keyframe_buffer = params.getDouble("keyframe_buffer", p.keyframe_buffer);
+  if (!(p.keyframe_buffer >= 0.0)) throw linemap::ParameterError("parameter 'keyframe_buffer' must be >= 0");
   p.table = LookupTableParams::fromParams(params);
   p.quality = QualityParams::fromParams(params);
   p.fusion = line_map_merging::FusionParams::fromParams(params);
@@ -24,8 +29,41 @@ EvaluatorParams EvaluatorParams::fromParams(const linemap::ParamSet& params)
 }
 
 MapEvaluator::MapEvaluator(const EvaluatorParams& params)
-    : params_(params), scan_gate_(params.gate), segment_gate_(params.gate)
+    : params_(params),
+      scan_gate_(params.gate),
+      segment_gate_(params.gate),
+      scan_nodes_(params.gate, params.stamp_tolerance, params.keyframe_buffer),
+      segment_nodes_(params.gate, params.stamp_tolerance, params.keyframe_buffer)
 {
+  if (params_.keyframe_source == line_map_merging::KeyframeSource::kTrajectory)
+  {
+    scan_nodes_.activate(-INFINITY, std::nullopt);
+    segment_nodes_.activate(-INFINITY, std::nullopt);
+  }
+}
+
+bool MapEvaluator::storeNodes(std::vector<line_map_merging::NodeKeyframes<Frame>::Ready> ready,
+                              std::vector<Frame>& frames, std::map<double, linemap::Pose2>& stamps)
+{
+  bool stored = false;
+  for (auto& r : ready)
+  {
+    if (!stamps.emplace(r.stamp, r.pose).second) continue;
+    r.payload.pose = r.pose;
+    frames.push_back(std::move(r.payload));
+    stored = true;
+  }
+  return stored;
+}
+
+bool MapEvaluator::holdForNodes(line_map_merging::NodeKeyframes<Frame>& nodes, const Frame& frame,
+                                std::vector<Frame>& frames, std::map<double, linemap::Pose2>& stamps,
+                                bool& stored)
+{
+  stored = false;
+  if (params_.keyframe_source == line_map_merging::KeyframeSource::kTf) return false;
+  stored = storeNodes(nodes.addScan(frame.stamp, frame), frames, stamps);
+  return nodes.active();
 }
 
 bool MapEvaluator::gateAccepts(const std::map<double, linemap::Pose2>& stored,
@@ -61,9 +99,17 @@ bool MapEvaluator::addScan(double stamp, const linemap::Pose2& laser_pose, std::
     return false;
   }
   history_.add(stamp, odom_pose ? *odom_pose : laser_pose);
-  if (!gateAccepts(scan_stamps_, scan_gate_, stamp, laser_pose)) return false;
+  Frame frame{stamp, laser_pose, odom_pose, std::move(points), {}};
+  bool stored = false;
+  if (holdForNodes(scan_nodes_, frame, scans_, scan_stamps_, stored))
+  {
+    table_dirty_ = table_dirty_ || stored;
+    return stored;
+  }
+  if (stored) table_dirty_ = true;
+  if (!gateAccepts(scan_stamps_, scan_gate_, stamp, laser_pose)) return stored;
   scan_stamps_.emplace(stamp, laser_pose);
-  scans_.push_back({stamp, laser_pose, odom_pose, std::move(points), {}});
+  scans_.push_back(std::move(frame));
   table_dirty_ = true;
   return true;
 }
@@ -78,21 +124,58 @@ bool MapEvaluator::addSegments(double stamp, const linemap::Pose2& laser_pose,
     return false;
   }
   history_.add(stamp, odom_pose ? *odom_pose : laser_pose);
-  if (!gateAccepts(segment_stamps_, segment_gate_, stamp, laser_pose)) return false;
+  Frame frame{stamp, laser_pose, odom_pose, {}, std::move(segments)};
+  bool stored = false;
+  if (holdForNodes(segment_nodes_, frame, segments_, segment_stamps_, stored)) return stored;
+  if (!gateAccepts(segment_stamps_, segment_gate_, stamp, laser_pose)) return stored;
   segment_stamps_.emplace(stamp, laser_pose);
-  segments_.push_back({stamp, laser_pose, odom_pose, {}, std::move(segments)});
+  segments_.push_back(std::move(frame));
   return true;
 }
 
 std::size_t MapEvaluator::applyTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses)
 {
+  // As the merger (OnlineMapper::addTrajectory): at the first trajectory, frames stored on tf are
+  // dropped when their scans are all still held, and the nodes choose again from the start.
+  auto rebuild = [&](line_map_merging::NodeKeyframes<Frame>& nodes, std::vector<Frame>& frames,
+                     std::map<double, linemap::Pose2>& stamps)
+  {
+    if (params_.keyframe_source == line_map_merging::KeyframeSource::kTf || nodes.active() ||
+        stamps.empty() || nodes.oldestHeld() > stamps.begin()->first)
+      return;
+    frames.clear();
+    stamps.clear();
+    nodes.activate(-INFINITY, std::nullopt);
+    table_dirty_ = true;
+  };
+  rebuild(scan_nodes_, scans_, scan_stamps_);
+  rebuild(segment_nodes_, segments_, segment_stamps_);
   const auto nc =
       line_map_merging::nodeCorrections(history_, laser_poses, params_.stamp_tolerance, params_.max_gap);
-  if (nc.corrections.empty()) return nc.unmatched;
-  for (std::vector<Frame>* frames : {&scans_, &segments_})
-    for (Frame& f : *frames)
-      f.pose = line_map_merging::correctionAt(nc.corrections, f.stamp, params_.correction) * continuous(f);
-  table_dirty_ = true;
+  if (!nc.corrections.empty())
+  {
+    for (std::vector<Frame>* frames : {&scans_, &segments_})
+      for (Frame& f : *frames)
+        f.pose = line_map_merging::correctionAt(nc.corrections, f.stamp, params_.correction) * continuous(f);
+    table_dirty_ = true;
+  }
+  if (params_.keyframe_source == line_map_merging::KeyframeSource::kTf) return nc.unmatched;
+  // A back end is present: its nodes choose the stored frames from the newest stored one on, as the
+  // merger's keyframes (the gate measures from the newest stored frame where it now is).
+  auto activate = [](line_map_merging::NodeKeyframes<Frame>& nodes, const std::vector<Frame>& frames)
+  {
+    if (nodes.active()) return;
+    const auto newest = std::max_element(frames.begin(), frames.end(),
+                                         [](const Frame& a, const Frame& b) { return a.stamp < b.stamp; });
+    if (newest == frames.end())
+      nodes.activate(-INFINITY, std::nullopt);
+    else
+      nodes.activate(newest->stamp, newest->pose);
+  };
+  activate(scan_nodes_, scans_);
+  activate(segment_nodes_, segments_);
+  if (storeNodes(scan_nodes_.addTrajectory(laser_poses), scans_, scan_stamps_)) table_dirty_ = true;
+  storeNodes(segment_nodes_.addTrajectory(laser_poses), segments_, segment_stamps_);
   return nc.unmatched;
 }
 
@@ -124,11 +207,15 @@ std::size_t MapEvaluator::originalCount() const
 
 void MapEvaluator::reset()
 {
+  const double horizon = std::max(scan_stamps_.empty() ? -INFINITY : scan_stamps_.rbegin()->first,
+                                  segment_stamps_.empty() ? -INFINITY : segment_stamps_.rbegin()->first);
   scans_.clear();
   segments_.clear();
   scan_stamps_.clear();
   segment_stamps_.clear();
   history_.clear();
+  scan_nodes_.clear(horizon);
+  segment_nodes_.clear(horizon);
   scan_gate_ = line_map_merging::KeyframeGate(params_.gate);
   segment_gate_ = line_map_merging::KeyframeGate(params_.gate);
   table_ = LookupTable();

@@ -76,7 +76,8 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     segment_filter_->setTolerance(ros::Duration(tf_timeout));
     segment_filter_->registerCallback(&LineMapEvalNodelet::onSegments, this);
     map_sub_ = nh.subscribe("line_map", 1, &LineMapEvalNodelet::onMap, this);
-    trajectory_sub_ = nh.subscribe("optimized_trajectory", 1, &LineMapEvalNodelet::onTrajectory, this);
+    // Every trajectory counts: its new nodes choose the stored scans (map_evaluator.hpp).
+    trajectory_sub_ = nh.subscribe("optimized_trajectory", 10, &LineMapEvalNodelet::onTrajectory, this);
     evaluate_srv_ = pnh.advertiseService("evaluate", &LineMapEvalNodelet::onEvaluate, this);
     diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
     diagnostics_->setHardwareID("line_map_eval");

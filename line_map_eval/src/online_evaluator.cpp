@@ -57,6 +57,7 @@ std::vector<linemap::Vec2> OnlineEvaluator::scanPoints(const ScanRanges& scan)
 bool OnlineEvaluator::addScan(double stamp, const ScanRanges& scan, const linemap::Pose2& laser,
                               const std::optional<linemap::Pose2>& odom)
 {
+  ++counters_.scans;
   if (!std::isfinite(scan.angle_increment) || scan.angle_increment == 0.0)
   {
     ++counters_.rejected_scans;
@@ -70,11 +71,13 @@ bool OnlineEvaluator::addScan(double stamp, const ScanRanges& scan, const linema
 bool OnlineEvaluator::addSegments(double stamp, std::vector<linemap::Segment2> segments,
                                   const linemap::Pose2& laser, const std::optional<linemap::Pose2>& odom)
 {
+  ++counters_.segment_sets;
   return evaluator_.addSegments(stamp, laser, std::move(segments), odom);
 }
 
 void OnlineEvaluator::addTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses)
 {
+  ++counters_.trajectories;
   std::vector<std::pair<double, linemap::Pose2>> valid;
   valid.reserve(laser_poses.size());
   for (const auto& [stamp, p] : laser_poses)
@@ -122,7 +125,10 @@ std::vector<std::pair<std::string, std::string>> OnlineEvaluator::diagnostics() 
     return out.str();
   };
   const EvaluatorCounters& c = counters_;
-  return {{"keyframe scans", n(evaluator_.scanCount())},
+  return {{"scans", n(c.scans)},
+          {"segment sets", n(c.segment_sets)},
+          {"trajectories", n(c.trajectories)},
+          {"keyframe scans", n(evaluator_.scanCount())},
           {"original segments", n(evaluator_.originalCount())},
           {"dropped scans (tf)", n(c.dropped_scans)},
           {"rejected scans", n(c.rejected_scans)},

@@ -119,9 +119,21 @@ TEST(MapEvaluator, TrajectoryReRegistersScansAndSegments)
   EXPECT_NEAR(m.statistics.mean_length, 4.0, 1e-12);
 }
 
+namespace
+{
+/// The keyframe gate on tf stores every frame; trajectories only re-register (the tests of the
+/// correction of frames that are no nodes).
+EvaluatorParams tfParams()
+{
+  EvaluatorParams p;
+  p.keyframe_source = line_map_merging::KeyframeSource::kTf;
+  return p;
+}
+}  // namespace
+
 TEST(MapEvaluator, UnmatchedKeyframeTakesInterpolatedCorrection)
 {
-  MapEvaluator eval(EvaluatorParams{});
+  MapEvaluator eval(tfParams());
   const Pose2 offset(1.0, 0.0, 0.0);  // the whole trajectory moves by 1 m in x
   for (int i = 0; i < 3; ++i)
     ASSERT_TRUE(eval.addSegments(i, Pose2(i, 0, 0), {Segment2(Vec2(0, 1), Vec2(0.5, 1))}));
@@ -138,7 +150,7 @@ TEST(MapEvaluator, UnmatchedKeyframeTakesInterpolatedCorrection)
 // and is never taken as a stored scan's own pose.
 TEST(MapEvaluator, PoseOfAnUnstoredScanMovesItsStoredNeighbourByRelativeOdometry)
 {
-  MapEvaluator eval(EvaluatorParams{});
+  MapEvaluator eval(tfParams());
   const std::vector<Segment2> seen{Segment2(Vec2(0, 1), Vec2(0.5, 1))};
   for (const auto& [stamp, pose, stored] : {std::tuple{1.000, Pose2(0, 0, 0), true},
                                             std::tuple{1.002, Pose2(0.05, 0, 0), false},  // inside the gate
@@ -167,7 +179,7 @@ TEST(MapEvaluator, OdometryPosesKeepCorrectionsApartAcrossAMapToOdomJump)
                                  Pose2(0.5, -0.3, 1.2)};
   for (const bool with_odometry : {true, false})
   {
-    EvaluatorParams params;
+    EvaluatorParams params = tfParams();
     // Without odometry the map-frame corrections of keyframes 0 and 2 are interpolated (nearest
     // would take keyframe 0's by the tie-break alone).
     if (!with_odometry) params.correction = line_map_merging::CorrectionMode::kInterpolate;
@@ -223,4 +235,29 @@ TEST(MapEvaluator, CoverageDropsWhenAWallIsLeftOut)
   const auto r = eval.evaluate(twice);
   EXPECT_EQ(r.redundancy.pairs, 1u);
   EXPECT_NEAR(r.redundancy.overlap_length, 4.0, 1e-12);
+}
+
+// Once a trajectory came, the scans stored are the back end's nodes (gated on their poses), each at
+// its node's pose, as the merger's keyframes; a node whose scan comes later waits for it.
+TEST(MapEvaluator, AfterATrajectoryTheNodesChooseTheStoredScans)
+{
+  EvaluatorParams params;  // keyframe_source auto, gate 0.2 m
+  MapEvaluator eval(params);
+  // A scan every 0.105 m along x; odometry reads 14 % long.
+  auto odom = [](int i) { return Pose2(0.12 * i, 0, 0); };
+  auto truth = [](int i) { return Pose2(0.105 * i, 0, 0); };
+  for (int i = 0; i < 10; ++i) eval.addScan(i, odom(i), wallPointsInLaserFrame(truth(i)), odom(i));
+  EXPECT_EQ(eval.scanCount(), 5u);  // 0, 2, 4, 6, 8 on tf
+  // Nodes at every scan up to 9 and, not yet seen, 10..13.
+  std::vector<std::pair<double, Pose2>> nodes;
+  for (int i = 0; i < 14; ++i) nodes.emplace_back(i, truth(i));
+  EXPECT_EQ(eval.applyTrajectory(nodes), 4u);  // 10..13 unseen yet
+  // Node 9 is 0.105 m past node 8: below the gate. Scans 10..13 arrive: 10 and 12 are stored at once,
+  // at their nodes' poses (odometry would put them 0.15-0.2 m off).
+  for (int i = 10; i < 14; ++i)
+    EXPECT_EQ(eval.addScan(i, odom(i), wallPointsInLaserFrame(truth(i)), odom(i)), i % 2 == 0) << i;
+  EXPECT_EQ(eval.scanCount(), 7u);
+  // The walls of the truth are where the stored scans say.
+  const auto m = eval.evaluate(kWalls);
+  EXPECT_GT(m.quality.quality, 99.0);
 }

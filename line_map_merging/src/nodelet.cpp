@@ -70,7 +70,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     segments_sub_ = nh.subscribe<line_map_msgs::LineSegmentArray>(
         "line_segments", queue,
         boost::function<void(const SegmentsEvent&)>([this](const SegmentsEvent& e) { onRaw(e); }));
-    trajectory_sub_ = nh.subscribe("optimized_trajectory", 2, &LineMapMergingNodelet::onTrajectory, this);
+    // Every trajectory counts: its new nodes become keyframes (node_keyframes.hpp).
+    trajectory_sub_ = nh.subscribe("optimized_trajectory", 10, &LineMapMergingNodelet::onTrajectory, this);
     save_srv_ = pnh.advertiseService("save_map", &LineMapMergingNodelet::onSave, this);
     load_srv_ = pnh.advertiseService("load_map", &LineMapMergingNodelet::onLoad, this);
     reset_srv_ = pnh.advertiseService("reset_map", &LineMapMergingNodelet::onReset, this);

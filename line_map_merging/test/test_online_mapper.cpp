@@ -68,6 +68,9 @@ OnlineMapperParams params()
   OnlineMapperParams p;
   p.gate.distance = 0.19;  // every 4th scan (0, 4, 8, ...): the chord of 4 drifting steps is > 0.19 m
   p.gate.angle = 1.0;
+  // The keyframe gate on tf chooses every keyframe: these tests correct keyframes that are no nodes.
+  // The nodes choose them in the OnlineMapperNodes tests below.
+  p.keyframe_source = KeyframeSource::kTf;
   return p;
 }
 
@@ -317,6 +320,158 @@ TEST(OnlineMapperFiles, ALoadedMapTakesTheSameTrajectoryLikeTheOriginal)
   loaded->reset();
   EXPECT_EQ(loaded->merger().keyframeCount(), 0u);
   EXPECT_EQ(loaded->addScan(run.scan(0)), ScanOutcome::kKeyframe);
+}
+
+namespace
+{
+OnlineMapperParams nodeParams(KeyframeSource source)
+{
+  OnlineMapperParams p = params();
+  p.keyframe_source = source;
+  return p;
+}
+
+/// The nodes of `run` at or before scan `last`.
+std::vector<StampedPose> nodesUpTo(const Drive& run, int last)
+{
+  std::vector<StampedPose> out;
+  for (const auto& n : run.nodes())
+    if (n.first <= run.stamps[last]) out.push_back(n);
+  return out;
+}
+
+void expectSameMap(const OnlineMapper& a, const OnlineMapper& b)
+{
+  EXPECT_EQ(a.keyframeStamps(), b.keyframeStamps());
+  const auto ma = a.merger().map(), mb = b.merger().map();
+  ASSERT_EQ(ma.size(), mb.size());
+  for (std::size_t i = 0; i < ma.size(); ++i)
+  {
+    EXPECT_NEAR((ma[i].segment.start - mb[i].segment.start).norm(), 0.0, 1e-9);
+    EXPECT_NEAR((ma[i].segment.end - mb[i].segment.end).norm(), 0.0, 1e-9);
+  }
+}
+}  // namespace
+
+TEST(OnlineMapperNodes, AfterTheFirstTrajectoryTheNodesAreTheKeyframesAtTheirOwnPoses)
+{
+  // Scans 0..39 on tf: keyframes 0, 4, ..., 36. The trajectory of nodes 2, 6, ..., 38 adjusts them and
+  // from then on only nodes become keyframes, each exactly at its node's pose: nothing interpolated.
+  Drive run;
+  OnlineMapperParams p = nodeParams(KeyframeSource::kAuto);
+  p.keyframe_buffer = 3.0;  // scans 0..8 are no longer held: the tf keyframes stay
+  auto m = mapper(p);
+  for (int i = 0; i < 40; ++i) m->addScan(run.scan(i));
+  EXPECT_FALSE(m->nodesChoose());
+  EXPECT_EQ(m->merger().keyframeCount(), 10u);
+  m->addTrajectory(nodesUpTo(run, 39));
+  EXPECT_TRUE(m->nodesChoose());
+  // Node 38 is 0.1 m past keyframe 36: below the gate, not merged.
+  EXPECT_EQ(m->merger().keyframeCount(), 10u);
+  Pose2 map_to_odom = run.truth[38] * run.odom[38].inverse();
+  for (int i = 40; i < kScans; ++i)
+  {
+    const ScanOutcome o = m->addScan(run.scan(i, map_to_odom));
+    EXPECT_EQ(o, ScanOutcome::kHeld) << "scan " << i;  // no trajectory names it yet
+    if (i % 20 != 19) continue;
+    m->addTrajectory(nodesUpTo(run, i));
+    map_to_odom = run.truth[i - 1] * run.odom[i - 1].inverse();
+  }
+  // Nodes 42, 46, ..., 118 are 0.2 m apart (> the 0.19 m gate): every one a keyframe.
+  EXPECT_EQ(m->merger().keyframeCount(), 10u + 20u);
+  EXPECT_EQ(m->counters().rebuilds, 0u);
+  EXPECT_EQ(m->counters().node_keyframes, 20u);
+  for (const KeyframeInfo& k : m->merger().keyframes())
+  {
+    const int i = scanOf(run, k.stamp);
+    if (i < 40) continue;
+    EXPECT_EQ(i % 4, 2) << "keyframe at scan " << i << " is no node";
+    EXPECT_NEAR(k.pose.x, run.truth[i].x, 1e-9);
+    EXPECT_NEAR(k.pose.y, run.truth[i].y, 1e-9);
+    EXPECT_NEAR(k.pose.theta, run.truth[i].theta, 1e-9);
+  }
+  for (const MapSegment& s : m->merger().map())
+  {
+    EXPECT_NEAR(s.segment.start.y(), 1.0, 0.01);
+    EXPECT_NEAR(s.segment.end.y(), 1.0, 0.01);
+  }
+}
+
+TEST(OnlineMapperNodes, WhileEveryScanIsHeldTheFirstTrajectoryRebuildsTheMapFromItsNodes)
+{
+  // Scans 0..39 on tf (keyframes 0, 4, ..., 36), all still held: the first trajectory makes the map
+  // again from its nodes 2, 6, ..., 38, each at its own pose, as if the nodes had chosen from the start.
+  Drive run;
+  auto m = mapper(nodeParams(KeyframeSource::kAuto));
+  auto only_nodes = mapper(nodeParams(KeyframeSource::kTrajectory));
+  for (int i = 0; i < 40; ++i)
+  {
+    m->addScan(run.scan(i));
+    only_nodes->addScan(run.scan(i));
+  }
+  EXPECT_EQ(m->merger().keyframeCount(), 10u);
+  EXPECT_TRUE(m->addTrajectory(nodesUpTo(run, 39)));
+  only_nodes->addTrajectory(nodesUpTo(run, 39));
+  EXPECT_EQ(m->counters().rebuilds, 1u);
+  EXPECT_EQ(m->merger().keyframeCount(), 10u);
+  for (const KeyframeInfo& k : m->merger().keyframes())
+  {
+    const int i = scanOf(run, k.stamp);
+    EXPECT_EQ(i % 4, 2) << "keyframe at scan " << i << " is no node";
+    EXPECT_NEAR(k.pose.x, run.truth[i].x, 1e-9);
+    EXPECT_NEAR(k.pose.y, run.truth[i].y, 1e-9);
+  }
+  expectSameMap(*m, *only_nodes);
+}
+
+TEST(OnlineMapperNodes, ANodeWaitsForItsScanSoTheOrderOfArrivalDoesNotMatter)
+{
+  // Scans first and then each trajectory, against each trajectory first (its newest nodes' scans
+  // still in the extraction or the tf filter): the same keyframes, the same map.
+  Drive run;
+  auto scans_first = mapper(nodeParams(KeyframeSource::kTrajectory));
+  auto nodes_first = mapper(nodeParams(KeyframeSource::kTrajectory));
+  EXPECT_TRUE(scans_first->nodesChoose());
+  for (int block = 0; block < kScans / 20; ++block)
+  {
+    const int last = block * 20 + 19;
+    for (int i = block * 20; i <= last; ++i) EXPECT_EQ(scans_first->addScan(run.scan(i)), ScanOutcome::kHeld);
+    scans_first->addTrajectory(nodesUpTo(run, last));
+    nodes_first->addTrajectory(nodesUpTo(run, last));
+    for (int i = block * 20; i <= last; ++i)
+      EXPECT_EQ(nodes_first->addScan(run.scan(i)), i % 4 == 2 ? ScanOutcome::kKeyframe : ScanOutcome::kHeld)
+          << "scan " << i;
+  }
+  EXPECT_EQ(scans_first->merger().keyframeCount(), static_cast<std::size_t>(kScans / 4));
+  expectSameMap(*scans_first, *nodes_first);
+}
+
+TEST(OnlineMapperNodes, AReplayAddsNothingAndTheBufferIsBounded)
+{
+  Drive run;
+  OnlineMapperParams p = nodeParams(KeyframeSource::kTrajectory);
+  p.keyframe_buffer = 1.0;  // 10 scans
+  auto m = mapper(p);
+  for (int i = 0; i < 60; ++i) m->addScan(run.scan(i));
+  // Scans older than the buffer are gone: nodes 2..46 (stamps before scan 49) find none.
+  const auto diag = [&](const std::string& key)
+  {
+    for (const auto& [k, v] : m->diagnostics())
+      if (k == key) return std::stoul(v);
+    return 9999ul;
+  };
+  EXPECT_LE(diag("scans held for a trajectory"), 11u);
+  m->addTrajectory(nodesUpTo(run, 59));
+  EXPECT_EQ(diag("nodes without a scan"), 12u);
+  EXPECT_EQ(m->merger().keyframeCount(), 3u);          // nodes 50, 54, 58
+  EXPECT_EQ(diag("scans held for a trajectory"), 1u);  // scan 59, after the newest node
+  // rosbag play --loop: the same scans and trajectory again add nothing.
+  const std::uint64_t keyframes = m->merger().keyframeCount();
+  m->observeTime(run.stamps[0], run.stamps[0]);
+  for (int i = 0; i < 60; ++i) m->addScan(run.scan(i));
+  m->addTrajectory(nodesUpTo(run, 59));
+  EXPECT_EQ(m->merger().keyframeCount(), keyframes);
+  EXPECT_EQ(diag("nodes without a scan"), 12u);
 }
 
 TEST(TrajectoryAnchor, HistoryAndCorrections)

@@ -18,6 +18,7 @@
 #include "line_map_eval/map_statistics.hpp"
 #include "line_map_merging/fusion.hpp"
 #include "line_map_merging/keyframe_gate.hpp"
+#include "line_map_merging/node_keyframes.hpp"
 #include "line_map_merging/trajectory_anchor.hpp"
 
 namespace line_map_eval
@@ -28,13 +29,16 @@ struct EvaluatorParams
   double stamp_tolerance = 0.05;  ///< [s] trajectory node <-> scan matching
   double max_gap = 1.0;           ///< [s] a node between two scans at most this far apart is interpolated
   line_map_merging::CorrectionMode correction = line_map_merging::CorrectionMode::kNearest;
+  /// Which scans are stored, as the merger chooses its keyframes (line_map_merging/node_keyframes.hpp).
+  line_map_merging::KeyframeSource keyframe_source = line_map_merging::KeyframeSource::kAuto;
+  double keyframe_buffer = 300.0;  ///< [s] scans held for a trajectory to name them nodes
   LookupTableParams table;
   QualityParams quality;
   line_map_merging::FusionParams fusion;  ///< error assignment, redundant pairs, length coverage
   CoverageParams coverage;
 
   /// Keys "keyframe_distance", "keyframe_angle", "stamp_tolerance", "trajectory_max_gap",
-  /// "trajectory_correction", "eval/...", "fusion/...".
+  /// "trajectory_correction", "keyframe_source", "keyframe_buffer", "eval/...", "fusion/...".
   static EvaluatorParams fromParams(const linemap::ParamSet& params);
 };
 
@@ -60,7 +64,9 @@ class MapEvaluator
   /// Re-registers every stored frame on a trajectory of laser poses (map frame) at any stamps: as
   /// the merger does (line_map_merging/trajectory_anchor.hpp), each node found among the scans and
   /// segment sets seen gives the corrected map->odom there, and every frame takes that of its nearest
-  /// node (or the interpolation). Returns how many trajectory poses matched no scan seen.
+  /// node (or the interpolation). Then, unless keyframe_source is tf, the nodes newer than the stored
+  /// frames store their held scans and segment sets at the nodes' poses, through the keyframe gate,
+  /// as the merger takes them as keyframes. Returns how many trajectory poses matched no scan seen.
   std::size_t applyTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses);
 
   /// Scores `map` (map frame) with computeMapMetrics; rebuilds the lookup table first when frames changed.
@@ -88,6 +94,13 @@ class MapEvaluator
                    double stamp, const linemap::Pose2& pose) const;
   /// The laser pose in the frame where it is continuous: odometry when known, else the map.
   static linemap::Pose2 continuous(const Frame& f) { return f.odom ? *f.odom : f.pose; }
+  /// Stores what the nodes chose; returns whether anything was stored.
+  bool storeNodes(std::vector<line_map_merging::NodeKeyframes<Frame>::Ready> ready,
+                  std::vector<Frame>& frames, std::map<double, linemap::Pose2>& stamps);
+  /// Holds `frame` for a trajectory (unless keyframe_source is tf); true when nodes choose the frames
+  /// now (`stored`: whether a waiting node stored it or an earlier held one).
+  bool holdForNodes(line_map_merging::NodeKeyframes<Frame>& nodes, const Frame& frame,
+                    std::vector<Frame>& frames, std::map<double, linemap::Pose2>& stamps, bool& stored);
 
   EvaluatorParams params_;
   line_map_merging::KeyframeGate scan_gate_;
@@ -95,6 +108,7 @@ class MapEvaluator
   std::vector<Frame> scans_;
   std::vector<Frame> segments_;
   std::map<double, linemap::Pose2> scan_stamps_, segment_stamps_;  // stored frames: stamp -> gate pose
+  line_map_merging::NodeKeyframes<Frame> scan_nodes_, segment_nodes_;
   line_map_merging::OdometryHistory history_;  // continuous laser pose of every scan and segment set seen
   LookupTable table_;
   std::vector<linemap::Vec2> table_points_;  // the registered scan points of table_ (point coverage)

@@ -36,6 +36,7 @@ struct ScanRanges
 struct EvaluatorCounters
 {
   std::size_t dropped_scans = 0, rejected_scans = 0, rejected_poses = 0, unmatched_poses = 0, time_jumps = 0;
+  std::size_t scans = 0, segment_sets = 0, trajectories = 0;  ///< received (posed) by the core
   double last_quality = 0.0, last_eval_ms = 0.0;
 };
 

@@ -172,7 +172,10 @@ class Diagnostics:
             return -1
 
     def merged(self):
-        """line_segments messages the merger has finished with (keyframe, gated, dropped, replayed)."""
+        """line_segments messages the merger has finished with (keyframe, gated, held for a trajectory,
+        dropped, replayed)."""
+        if "segment sets handled" in self.values.get("line map merging", {}):
+            return self.counter("line map merging", "segment sets handled")
         keys = ("keyframes", "scans below the keyframe gate", "dropped scans", "replayed scans skipped",
                 "zero-stamp segments")
         return sum(max(0, self.counter("line map merging", k)) for k in keys)

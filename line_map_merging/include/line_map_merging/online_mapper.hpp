@@ -23,6 +23,7 @@
 #include "line_extraction/params.hpp"
 #include "line_map_merging/keyframe_gate.hpp"
 #include "line_map_merging/merger.hpp"
+#include "line_map_merging/node_keyframes.hpp"
 #include "line_map_merging/trajectory_anchor.hpp"
 
 namespace line_map_merging
@@ -35,9 +36,12 @@ struct OnlineMapperParams
   double time_jump_tolerance = 1.0;  ///< [s] clock or stamp this much earlier than before = time jumped back
   double autosave_period = 0.0;      ///< [s] 0 = no autosave
   CorrectionMode correction = CorrectionMode::kNearest;
+  KeyframeSource keyframe_source = KeyframeSource::kAuto;
+  double keyframe_buffer = 300.0;  ///< [s] scans held for a trajectory to name them nodes
 
   /// Keys "keyframe_distance", "keyframe_angle", "stamp_tolerance", "trajectory_max_gap",
-  /// "time_jump_tolerance", "autosave_period", "trajectory_correction" (nearest | interpolate);
+  /// "time_jump_tolerance", "autosave_period", "trajectory_correction" (nearest | interpolate),
+  /// "keyframe_source" (auto | tf | trajectory), "keyframe_buffer";
   /// throws linemap::ParameterError naming the key.
   static OnlineMapperParams fromParams(const linemap::ParamSet& params);
 };
@@ -62,6 +66,7 @@ enum class ScanOutcome
   kReplayed,   ///< a keyframe with this stamp exists (a replayed bag): skipped
   kZeroStamp,  ///< stamped zero: dropped
   kRejected,   ///< the merger refused it (non-finite pose)
+  kHeld,       ///< the trajectory's nodes choose the keyframes: held until a trajectory names it (or not)
 };
 
 struct MapperCounters
@@ -72,6 +77,10 @@ struct MapperCounters
   std::size_t trajectories = 0, ignored_trajectories = 0, bad_poses = 0, unmatched_poses = 0;
   std::size_t adjustments = 0, adjustment_failures = 0;
   std::size_t time_jumps = 0, autosaves = 0, autosave_failures = 0;
+  std::size_t node_keyframes = 0;  ///< keyframes a trajectory node chose (at the node's pose)
+  std::size_t rebuilds = 0;        ///< maps made again from the nodes of the first trajectory
+  std::size_t handled =
+      0;  ///< segment sets finished with: given to addScan, or counted dropped by the caller
   double last_otm_ms = 0.0, last_gma_ms = 0.0;
 };
 
@@ -82,13 +91,19 @@ class OnlineMapper
   ~OnlineMapper();  ///< waits for an autosave being written
 
   /// Gates and merges one segment set. A scan whose stamp a keyframe already has is a replay:
-  /// skipped, and the gate moves on from it as from that keyframe, so a replay adds nothing.
+  /// skipped, and the gate moves on from it as from that keyframe, so a replay adds nothing. Once the
+  /// trajectory's nodes choose the keyframes (KeyframeSource), the scan is held instead, or merged at
+  /// once when a node of the last trajectory was waiting for it (kKeyframe).
   ScanOutcome addScan(const StampedScan& scan);
 
   /// Applies a trajectory of base poses (map frame) of the back end's nodes, at any stamps: each
   /// node found among the scans seen gives the corrected map->odom there; every keyframe gets the
   /// correction of its nearest node (or the interpolation, see CorrectionMode) and the map is
-  /// adjusted. Non-finite poses are counted and skipped. Returns whether the map changed.
+  /// adjusted. Then, unless keyframe_source is tf, the nodes newer than every keyframe take their
+  /// held scans as keyframes at the nodes' poses (base pose * mount), through the keyframe gate. At
+  /// the first trajectory (auto), when every scan since the first keyframe is held, the map is made
+  /// again from the nodes alone.
+  /// Non-finite poses are counted and skipped. Returns whether the map changed.
   bool addTrajectory(const std::vector<StampedPose>& base_poses);
 
   /// The clock reading and/or a message stamp (NaN or 0: not known). Returns true when time jumped
@@ -112,9 +127,20 @@ class OnlineMapper
   /// The caller saved `revision` (of revision(), taken when it took the snapshot) at `now`, or failed.
   void autosaved(std::uint64_t revision, double now, bool ok);
 
+  /// Whether the trajectory's nodes choose the keyframes now.
+  bool nodesChoose() const { return nodes_.active(); }
+
   /// Counts a scan the caller could not pose (no transform) or that came stamped zero.
-  void countDropped() { ++counters_.dropped; }
-  void countZeroStamp() { ++counters_.zero_stamps; }
+  void countDropped()
+  {
+    ++counters_.dropped;
+    ++counters_.handled;
+  }
+  void countZeroStamp()
+  {
+    ++counters_.zero_stamps;
+    ++counters_.handled;
+  }
   /// Counts a trajectory the caller refused (wrong frame) and poses it could not convert.
   void countIgnoredTrajectory() { ++counters_.ignored_trajectories; }
   void countBadPoses(std::size_t n) { counters_.bad_poses += n; }
@@ -139,9 +165,26 @@ class OnlineMapper
   /// merger offers one: after each keyframe and after each adjustment, on the merger's own state.
   void afterMapChange() { ++revision_; }
 
+  /// What a scan leaves for a trajectory node to merge.
+  struct HeldScan
+  {
+    linemap::Pose2 continuous, mount;
+    std::vector<linemap::Segment2> segments;
+  };
+  /// Merges one keyframe (laser pose in the map frame); false when the merger refused it.
+  bool merge(double stamp, const linemap::Pose2& laser, const linemap::Pose2& continuous,
+             const linemap::Pose2& mount, const std::vector<linemap::Segment2>& segments);
+  bool mergeNodes(std::vector<NodeKeyframes<HeldScan>::Ready> ready);
+  double newestKeyframeStamp() const;
+  /// Empties the map and the keyframe records (not the scan history, nor the held scans).
+  void clearKeyframes();
+  /// Moves every keyframe to the trajectory (anchored on the nodes); whether the map changed.
+  bool adjustTo(const std::vector<StampedPose>& nodes);
+
   std::unique_ptr<Merger> merger_;
   OnlineMapperParams params_;
   KeyframeGate gate_;
+  NodeKeyframes<HeldScan> nodes_;
   OdometryHistory history_;  ///< base pose of every scan seen, in the continuous frame
   std::unordered_map<std::uint64_t, linemap::Pose2> continuous_;  ///< keyframe index -> laser, same frame
   std::unordered_set<double> keyframe_stamps_;
