@@ -91,6 +91,11 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.loop_min_score = p.getDouble("loop/min_score", s.loop_min_score);
   s.loop_max_error_xy = getPositive(p, "loop/max_error_xy", s.loop_max_error_xy);
   s.loop_max_error_theta = getPositive(p, "loop/max_error_theta", s.loop_max_error_theta);
+  s.loop_corroborate_xy = p.getDouble("loop/corroborate_xy", s.loop_corroborate_xy);
+  s.loop_corroborate_theta = p.getDouble("loop/corroborate_theta", s.loop_corroborate_theta);
+  s.loop_agreement_xy = p.getDouble("loop/agreement_xy", s.loop_agreement_xy);
+  s.loop_agreement_theta = p.getDouble("loop/agreement_theta", s.loop_agreement_theta);
+  s.loop_pending_keyframes = getCount(p, "loop/pending_keyframes", s.loop_pending_keyframes, 1);
   s.loop_consistent_xy = p.getDouble("loop/consistent_xy", s.loop_consistent_xy);
   s.loop_consistent_theta = p.getDouble("loop/consistent_theta", s.loop_consistent_theta);
   return s;
@@ -113,6 +118,7 @@ void LaserSlam::reset()
   last_matched_odom_.reset();
   path_ = path_at_closure_ = 0.0;
   chain_matched_ = true;
+  pending_.reset();
 }
 
 SlamOutcome LaserSlam::addScan(const SlamScan& in)
@@ -407,23 +413,61 @@ void LaserSlam::closeLoops()
       path_at_closure_ = kf.path;
       continue;
     }
+    // It disagrees with the estimate. A large disagreement is the drift a closure is for, or a false
+    // match: it must be corroborated by a second closure, from another keyframe, implying the same
+    // correction of the current pose (a false match rarely repeats itself consistently).
+    const double size = std::hypot(disagreement.x, disagreement.y);
+    const Pose2 implied = graph_.node(j) * match->pose;  // where this closure puts keyframe k
+    std::vector<std::size_t> added{edge};
+    if (size > params_.loop_corroborate_xy || std::fabs(disagreement.theta) > params_.loop_corroborate_theta)
+    {
+      bool agrees = false;
+      if (pending_ && k - pending_->to <= params_.loop_pending_keyframes && pending_->to != k)
+      {
+        // The pending closure's correction, applied to keyframe k: where it puts k.
+        const Pose2 pending_k = pending_->implied * (graph_.node(pending_->to).inverse() * graph_.node(k));
+        const Pose2 diff = pending_k.inverse() * implied;
+        agrees = std::hypot(diff.x, diff.y) <= params_.loop_agreement_xy &&
+                 std::fabs(diff.theta) <= params_.loop_agreement_theta;
+      }
+      if (!agrees)
+      {
+        graph_.removeEdge(edge);
+        pending_ = PendingClosure{e, implied, k};
+        ++counters_.loops_pending;
+        continue;
+      }
+      // Both go in, under a loss wide enough for the correction they agree on.
+      const double scale = std::max(params_.loop_loss_scale, 2.0 * size / params_.loop_sigma_xy);
+      graph_.setLossScale(edge, scale);
+      PoseGraphEdge first = pending_->edge;
+      first.loss_scale = scale;
+      added.push_back(graph_.addEdge(first));
+      pending_.reset();
+    }
     std::vector<Pose2> before(graph_.nodeCount());
     for (std::size_t i = 0; i < before.size(); ++i) before[i] = graph_.node(i);
     const OptimizationStats stats = graph_.optimize();
     ++counters_.optimizations;
     counters_.last_optimization_ms = stats.milliseconds;
     counters_.total_optimization_ms += stats.milliseconds;
-    const Pose2 error = graph_.edgeError(edge);
-    if (std::hypot(error.x, error.y) > params_.loop_max_error_xy ||
-        std::fabs(error.theta) > params_.loop_max_error_theta)
+    bool fits = true;
+    for (std::size_t a : added)
+    {
+      const Pose2 error = graph_.edgeError(a);
+      fits &= std::hypot(error.x, error.y) <= params_.loop_max_error_xy &&
+              std::fabs(error.theta) <= params_.loop_max_error_theta;
+    }
+    if (!fits)
     {
       // The rest of the graph disagrees: a false closure the robust loss only damped. Undo it.
-      graph_.removeEdge(edge);
+      std::sort(added.rbegin(), added.rend());
+      for (std::size_t a : added) graph_.removeEdge(a);
       for (std::size_t i = 0; i < before.size(); ++i) graph_.setNode(i, before[i]);
-      ++counters_.loops_rejected_graph;
+      counters_.loops_rejected_graph += added.size();
       continue;
     }
-    ++counters_.loops_accepted;
+    counters_.loops_accepted += added.size();
     graph_optimized_ = true;
     path_at_closure_ = kf.path;
   }
@@ -483,6 +527,7 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
           {"loop closure attempts", n(c.loop_attempts)},
           {"loop closures accepted", n(c.loops_accepted)},
           {"loop closures consistent (not optimised)", n(c.loops_consistent)},
+          {"loop closures waiting for corroboration", n(c.loops_pending)},
           {"loop closures rejected (score)", n(c.loops_rejected_score)},
           {"loop closures rejected (graph)", n(c.loops_rejected_graph)},
           {"optimizations", n(c.optimizations)},

@@ -71,7 +71,8 @@ OptimizationStats PoseGraph::optimize()
   ceres::Problem problem;
   for (const auto& e : edges_)
   {
-    ceres::LossFunction* loss = e.loop ? new ceres::CauchyLoss(params_.loop_loss_scale) : nullptr;
+    ceres::LossFunction* loss =
+        e.loop ? new ceres::CauchyLoss(e.loss_scale > 0.0 ? e.loss_scale : params_.loop_loss_scale) : nullptr;
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<EdgeCost, 3, 3, 3>(new EdgeCost(e)), loss,
                              nodes_[e.from].data(), nodes_[e.to].data());
   }

@@ -19,6 +19,7 @@ struct PoseGraphEdge
   double sigma_xy = 0.05;      ///< [m] standard deviation of the translation
   double sigma_theta = 0.01;   ///< [rad]
   bool loop = false;           ///< under the robust loss
+  double loss_scale = 0.0;     ///< its Cauchy scale in standard deviations; 0 = the graph's
 };
 
 struct PoseGraphParams
@@ -44,6 +45,8 @@ class PoseGraph
   std::size_t addNode(const linemap::Pose2& initial);
   /// Adds an edge between existing nodes; returns its index. Throws std::out_of_range on a bad node.
   std::size_t addEdge(const PoseGraphEdge& edge);
+  /// Changes the Cauchy scale of loop edge `index` (standard deviations).
+  void setLossScale(std::size_t index, double scale) { edges_.at(index).loss_scale = scale; }
   /// Removes edge `index` (the last added edge is the usual one to remove).
   void removeEdge(std::size_t index);
 
