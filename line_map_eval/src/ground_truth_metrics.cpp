@@ -241,9 +241,18 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
       {
         if (!seen_end[w][e]) continue;
         const Vec2& end = e == 0 ? wall.start : wall.end;
-        double nearest = std::numeric_limits<double>::infinity();
+        double nearest = std::numeric_limits<double>::infinity(), reach = nearest;
         for (const std::size_t m : assoc[w])
+        {
           nearest = std::min({nearest, (map[m].start - end).norm(), (map[m].end - end).norm()});
+          reach = std::min(reach, linemap::distanceToSegment(end, map[m].start, map[m].end));
+        }
+        if (reach > params.vertex_radius)
+        {
+          ++r.unmapped_ends;
+          continue;
+        }
+        ++score.mapped_endpoints;
         score.endpoint_error = std::max(score.endpoint_error, nearest);
         r.max_endpoint_error = std::max(r.max_endpoint_error, nearest);
         endpoint_sum += nearest;

@@ -166,11 +166,19 @@ TEST(GroundTruthMetrics, OnlyTheSeenPartsCount)
   EXPECT_EQ(r.corners[0].endpoints, 2u);
   EXPECT_NEAR(r.corners[0].vertex_error, std::hypot(0.2, 0.02) + 0.105, 1e-12);
 
-  // Scored over the whole faces instead, F's unseen start would cost 2 m, H would be undetected,
-  // and F's coverage would drop to the seen share: what the old metric reported.
+  EXPECT_EQ(r.unmapped_ends, 0u);
+  EXPECT_EQ(f.mapped_endpoints, 1u);
+
+  // Scored over the whole faces instead, H is undetected and F's start, 2 m from M1, is seen but
+  // unmapped: a gap in the coverage, not a 2 m endpoint error.
   const GroundTruthResult whole = evaluateAgainstGroundTruth(faces, map, defaults());
-  EXPECT_NEAR(whole.max_endpoint_error, 2.0, 1e-12);
   EXPECT_EQ(whole.undetected_walls, 1u);
+  EXPECT_EQ(whole.unmapped_ends, 1u);
+  EXPECT_NEAR(whole.max_endpoint_error, std::hypot(0.2, 0.02), 1e-12);
+  // Reached within vertex_radius (0.3 m) it counts: M1 extended to start 0.29 m from F's start.
+  std::vector<Segment2> longer = map;
+  longer[0].start = Vec2(0.29, 0);
+  EXPECT_NEAR(evaluateAgainstGroundTruth(faces, longer, defaults()).max_endpoint_error, 0.29, 1e-12);
 
   // Undirected association takes M3 in (adding nothing: the seen [2, 5] is M1's already).
   GroundTruthParams undirected = defaults();

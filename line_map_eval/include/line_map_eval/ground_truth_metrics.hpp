@@ -52,11 +52,12 @@ struct WallScore
   double seen_length = 0.0;  ///< of its seen parts [m]
   /// Fraction of the samples of the seen parts within coverage_tolerance of an associated segment.
   double coverage = 0.0;
-  /// Largest distance from a SEEN face endpoint to the nearest endpoint of an associated map
-  /// segment [m]; 0 when neither end was seen, +infinity when no map segment is associated.
+  /// Largest distance from a seen and mapped face endpoint to the nearest endpoint of an
+  /// associated map segment [m]; 0 when there is none, +infinity when no segment is associated.
   double endpoint_error = 0.0;
-  std::size_t seen_endpoints = 0;  ///< 0, 1 or 2
-  std::size_t associated = 0;      ///< map segments associated with the face
+  std::size_t seen_endpoints = 0;    ///< 0, 1 or 2
+  std::size_t mapped_endpoints = 0;  ///< of those, the ends an associated segment reaches
+  std::size_t associated = 0;        ///< map segments associated with the face
 };
 
 struct CornerScore
@@ -71,8 +72,9 @@ struct GroundTruthResult
   std::vector<WallScore> walls;      ///< the seen faces
   std::vector<CornerScore> corners;  ///< the seen corners
   double coverage = 0.0;             ///< seen-length-weighted mean face coverage in [0, 1]
-  double max_endpoint_error = 0.0;   ///< over the seen endpoints of detected faces [m]
+  double max_endpoint_error = 0.0;   ///< over the seen and mapped face endpoints [m]
   double mean_endpoint_error = 0.0;  ///< same, mean [m]
+  std::size_t unmapped_ends = 0;     ///< seen face endpoints no associated segment reaches
   std::size_t undetected_walls = 0;  ///< seen faces without any associated map segment
   std::size_t unseen_walls = 0;      ///< faces no scan saw (not scored)
   double mean_vertex_error = 0.0;    ///< mean over the corners with endpoints of their vertex_error [m]
@@ -88,8 +90,11 @@ struct GroundTruthResult
 /// Coverage samples each seen interval every <= sample_spacing (both ends included) and counts
 /// the samples within coverage_tolerance of an associated segment, so a perpendicular face's
 /// segment ending at a corner does not count as covering it. A face endpoint is seen when a seen
-/// interval reaches within coverage_tolerance of it; its error is the distance to the nearest
-/// endpoint of an associated segment. A corner is a point where the endpoints of two faces lie
+/// interval reaches within coverage_tolerance of it, and mapped when an associated segment passes
+/// within vertex_radius of it; its error is then the distance to the nearest endpoint of an
+/// associated segment (a segment that runs on past the end, across a partition, shows here). An
+/// end the map does not reach is an unmapped end (and shows in the coverage), not an endpoint
+/// error of metres. A corner is a point where the endpoints of two faces lie
 /// within corner_tolerance and their undirected headings differ by at least corner_min_angle
 /// (collinear continuations are not corners); its position is the mean of those endpoints, and
 /// corners closer than corner_tolerance are one. It is seen when the ends of two of its faces
