@@ -1,0 +1,187 @@
+// LaserSlam on a ray-cast room: with drifting odometry and without odometry the trajectory stays on
+// the truth, loops close; bad input (time going back, empty scans, odometry jumps, NaN odometry) is
+// counted and leaves the graph intact.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "line_map_merging/laser_slam.hpp"
+#include "slam_world.hpp"
+
+using line_map_merging::LaserSlam;
+using line_map_merging::LaserSlamParams;
+using line_map_merging::SlamOutcome;
+using line_map_merging::SlamScan;
+using linemap::Pose2;
+
+namespace
+{
+/// Two laps of a 5.5 x 3 m rectangle in the room: 5 cm per scan, turning 0.1 rad per scan at corners.
+std::vector<Pose2> laps(int count)
+{
+  const std::vector<linemap::Vec2> corners = {{1.5, 4.0}, {7.0, 4.0}, {7.0, 1.0}, {1.5, 1.0}};
+  std::vector<Pose2> path;
+  Pose2 p(1.5, 4.0, 0.0);
+  for (int lap = 0; lap < count; ++lap)
+    for (std::size_t c = 1; c <= corners.size(); ++c)
+    {
+      const linemap::Vec2 goal = corners[c % corners.size()];
+      const double heading = std::atan2(goal.y() - p.y, goal.x() - p.x);
+      while (std::fabs(linemap::normalizeAngle(heading - p.theta)) > 1e-9)
+      {
+        const double d = linemap::normalizeAngle(heading - p.theta);
+        p.theta = linemap::normalizeAngle(p.theta + std::clamp(d, -0.1, 0.1));
+        path.push_back(p);
+      }
+      while ((goal - p.translation()).norm() > 1e-9)
+      {
+        const linemap::Vec2 step = goal - p.translation();
+        const double len = std::min(0.05, step.norm());
+        p.x += step.x() / step.norm() * len;
+        p.y += step.y() / step.norm() * len;
+        path.push_back(p);
+      }
+    }
+  return path;
+}
+
+/// Odometry with a heading bias per metre and per radian: the loop visibly fails to close.
+std::vector<Pose2> drifting(const std::vector<Pose2>& truth)
+{
+  std::vector<Pose2> odom{truth[0]};
+  for (std::size_t i = 1; i < truth.size(); ++i)
+  {
+    Pose2 step = truth[i - 1].inverse() * truth[i];
+    step.theta += 0.03 * std::hypot(step.x, step.y) + 0.02 * step.theta;
+    odom.push_back(odom.back() * step);
+  }
+  return odom;
+}
+
+/// Largest and mean position error; the SLAM's map frame is the first pose.
+std::pair<double, double> errors(const std::vector<std::pair<double, Pose2>>& poses,
+                                 const std::vector<Pose2>& truth)
+{
+  double m = 0.0, sum = 0.0;
+  for (std::size_t i = 0; i < poses.size(); ++i)
+  {
+    const Pose2 p = truth[0] * poses[i].second;
+    const double e = std::hypot(p.x - truth[i].x, p.y - truth[i].y);
+    m = std::max(m, e);
+    sum += e;
+  }
+  return {m, sum / static_cast<double>(poses.size())};
+}
+
+// Range noise 5 mm, cells 2.5 cm: a few centimetres at worst, about one centimetre on average.
+void expectOnTruth(const std::vector<std::pair<double, Pose2>>& poses, const std::vector<Pose2>& truth)
+{
+  const auto [worst, mean] = errors(poses, truth);
+  EXPECT_LT(worst, 0.1);
+  EXPECT_LT(mean, 0.03);
+}
+
+struct Room
+{
+  LaserSlam slam;
+  std::vector<Pose2> truth, odom;
+  explicit Room(const LaserSlamParams& p = {}) : slam(p), truth(laps(2)), odom(drifting(truth)) {}
+  SlamScan scan(std::size_t i, bool with_odom) const
+  {
+    SlamScan s;
+    s.stamp = 1.0 + 0.2 * static_cast<double>(i);
+    s.points = slam_world::scan(slam_world::room(), truth[i], 180, 20.0, 0.005, static_cast<unsigned>(i));
+    if (with_odom) s.odom = odom[i];
+    return s;
+  }
+};
+}  // namespace
+
+TEST(LaserSlam, DriftingOdometryLoopCloses)
+{
+  Room run;
+  double odom_error = 0.0;
+  for (std::size_t i = 0; i < run.truth.size(); ++i)
+  {
+    ASSERT_NE(run.slam.addScan(run.scan(i, true)), SlamOutcome::kRejected);
+    odom_error = std::max(odom_error, (run.odom[i].translation() - run.truth[i].translation()).norm());
+  }
+  EXPECT_GT(odom_error, 0.3);  // the odometry alone is far off
+  EXPECT_LT(errors(run.slam.scanPoses(), run.truth).first, odom_error / 3.0);
+  const auto& c = run.slam.counters();
+  EXPECT_GT(c.loops_accepted, 0u);
+  EXPECT_EQ(c.poor_matches, 0u);
+  EXPECT_EQ(run.slam.scanPoses().size(), run.truth.size());
+  expectOnTruth(run.slam.scanPoses(), run.truth);
+  // The trajectory is of the keyframes, stamped with their scans' stamps, in order.
+  const auto t = run.slam.trajectory();
+  ASSERT_EQ(t.size(), c.keyframes);
+  for (std::size_t k = 1; k < t.size(); ++k) EXPECT_GT(t[k].first, t[k - 1].first);
+}
+
+TEST(LaserSlam, WithoutOdometry)
+{
+  Room run;
+  for (std::size_t i = 0; i < run.truth.size(); ++i) run.slam.addScan(run.scan(i, false));
+  EXPECT_EQ(run.slam.counters().without_odometry, run.truth.size());
+  expectOnTruth(run.slam.scanPoses(), run.truth);
+}
+
+TEST(LaserSlam, BadInputIsCountedAndHarmless)
+{
+  Room run;
+  const std::size_t n = run.truth.size() / 2;
+  for (std::size_t i = 0; i < n; ++i) run.slam.addScan(run.scan(i, true));
+  const std::size_t keyframes = run.slam.keyframes().size();
+  const Pose2 before = run.slam.currentPose();
+
+  // Time going back by 5 s: ignored, counted; nothing changes.
+  SlamScan back = run.scan(n, true);
+  back.stamp -= 5.0 + 0.2 * static_cast<double>(n);
+  EXPECT_EQ(run.slam.addScan(back), SlamOutcome::kRejected);
+  EXPECT_EQ(run.slam.counters().time_jumps, 1u);
+  EXPECT_EQ(run.slam.keyframes().size(), keyframes);
+  EXPECT_NEAR(run.slam.currentPose().x, before.x, 1e-12);
+
+  // An empty scan (the laser blinded): posed by odometry, counted, no keyframe.
+  SlamScan empty = run.scan(n, true);
+  empty.points.clear();
+  EXPECT_EQ(run.slam.addScan(empty), SlamOutcome::kPredicted);
+  EXPECT_EQ(run.slam.counters().few_points, 1u);
+
+  // Odometry jumping by 3 m from here on, and one NaN odometry reading: matching carries on.
+  for (std::size_t i = n + 1; i < run.truth.size(); ++i)
+  {
+    SlamScan s = run.scan(i, true);
+    s.odom = Pose2(3.0, -2.0, 1.0) * *s.odom;
+    if (i == n + 20) s.odom = Pose2(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0);
+    EXPECT_EQ(run.slam.addScan(s), SlamOutcome::kMatched) << "scan " << i;
+  }
+  const auto& c = run.slam.counters();
+  EXPECT_GE(c.odometry_jumps, 1u);
+  EXPECT_EQ(c.poor_matches, 0u);
+  EXPECT_EQ(c.rejected, 1u);
+  // Every accepted scan has a pose (the rejected one none), all on the truth.
+  const auto poses = run.slam.scanPoses();
+  ASSERT_EQ(poses.size(), run.truth.size());
+  expectOnTruth(poses, run.truth);
+}
+
+TEST(LaserSlam, ParametersAreCheckedByName)
+{
+  linemap::ParamSet p;
+  p.set("front_end/resolution", "-1");
+  try
+  {
+    LaserSlamParams::fromParams(p);
+    FAIL() << "a negative resolution was accepted";
+  }
+  catch (const linemap::ParameterError& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("front_end/resolution"), std::string::npos);
+  }
+  p = linemap::ParamSet();
+  p.set("loop/min_score", "0.7");
+  EXPECT_DOUBLE_EQ(LaserSlamParams::fromParams(p).loop_min_score, 0.7);
+}
