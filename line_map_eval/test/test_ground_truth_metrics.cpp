@@ -6,6 +6,8 @@
 #include <limits>
 
 #include "line_map_eval/ground_truth_metrics.hpp"
+#include "line_map_eval/simulator.hpp"
+#include "line_map_eval/world.hpp"
 
 using line_map_eval::evaluateAgainstGroundTruth;
 using line_map_eval::findCorners;
@@ -243,4 +245,41 @@ TEST(GroundTruthMetrics, ASegmentAcrossAPartitionBelongsToBothFaces)
   // Off the line by more than association_distance over the overlap: not associated.
   const std::vector<Segment2> off = {Segment2(Vec2(0, 0.25), Vec2(8, 0.25))};
   EXPECT_EQ(evaluateAgainstGroundTruth(faces, off, defaults()).undetected_walls, 2u);
+}
+
+TEST(GroundTruthMetrics, APerfectMapOfWhatWasSeenScoresPerfectlyOnTheOffice)
+{
+  // The map that draws exactly the seen parts of every face of the simulated office (the
+  // metric's own definition of what could be mapped): full coverage, nothing undetected, and every
+  // seen end within coverage_tolerance (the seen part's end) of a map endpoint. Scored against the
+  // whole faces instead, the same map loses metres at the ends it never saw: the old puzzle.
+  line_map_eval::SimulationOptions opt;
+  opt.scans = 200;
+  const auto sim = line_map_eval::simulate(
+      line_map_eval::loadWorld(std::string(LINEMAP_SOURCE_DIR) + "/config/worlds/office.yaml"), opt);
+  const GroundTruthParams p = defaults();
+  const SeenParts seen = line_map_eval::seenParts(sim.truth, p.min_seen_length, p.min_seen_beams);
+  std::vector<Segment2> map;
+  std::size_t seen_faces = 0;
+  for (std::size_t f = 0; f < seen.size(); ++f)
+  {
+    const Segment2& face = sim.truth.walls[f];
+    const Vec2 u = (face.end - face.start).normalized();
+    seen_faces += !seen[f].empty();
+    for (const auto& [from, to] : seen[f]) map.emplace_back(face.start + from * u, face.start + to * u);
+  }
+  ASSERT_GT(seen_faces, 30u);
+  const GroundTruthResult r = evaluateAgainstGroundTruth(sim.truth, map, p);
+  EXPECT_EQ(r.walls.size(), seen_faces);
+  EXPECT_EQ(r.unseen_walls, sim.truth.walls.size() - seen_faces);
+  EXPECT_DOUBLE_EQ(r.coverage, 1.0);
+  EXPECT_EQ(r.undetected_walls, 0u);
+  EXPECT_EQ(r.unmapped_ends, 0u);
+  EXPECT_LE(r.max_endpoint_error, p.coverage_tolerance + 1e-9);
+  EXPECT_EQ(r.missed_corners, 0u);
+
+  const GroundTruthResult whole = evaluateAgainstGroundTruth(sim.truth.walls, map, p);
+  EXPECT_LT(whole.coverage, 0.9);
+  EXPECT_GT(whole.undetected_walls, 0u);
+  EXPECT_GT(whole.unmapped_ends, 0u);
 }
