@@ -1,0 +1,98 @@
+#!/usr/bin/python3
+"""Rostest checker (test/slam_pipeline.test): the first 1500 scans of the Intel raw log, converted
+without the corrected trajectory, played through linemap.launch slam:=true. Waits until the SLAM
+has handled every scan of the bag (its diagnostics), then checks the trajectories it published
+(poses stamped with scan stamps, one per keyframe, finite), tf map -> odom at the last scan, and
+that the merger adjusted its map to them."""
+import math
+import os
+import sys
+import tempfile
+import unittest
+
+import rospy
+import rostest
+import tf2_ros
+from diagnostic_msgs.msg import DiagnosticArray
+from nav_msgs.msg import Path
+
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+import linemap_testing as lt  # noqa: E402
+
+SCANS = 1500
+RATE = 20
+
+
+class CheckSlamPipeline(unittest.TestCase):
+    def test_slam_feeds_the_merger(self):
+        raw = os.path.join(lt.datasets_dir(), "intel.clf.bz2")
+        if not os.path.exists(raw):
+            self.skipTest("Intel dataset missing under " + lt.datasets_dir())
+        bag = os.path.join(tempfile.mkdtemp(prefix="slam_pipeline_"), "intel.bag")
+        rc, log = lt.run(["rosrun", "line_map_eval", "carmen_to_bag", raw, bag, "--max-scans", str(SCANS)], 300)
+        self.assertEqual(rc, 0, log)
+        import rosbag
+        with rosbag.Bag(bag) as b:
+            stamps = sorted(m.header.stamp.to_sec() for _, m, _ in b.read_messages(topics=["/scan", "scan"]))
+        self.assertEqual(len(stamps), SCANS)
+
+        slam, merging, paths = {}, {}, []
+
+        def diag(msg):
+            for s in msg.status:
+                values = {kv.key: kv.value for kv in s.values}
+                if s.name.endswith("laser slam"):
+                    slam.update(values)
+                elif s.name.endswith("line map merging"):
+                    merging.update(values)
+
+        rospy.Subscriber("/diagnostics", DiagnosticArray, diag, queue_size=50)
+        rospy.Subscriber("/optimized_trajectory", Path, lambda m: paths.append(m), queue_size=100)
+        buf = tf2_ros.Buffer(rospy.Duration(600))
+        tf2_ros.TransformListener(buf)
+        lt.wait_until(lambda: "scans" in slam and "keyframes" in merging, "the SLAM and merger diagnostics",
+                      lambda: "slam %s, merging %s" % (bool(slam), bool(merging)), 60.0)
+
+        lt.play(bag, RATE)
+        limit = lt.work_limit(stamps[-1] - stamps[0], RATE)
+        lt.wait_until(lambda: int(slam.get("scans", "0")) >= SCANS, "the SLAM to handle all %d scans" % SCANS,
+                      lambda: "%s scans" % slam.get("scans"), limit, gone=lambda: lt.gone_nodes("/tf"))
+        lt.wait_until(lambda: paths and int(merging.get("adjustments", "0")) >= 1,
+                      "a trajectory and the merger's adjustment to it",
+                      lambda: "%d paths, merger %s" % (len(paths), merging.get("adjustments")), 60.0)
+        summary = ("slam: %s keyframes, %s closures accepted, %s rejected (score), %s poor matches; %d trajectories; "
+              "merger: %s adjustments, %s map segments" % (
+                  slam.get("keyframes"), slam.get("loop closures accepted"), slam.get("loop closures rejected (score)"),
+                  slam.get("poor matches"), len(paths), merging.get("adjustments"), merging.get("map segments")))
+        print(summary)
+        with open(os.path.join(lt.artifact_dir(), "slam_pipeline.txt"), "w") as f:
+            f.write(summary + "\n")
+        self.assertEqual(int(slam["scans out of order (ignored)"]), 0)
+        self.assertEqual(int(slam["scans dropped (no tf)"]), 0)
+        self.assertGreater(int(slam["matched scans"]), SCANS // 4)
+
+        last = paths[-1]
+        self.assertEqual(last.header.frame_id, "map")
+        self.assertGreater(len(last.poses), 10)
+        previous = -1.0
+        for p in last.poses:
+            t = p.header.stamp.to_sec()
+            self.assertGreater(t, previous, "keyframe poses in stamp order")
+            previous = t
+            # Every pose carries the stamp of one of the bag's scans (to the nanosecond of ROS time).
+            near = min(abs(s - t) for s in stamps[max(0, bisect(stamps, t) - 1):bisect(stamps, t) + 1])
+            self.assertLess(near, 1e-6, "pose stamp %.9f is no scan stamp" % t)
+            self.assertTrue(all(math.isfinite(v) for v in (p.pose.position.x, p.pose.position.y,
+                                                           p.pose.orientation.z, p.pose.orientation.w)))
+        # tf map -> odom at the last scan: the SLAM's.
+        self.assertTrue(buf.can_transform("map", "odom", rospy.Time.from_sec(stamps[-1]), rospy.Duration(5.0)))
+
+
+def bisect(values, x):
+    import bisect as b
+    return b.bisect_left(values, x)
+
+
+if __name__ == "__main__":
+    rospy.init_node("check_slam_pipeline")
+    rostest.rosrun("line_map_eval", "check_slam_pipeline", CheckSlamPipeline)
