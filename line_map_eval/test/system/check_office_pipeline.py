@@ -54,7 +54,8 @@ class CheckOfficePipeline(unittest.TestCase):
         poor = []
         for w, wall, intervals in seen:
             c, gaps = lt.coverage(wall, intervals, segments, band["coverage_distance_m"], return_gaps=True)
-            worst = min(worst, (c, w))
+            if c < worst[0]:  # (not min() of tuples: a tie at 1.0 would compare an index with None)
+                worst = (c, w)
             if c < band["min_wall_coverage"]:
                 poor.append("wall %d %s: %.1f %%, uncovered %s" % (w, wall, 100.0 * c, [[round(a, 2), round(b, 2)] for a, b in gaps]))
         print("office: %d map segments, quality %.2f %%, error %.2f mm, %d seen walls, worst coverage %.1f %% "
