@@ -58,7 +58,10 @@ std::string runAll(const ScanInput& scan, std::size_t max_segments)
       {
         m = e.what();
       }
-      if (!first) EXPECT_EQ(m.empty(), message.empty());
+      if (!first)
+      {
+        EXPECT_EQ(m.empty(), message.empty());
+      }
       message = m;
       first = false;
     }

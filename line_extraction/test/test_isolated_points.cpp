@@ -94,6 +94,9 @@ TEST(IsolatedPoints, PipelineKeepsAWallWholeDespiteSpuriousReturns)
     // Without the filter the spurious returns cut the walls (smsm and
     // line_regression rejoin the pieces with their own collinear merge).
     const std::string n = name;
-    if (n != "smsm" && n != "line_regression") EXPECT_GT(plain.extract(s).segments.size(), 4u);
+    if (n != "smsm" && n != "line_regression")
+    {
+      EXPECT_GT(plain.extract(s).segments.size(), 4u);
+    }
   }
 }

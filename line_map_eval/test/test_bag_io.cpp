@@ -97,7 +97,10 @@ TEST(BagIo, IntelPrefixRoundTrip)
   ASSERT_EQ(back.scans.size(), n);
   for (std::size_t i = 0; i < n; ++i)
   {
-    if (i > 0) ASSERT_GT(back.scans[i].stamp, back.scans[i - 1].stamp) << i;
+    if (i > 0)
+    {
+      ASSERT_GT(back.scans[i].stamp, back.scans[i - 1].stamp) << i;
+    }
     ASSERT_NEAR(back.scans[i].stamp, rec.scans[i].stamp, 1e-6) << i;
     ASSERT_EQ(back.scans[i].ranges, rec.scans[i].ranges) << i;
   }

@@ -78,7 +78,9 @@ TEST(Batch, EveryMergerProducesEveryColumn)
     // the merger kept pieces merged on the drifting odometry (online without adjustment).
     EXPECT_LE(r.originals.longest, 4.05);
     if (!r.online || line_map_merging::makeMerger(r.name, options.params)->supportsAdjustment())
+    {
       EXPECT_LE(r.map.longest, 4.05);
+    }
     EXPECT_LE(r.map.shortest, r.map.mean);
     EXPECT_LE(r.map.mean, r.map.longest);
     // Merging fuses pieces of one wall seen from several places into longer segments.
@@ -89,7 +91,10 @@ TEST(Batch, EveryMergerProducesEveryColumn)
     EXPECT_LT(r.error.mean_error, 0.05);
     EXPECT_GT(r.error.assigned, 0u);
     EXPECT_TRUE(std::isfinite(r.total_ms));
-    if (r.online) EXPECT_TRUE(std::isfinite(r.per_frame_ms));
+    if (r.online)
+    {
+      EXPECT_TRUE(std::isfinite(r.per_frame_ms));
+    }
     ASSERT_TRUE(r.ground_truth);
     // The room's four inner faces are seen; the crate's 0.4 m sides are shorter than a sight
     // (eval/gt_min_seen_length 0.6 m) and are not scored.

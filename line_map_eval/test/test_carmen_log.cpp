@@ -299,7 +299,10 @@ TEST(CarmenLog, KeyframesPairWithRawScansByRanges)
     EXPECT_EQ(pairs.back(), e.last) << e.raw;
     for (std::size_t k = 0; k < pairs.size(); ++k)
     {
-      if (k > 0) ASSERT_GT(pairs[k], pairs[k - 1]) << e.raw;
+      if (k > 0)
+      {
+        ASSERT_GT(pairs[k], pairs[k - 1]) << e.raw;
+      }
       ASSERT_EQ(raw.scans[pairs[k]].ranges, corrected.scans[k].ranges) << e.raw << " keyframe " << k;
     }
   }
@@ -453,7 +456,10 @@ TEST(CarmenRecording, IntelRecording)
   std::size_t unchanged = 0;
   for (std::size_t i = 0; i < rec.scans.size(); ++i)
   {
-    if (i > 0) ASSERT_GE(rec.scans[i].stamp - rec.scans[i - 1].stamp, 1e-3 - 1e-6) << i;
+    if (i > 0)
+    {
+      ASSERT_GE(rec.scans[i].stamp - rec.scans[i - 1].stamp, 1e-3 - 1e-6) << i;
+    }
     ASSERT_GE(rec.scans[i].stamp, raw.scans[i].timestamp) << i;
     if (rec.scans[i].stamp == raw.scans[i].timestamp) ++unchanged;
     ASSERT_EQ(rec.scans[i].odom.x, raw.scans[i].robot_pose.x);

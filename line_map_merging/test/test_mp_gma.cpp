@@ -237,7 +237,10 @@ TEST(MpGma, MergingContinuesAfterAnAdjustmentIndexAndLinearAlike)
       EXPECT_EQ(ma[i].segment.start, mb[i].segment.start);
       EXPECT_EQ(ma[i].segment.end, mb[i].segment.end);
     }
-    if (consistent) EXPECT_EQ(ma.size(), 8u) << "true poses from the adjustment on: one segment per wall";
+    if (consistent)
+    {
+      EXPECT_EQ(ma.size(), 8u) << "true poses from the adjustment on: one segment per wall";
+    }
   }
 }
 
