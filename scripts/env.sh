@@ -52,7 +52,12 @@ linemap_step() {
 _linemap_progress() {
   case "$1" in
     build) grep -o '^\[ *[0-9]*%\]' "$2" 2>/dev/null | tail -n 1 | tr -d '[] ' | sed 's/$/ /' ;;
-    tests) printf '%s test targets run ' "$(grep -c '^Built target run_tests_' "$2" 2>/dev/null || true)" ;;
+    tests)
+      # One make target per gtest, rostest and launch check: _run_tests_<pkg>_<kind>_<name>.
+      local leaf='_run_tests_[A-Za-z0-9_]*_(gtest|rostest|roslaunch-check)_'
+      printf '%s of %s tests ' "$(grep -cE "Built target ${leaf}" "$2" 2>/dev/null || true)" \
+        "$(find "$BUILD_DIR/build" -maxdepth 3 -type d -path '*/CMakeFiles/_run_tests_*' 2>/dev/null | grep -cE "/${leaf}" || true)"
+      ;;
   esac
 }
 
