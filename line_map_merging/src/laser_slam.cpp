@@ -96,6 +96,9 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.loop_agreement_xy = p.getDouble("loop/agreement_xy", s.loop_agreement_xy);
   s.loop_agreement_theta = p.getDouble("loop/agreement_theta", s.loop_agreement_theta);
   s.loop_pending_keyframes = getCount(p, "loop/pending_keyframes", s.loop_pending_keyframes, 1);
+  s.loop_ambiguity_distance = p.getDouble("loop/ambiguity_distance", s.loop_ambiguity_distance);
+  s.loop_ambiguity_ratio = p.getDouble("loop/ambiguity_ratio", s.loop_ambiguity_ratio);
+  s.loop_scale_by_disagreement = p.getDouble("loop/scale_by_disagreement", s.loop_scale_by_disagreement);
   s.loop_consistent_xy = p.getDouble("loop/consistent_xy", s.loop_consistent_xy);
   s.loop_consistent_theta = p.getDouble("loop/consistent_theta", s.loop_consistent_theta);
   return s;
@@ -315,8 +318,9 @@ void LaserSlam::rebuildLocalMap()
   local_map_ = LikelihoodGrid(points, params_.resolution, params_.sigma, 0.5);
 }
 
-std::optional<MatchResult> LaserSlam::matchLoop(std::size_t candidate, std::size_t current,
-                                                const Pose2& guess, double radius, double angle)
+std::optional<std::pair<MatchResult, double>> LaserSlam::matchLoop(std::size_t candidate, std::size_t current,
+                                                                   const Pose2& guess, double radius,
+                                                                   double angle)
 {
   // Submap: the candidate and its neighbours in the candidate's frame, by their optimised poses.
   const Pose2 inv = graph_.node(candidate).inverse();
@@ -352,7 +356,17 @@ std::optional<MatchResult> LaserSlam::matchLoop(std::size_t candidate, std::size
         refineMatch(fine, scan, local.front().pose, local.front().pose, params_.refinement);
     if (!best || refined.score > best->score) best = refined;
   }
-  return best;
+  if (!best) return std::nullopt;
+  double ambiguity = 0.0;
+  if (params_.loop_ambiguity_distance > 0.0)
+  {
+    wide.exclude_radius = params_.loop_ambiguity_distance;
+    wide.exclude_centre = candidates.front().pose.translation();
+    const auto other = correlativeSearch(coarse, scan, guess, wide, 1);
+    if (!other.empty() && candidates.front().score > 0.0)
+      ambiguity = other.front().score / candidates.front().score;
+  }
+  return std::make_pair(*best, ambiguity);
 }
 
 void LaserSlam::closeLoops()
@@ -388,12 +402,18 @@ void LaserSlam::closeLoops()
   {
     ++counters_.loop_attempts;
     const Pose2 guess = graph_.node(j).inverse() * graph_.node(k);
-    const auto match = matchLoop(j, k, guess, radius, angle);
-    if (!match || match->score < params_.loop_min_score)
+    const auto found = matchLoop(j, k, guess, radius, angle);
+    if (!found || found->first.score < params_.loop_min_score)
     {
       ++counters_.loops_rejected_score;
       continue;
     }
+    if (params_.loop_ambiguity_distance > 0.0 && found->second >= params_.loop_ambiguity_ratio)
+    {
+      ++counters_.loops_ambiguous;
+      continue;
+    }
+    const MatchResult* match = &found->first;
     PoseGraphEdge e;
     e.from = j;
     e.to = k;
@@ -445,6 +465,9 @@ void LaserSlam::closeLoops()
       added.push_back(graph_.addEdge(first));
       pending_.reset();
     }
+    else if (params_.loop_scale_by_disagreement > 0.0)
+      graph_.setLossScale(edge, std::max(params_.loop_loss_scale,
+                                         params_.loop_scale_by_disagreement * size / params_.loop_sigma_xy));
     std::vector<Pose2> before(graph_.nodeCount());
     for (std::size_t i = 0; i < before.size(); ++i) before[i] = graph_.node(i);
     const OptimizationStats stats = graph_.optimize();
@@ -528,6 +551,7 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
           {"loop closures accepted", n(c.loops_accepted)},
           {"loop closures consistent (not optimised)", n(c.loops_consistent)},
           {"loop closures waiting for corroboration", n(c.loops_pending)},
+          {"loop closures rejected (ambiguous)", n(c.loops_ambiguous)},
           {"loop closures rejected (score)", n(c.loops_rejected_score)},
           {"loop closures rejected (graph)", n(c.loops_rejected_graph)},
           {"optimizations", n(c.optimizations)},

@@ -109,6 +109,10 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
       for (int ox = -reach; ox <= reach; ++ox)
       {
         const int dx = ox * step, dy = oy * step;
+        if (window.exclude_radius > 0.0 &&
+            std::hypot(center.x + dx * res - window.exclude_centre.x(),
+                       center.y + dy * res - window.exclude_centre.y()) < window.exclude_radius)
+          continue;
         double sum = 0.0;
         for (std::size_t i = 0; i < points.size(); ++i)
         {

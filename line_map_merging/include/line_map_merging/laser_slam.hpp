@@ -63,6 +63,14 @@ struct LaserSlamParams
   std::size_t loop_candidates = 2;        ///< submaps tried per keyframe
   std::size_t loop_every = 1;             ///< keyframes between attempts
   double loop_min_score = 0.55;
+  /// A closure whose coarse search finds another pose at least ambiguity_distance away scoring at least
+  /// ambiguity_ratio of the best is refused (a corridor seen from inside); 0 / ratio > 1: no check.
+  double loop_ambiguity_distance = 0.3;  ///< [m]
+  double loop_ambiguity_ratio = 0.9;
+  /// An unambiguous closure goes in under a Cauchy scale of this many times its disagreement with the
+  /// estimate (in standard deviations), so a true closure after a long drift is applied, not damped
+  /// like an outlier; 0: always the graph's loop_loss_scale.
+  double loop_scale_by_disagreement = 2.0;
   double loop_max_error_xy = 0.3;     ///< [m] a closure the optimised graph misses by more is removed
   double loop_max_error_theta = 0.1;  ///< [rad]
   /// A closure the estimate misses by more than these needs a second one implying the same correction
@@ -104,7 +112,8 @@ struct SlamCounters
   std::size_t few_points = 0, poor_matches = 0, odometry_jumps = 0, wide_searches = 0, without_odometry = 0,
               time_jumps = 0;
   std::size_t keyframes = 0, loop_attempts = 0, loops_accepted = 0, loops_rejected_score = 0,
-              loops_rejected_graph = 0, loops_consistent = 0, loops_pending = 0, optimizations = 0;
+              loops_rejected_graph = 0, loops_consistent = 0, loops_pending = 0, loops_ambiguous = 0,
+              optimizations = 0;
   double last_optimization_ms = 0.0, total_optimization_ms = 0.0, last_match_ms = 0.0, total_loop_ms = 0.0;
 };
 
@@ -150,8 +159,10 @@ class LaserSlam
   void addKeyframe(const SlamScan& scan, std::size_t scan_index, bool chain_matched);
   void rebuildLocalMap();
   void closeLoops();
-  std::optional<MatchResult> matchLoop(std::size_t candidate, std::size_t current,
-                                       const linemap::Pose2& guess, double radius, double angle);
+  /// The refined match and its ambiguity (best coarse score away from the peak / the peak's).
+  std::optional<std::pair<MatchResult, double>> matchLoop(std::size_t candidate, std::size_t current,
+                                                          const linemap::Pose2& guess, double radius,
+                                                          double angle);
 
   LaserSlamParams params_;
   PoseGraph graph_;

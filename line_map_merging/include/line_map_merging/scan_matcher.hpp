@@ -23,6 +23,10 @@ struct SearchWindow
   /// equally good poses (a corridor) the one nearest the prior wins.
   double translation_penalty = 0.0;  ///< [1/m^2]
   double rotation_penalty = 0.0;     ///< [1/rad^2]
+  /// Candidates whose translation lies within this of `exclude_centre` are skipped (0: none): the
+  /// best pose away from a peak already found, i.e. how ambiguous that peak is.
+  double exclude_radius = 0.0;  ///< [m]
+  linemap::Vec2 exclude_centre = linemap::Vec2::Zero();
 };
 
 struct RefinementParams
