@@ -52,14 +52,14 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     map_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("map_frame", "map"));
     base_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("base_frame", "base_link"));
     odom_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("odom_frame", "odom"));
-    const double tf_timeout = pnh.param("tf_timeout", 0.5);
+    // No filter tolerance: it would hold each scan until tf reached its stamp + tolerance, so the
+    // last scans of a bag (or of a checker's step) never came through.
     tf_ = std::make_shared<tf2_ros::Buffer>(ros::Duration(600.0));
     tf_listener_ = std::make_shared<tf2_ros::TransformListener>(*tf_);
     quality_pub_ = nh.advertise<line_map_msgs::MapQuality>("map_quality", 1, true);
     grid_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("lookup_table", 1, true);
     scan_sub_.subscribe(nh, "scan", 50);
     scan_filter_ = std::make_unique<Filter<sensor_msgs::LaserScan>>(scan_sub_, *tf_, map_frame_, 50, nh);
-    scan_filter_->setTolerance(ros::Duration(tf_timeout));
     scan_filter_->registerCallback(&LineMapEvalNodelet::onScan, this);
     scan_filter_->registerFailureCallback(
         [this](const sensor_msgs::LaserScan::ConstPtr& msg,
@@ -73,7 +73,6 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     segment_sub_.subscribe(nh, "line_segments", 50);
     segment_filter_ =
         std::make_unique<Filter<line_map_msgs::LineSegmentArray>>(segment_sub_, *tf_, map_frame_, 50, nh);
-    segment_filter_->setTolerance(ros::Duration(tf_timeout));
     segment_filter_->registerCallback(&LineMapEvalNodelet::onSegments, this);
     map_sub_ = nh.subscribe("line_map", 1, &LineMapEvalNodelet::onMap, this);
     // Every trajectory counts: its new nodes choose the stored scans (map_evaluator.hpp).
