@@ -70,7 +70,7 @@ target_source() {
 }
 target_libs() {
   case "$1" in
-    merging | map_file) echo "-ltbb -lyaml-cpp" ;;
+    merging | map_file) echo "-ltbb -lyaml-cpp -lceres -lglog" ;;  # the laser SLAM's scan matcher uses Ceres
     carmen) echo "-lboost_iostreams -lz -lbz2" ;;
   esac
 }

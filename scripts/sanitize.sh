@@ -22,7 +22,7 @@ case "${1:-tsan}" in
     echo "sanitize: building $out/tsan_mp_gma"
     clang++ -std=c++17 -O1 -g -fsanitize=thread -fno-omit-frame-pointer -DLINEMAP_TSAN -I line_extraction/include \
       -I line_map_merging/include -I /usr/include/eigen3 "${srcs[@]}" line_map_merging/fuzz/tsan_mp_gma.cpp \
-      -ltbb -lyaml-cpp -o "$out/tsan_mp_gma"
+      -ltbb -lyaml-cpp -lceres -lglog -o "$out/tsan_mp_gma"
     TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1${TSAN_OPTIONS:+:$TSAN_OPTIONS}" "$out/tsan_mp_gma"
     ;;
   *) echo "usage: sanitize.sh tsan" >&2; exit 2 ;;
