@@ -65,7 +65,7 @@ Trajectory readTrajectory(const std::string& path)
 void print(const std::string& name, const RelationsError& e, const std::string& extra)
 {
   const double deg = 180.0 / linemap::kPi;
-  std::cout << std::left << std::setw(22) << name << std::right << std::fixed << std::setw(6) << e.used << "/"
+  std::cout << std::left << std::setw(25) << name << std::right << std::fixed << std::setw(6) << e.used << "/"
             << std::left << std::setw(6) << e.relations << std::right << std::setprecision(4) << std::setw(8)
             << e.translation_mean << " ± " << std::setw(6) << e.translation_std << std::setprecision(2)
             << std::setw(8) << e.rotation_mean * deg << " ± " << std::setw(5) << e.rotation_std * deg << "  "
@@ -141,7 +141,7 @@ int main(int argc, char** argv)
         t.push_back({raw.scans[i].timestamp, poses[i]});
       return t;
     };
-    std::cout << "trajectory              used/total   trans [m] mean ± std   rot [deg] mean ± std\n";
+    std::cout << "trajectory                 used/total   trans [m] mean ± std   rot [deg] mean ± std\n";
     if (odometry)
     {
       std::vector<Pose2> poses;
