@@ -61,9 +61,10 @@ class CheckSlamPipeline(unittest.TestCase):
                       "a trajectory and the merger's adjustment to it",
                       lambda: "%d paths, merger %s" % (len(paths), merging.get("adjustments")), 60.0)
         summary = ("slam: %s keyframes, %s closures accepted, %s rejected (score), %s poor matches; %d trajectories; "
-              "merger: %s adjustments, %s map segments" % (
+              "merger: %s adjustments, %s map segments, %s keyframes (chosen by %s; %s node keyframes)" % (
                   slam.get("keyframes"), slam.get("loop closures accepted"), slam.get("loop closures rejected (score)"),
-                  slam.get("poor matches"), len(paths), merging.get("adjustments"), merging.get("map segments")))
+                  slam.get("poor matches"), len(paths), merging.get("adjustments"), merging.get("map segments"),
+                  merging.get("keyframes"), merging.get("keyframes chosen by"), merging.get("node keyframes")))
         print(summary)
         with open(os.path.join(lt.artifact_dir(), "slam_pipeline.txt"), "w") as f:
             f.write(summary + "\n")
