@@ -16,7 +16,7 @@ case "${1:-tsan}" in
     srcs=()
     for p in line_extraction line_map_merging; do
       for s in "$p"/src/*.cpp; do
-        case "$s" in */node.cpp | */nodelet.cpp) ;; *) srcs+=("$s") ;; esac
+        case "$s" in */node.cpp | */nodelet.cpp | */*_nodelet.cpp) ;; *) srcs+=("$s") ;; esac
       done
     done
     echo "sanitize: building $out/tsan_mp_gma"
