@@ -361,6 +361,9 @@ TEST(OnlineMapperNodes, AfterTheFirstTrajectoryTheNodesAreTheKeyframesAtTheirOwn
   OnlineMapperParams p = nodeParams(KeyframeSource::kAuto);
   p.keyframe_buffer = 3.0;  // scans 0..8 are no longer held: the tf keyframes stay
   auto m = mapper(p);
+  // A trajectory that names no scan seen (here: before any) leaves the choice to the tf gate.
+  EXPECT_FALSE(m->addTrajectory({{run.stamps[2], run.truth[2]}}));
+  EXPECT_FALSE(m->nodesChoose());
   for (int i = 0; i < 40; ++i) m->addScan(run.scan(i));
   EXPECT_FALSE(m->nodesChoose());
   EXPECT_EQ(m->merger().keyframeCount(), 10u);
