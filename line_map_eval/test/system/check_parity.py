@@ -147,6 +147,16 @@ class Driver:
                     # Keep the nodelets' queues (>= 50) from overflowing: at most 20 scans in flight.
                     if self.scans > 20 and self.newest_segments() < self.stamps[-21] - 1e-6:
                         self.wait_extracted(self.stamps[-6], "scan %d" % (self.scans - 5), step=0.005)
+            # The same at the end: a copy of the last /tf 1 ms later lets a scan that came before its
+            # transform through; no scan lies between the two samples.
+            last_tf = next((m for topic, m, _ in reversed(messages) if topic == "/tf"), None)
+            if last_tf is not None:
+                import copy
+                extra = copy.deepcopy(last_tf)
+                for tr in extra.transforms:
+                    tr.header.stamp += rospy.Duration(0.001)
+                self.clock.publish(Clock(clock=extra.transforms[0].header.stamp))
+                self.tf.publish(extra)
         self.wait_scans_done("the end of the bag")
 
 
