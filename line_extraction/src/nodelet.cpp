@@ -51,7 +51,8 @@ class LineExtractionRos
     const linemap::ParamSet params = linemap_ros::loadParamSet(private_nh);
     // Throws linemap::ParameterError naming the parameter; the nodelet reports it.
     extractor_ = std::make_unique<LineExtractor>(params);
-    segments_pub_ = nh.advertise<line_map_msgs::LineSegmentArray>("line_segments", 10);
+    // As deep as the scan queue: a slow subscriber (a checker in python under load) loses messages past it.
+    segments_pub_ = nh.advertise<line_map_msgs::LineSegmentArray>("line_segments", 100);
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_segments_markers", 1);
     // Room for bursts (a bag played fast, worker threads busy with a lookup table or an autosave):
     // with 10, a bag at 40x real time lost scans here, unseen by any counter. Extraction takes

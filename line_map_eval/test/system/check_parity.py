@@ -144,9 +144,10 @@ class Driver:
                 if topic == "/scan":
                     self.scans += 1
                     self.stamps.append(msg.header.stamp.to_sec())
-                    # Keep the nodelets' queues (>= 50) from overflowing: at most 20 scans in flight.
-                    if self.scans > 20 and self.newest_segments() < self.stamps[-21] - 1e-6:
-                        self.wait_extracted(self.stamps[-6], "scan %d" % (self.scans - 5), step=0.005)
+                    # Keep every queue on the way (the publishers' >= 100, tf filters' 100) from
+                    # overflowing under load: at most 8 scans in flight.
+                    if self.scans > 8 and self.newest_segments() < self.stamps[-9] - 1e-6:
+                        self.wait_extracted(self.stamps[-3], "scan %d" % (self.scans - 2), step=0.005)
             # The same at the end: a copy of the last /tf 1 ms later lets a scan that came before its
             # transform through; no scan lies between the two samples.
             last_tf = next((m for topic, m, _ in reversed(messages) if topic == "/tf"), None)
