@@ -143,9 +143,8 @@ class LaserSlam
   std::vector<std::pair<double, linemap::Pose2>> scanPoses() const;
   /// Base pose of the last accepted scan in the map frame.
   linemap::Pose2 currentPose() const;
-  /// The last accepted scan's front-end pose, and its odometry (if it had any).
+  /// The last accepted scan's front-end pose.
   const linemap::Pose2& currentLocal() const { return last_local_; }
-  std::optional<linemap::Pose2> currentOdom() const { return last_odom_; }
 
   const std::vector<SlamKeyframe>& keyframes() const { return keyframes_; }
   const PoseGraph& graph() const { return graph_; }
