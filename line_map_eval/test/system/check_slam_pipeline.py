@@ -56,7 +56,7 @@ class CheckSlamPipeline(unittest.TestCase):
         lt.play(bag, RATE)
         limit = lt.work_limit(stamps[-1] - stamps[0], RATE)
         lt.wait_until(lambda: int(slam.get("scans", "0")) >= SCANS, "the SLAM to handle all %d scans" % SCANS,
-                      lambda: "%s scans" % slam.get("scans"), limit, gone=lambda: lt.gone_nodes("/tf"))
+                      lambda: "%s scans" % slam.get("scans"), limit, gone=lt.gone_nodes("/tf"))
         lt.wait_until(lambda: paths and int(merging.get("adjustments", "0")) >= 1,
                       "a trajectory and the merger's adjustment to it",
                       lambda: "%d paths, merger %s" % (len(paths), merging.get("adjustments")), 60.0)
