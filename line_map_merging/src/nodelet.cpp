@@ -16,7 +16,7 @@
 #include <string>
 
 #include "line_extraction/ros/param_loader.hpp"
-#include "line_map_merging/online_mapper.hpp"
+#include "line_map_merging/concurrent_mapper.hpp"
 #include "ros/map_messages.hpp"
 
 namespace line_map_merging
@@ -27,6 +27,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   ~LineMapMergingNodelet() override
   {
     autosave_timer_.stop();
+    poll_timer_.stop();
     if (filter_) filter_->clear();
     if (mapper_) autosave(INFINITY);  // the changes since the last autosave
   }
@@ -49,8 +50,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     const linemap::ParamSet params = linemap_ros::loadParamSet(pnh);
     try
     {
-      mapper_ = std::make_unique<OnlineMapper>(makeMerger(pnh.param<std::string>("method", "cae"), params),
-                                               OnlineMapperParams::fromParams(params));
+      mapper_ = ConcurrentMapper::fromParams(pnh.param<std::string>("method", "cae"), params);
     }
     catch (const std::exception& e)
     {
@@ -70,12 +70,11 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     segments_sub_ = nh.subscribe<line_map_msgs::LineSegmentArray>(
         "line_segments", queue,
         boost::function<void(const SegmentsEvent&)>([this](const SegmentsEvent& e) { onRaw(e); }));
-    // Every trajectory counts: its new nodes become keyframes (node_keyframes.hpp).
     trajectory_sub_ = nh.subscribe("optimized_trajectory", 10, &LineMapMergingNodelet::onTrajectory, this);
     save_srv_ = pnh.advertiseService("save_map", &LineMapMergingNodelet::onSave, this);
     load_srv_ = pnh.advertiseService("load_map", &LineMapMergingNodelet::onLoad, this);
     reset_srv_ = pnh.advertiseService("reset_map", &LineMapMergingNodelet::onReset, this);
-    const double period = mapper_->params().autosave_period;
+    const double period = mapper_->mapper().params().autosave_period;
     if (period > 0.0 && !autosave_path_.empty())
       autosave_timer_ = nh.createWallTimer(ros::WallDuration(period), [this](const ros::WallTimerEvent&)
                                            { autosave(ros::WallTime::now().toSec()); });
@@ -84,19 +83,19 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
     diagnostics_->setHardwareID("none");
     diagnostics_->add("line map merging", this, &LineMapMergingNodelet::diagnose);
-    // Wall time and force_update(): update() waits for its next period in ROS time, which never
-    // comes after the clock jumped back (rosbag play --loop).
+    // Wall time and force_update(): update() waits in ROS time, stuck after the clock jumped back.
     diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), &LineMapMergingNodelet::tick, this);
-    NODELET_INFO("line_map_merging: method '%s' in frame '%s'", mapper_->merger().name(), map_frame_.c_str());
+    // A finished adjustment replaces the map at the next scan, or here when none comes.
+    poll_timer_ = nh.createWallTimer(ros::WallDuration(0.02), &LineMapMergingNodelet::poll, this);
+    NODELET_INFO("line_map_merging: method '%s' in frame '%s'", merger().name(), map_frame_.c_str());
   }
 
   void drop(const std::string& why, bool zero_stamp = false)
   {
     std::lock_guard<std::mutex> lock(mutex_);
     zero_stamp ? mapper_->countZeroStamp() : mapper_->countDropped();
-    NODELET_WARN_THROTTLE(5.0,
-                          "line_map_merging: segments dropped: %s (%zu dropped, %zu stamped zero so far)",
-                          why.c_str(), mapper_->counters().dropped, mapper_->counters().zero_stamps);
+    NODELET_WARN_THROTTLE(5.0, "line_map_merging: segments dropped: %s (%zu so far, %zu stamped zero)",
+                          why.c_str(), counters().dropped, counters().zero_stamps);
   }
 
   /// Time jumping back (rosbag play --loop): the tf buffer holds the old time line.
@@ -106,9 +105,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     if (!mapper_->observeTime(ros::Time::now().toSec(), stamp)) return;
     tf_->clear();
     NODELET_WARN_THROTTLE(5.0,
-                          "line_map_merging: time jumped backwards; tf buffer cleared, keyframe gate reset, "
-                          "map kept (%zu jumps so far)",
-                          mapper_->counters().time_jumps);
+                          "line_map_merging: time jumped back: tf buffer cleared, gate reset, map kept (%zu)",
+                          counters().time_jumps);
   }
 
   /// Before the tf filter: a zero stamp would be posed at the latest transform, and a frame unknown
@@ -130,25 +128,16 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     if ((ros::Time::now() - event.getReceiptTime()).toSec() > tf_timeout_)
       return drop("waited more than ~tf_timeout for tf");
     const std::string frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
-    StampedScan scan;
-    scan.stamp = msg->header.stamp.toSec();
-    const auto laser = lookupPose(*tf_, map_frame_, frame, msg->header.stamp);
-    if (!laser) return drop("no valid transform " + map_frame_ + " -> " + frame);
-    scan.laser = *laser;
-    if (!base_frame_.empty())
-    {
-      const auto mount = lookupPose(*tf_, base_frame_, frame, msg->header.stamp);
-      if (mount)
-        scan.mount = *mount;
-      else  // a bag without it lacks it for good: once is enough
-        NODELET_WARN_ONCE("line_map_merging: no %s -> %s transform; taking them as the same frame",
-                          base_frame_.c_str(), frame.c_str());
-    }
-    if (!odom_frame_.empty() && odom_frame_ != map_frame_)
-      scan.odom = lookupPose(*tf_, odom_frame_, frame, msg->header.stamp);
-    scan.segments = toSegments(*msg);
+    bool mount_found = true;
+    const auto scan = toStampedScan(*tf_, *msg, frame, map_frame_, base_frame_, odom_frame_, mount_found);
+    if (!scan) return drop("no valid transform " + map_frame_ + " -> " + frame);
+    if (!mount_found)  // a bag without it lacks it for good: once is enough
+      NODELET_WARN_ONCE("line_map_merging: no %s -> %s transform; taking them as the same frame",
+                        base_frame_.c_str(), frame.c_str());
     std::lock_guard<std::mutex> lock(mutex_);
-    if (mapper_->addScan(scan) == ScanOutcome::kKeyframe) publish(msg->header.stamp);
+    newest_ = std::max(newest_, msg->header.stamp);
+    const bool adjusted = mapper_->poll();
+    if (mapper_->addScan(*scan) == ScanOutcome::kKeyframe || adjusted) publish(msg->header.stamp);
   }
 
   void onTrajectory(const nav_msgs::Path::ConstPtr& path)
@@ -168,14 +157,15 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     mapper_->countBadPoses(bad);
     if (bad > 0)
       NODELET_WARN_THROTTLE(5.0, "line_map_merging: %zu invalid optimized_trajectory poses ignored", bad);
-    if (mapper_->addTrajectory(nodes))
-      publish(path->header.stamp.isZero() ? ros::Time::now() : path->header.stamp);
+    newest_ = std::max(newest_, path->header.stamp.isZero() ? ros::Time::now() : path->header.stamp);
+    if (mapper_->addTrajectory(nodes)) publish(newest_);
   }
 
   void autosave(double now)  // infinite `now`: the last save, at shutdown
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (autosave_path_.empty()) return;
+    if (!std::isfinite(now)) mapper_->finish();
     const std::string error = mapper_->autosave(autosave_path_, now, !std::isfinite(now));
     if (!error.empty()) NODELET_WARN_THROTTLE(30.0, "line_map_merging: autosave failed: %s", error.c_str());
   }
@@ -183,9 +173,10 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   bool onSave(line_map_msgs::SaveMap::Request& req, line_map_msgs::SaveMap::Response& res)
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string error = attemptAll([&] { mapper_->merger().save(req.path); });
+    if (mapper_->finish()) publish(newest_);  // the newest map, adjusted
+    const std::string error = attemptAll([&] { merger().save(req.path); });
     return answer(res, error,
-                  "saved " + std::to_string(mapper_->merger().segmentCount()) + " segments to " + req.path);
+                  "saved " + std::to_string(merger().segmentCount()) + " segments to " + req.path);
   }
 
   bool onLoad(line_map_msgs::LoadMap::Request& req, line_map_msgs::LoadMap::Response& res)
@@ -193,8 +184,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     std::lock_guard<std::mutex> lock(mutex_);
     const std::string error = attemptAll([&] { mapper_->load(req.path); });  // a failed load keeps the map
     return answer(res, error,
-                  "loaded " + std::to_string(mapper_->merger().segmentCount()) + " segments, " +
-                      std::to_string(mapper_->merger().keyframeCount()) + " keyframes from " + req.path) &&
+                  "loaded " + std::to_string(merger().segmentCount()) + " segments, " +
+                      std::to_string(merger().keyframeCount()) + " keyframes from " + req.path) &&
            (error.empty() ? publish(ros::Time::now()) : true);
   }
 
@@ -207,11 +198,17 @@ class LineMapMergingNodelet : public nodelet::Nodelet
 
   bool publish(const ros::Time& stamp)  // lock held
   {
-    const line_map_msgs::LineMap msg = toLineMap(mapper_->merger(), map_frame_, stamp);
+    const line_map_msgs::LineMap msg = toLineMap(merger(), map_frame_, stamp);
     map_pub_.publish(msg);
     if (marker_pub_.getNumSubscribers() > 0)
       marker_pub_.publish(toMarkers(msg, marker_width_, publish_labels_));
     return true;
+  }
+
+  void poll(const ros::WallTimerEvent&)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (mapper_->poll()) publish(newest_);
   }
 
   void tick(const ros::WallTimerEvent&)
@@ -223,14 +220,18 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    const bool dropped = mapper_->counters().dropped > 0;
+    const bool dropped = counters().dropped > 0;
     stat.summary(dropped ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
                  dropped ? "scans dropped (no transform)" : "merging");
     for (const auto& [key, value] : mapper_->diagnostics()) stat.add(key, value);
   }
 
-  std::mutex mutex_;  // guards mapper_
-  std::unique_ptr<OnlineMapper> mapper_;
+  const Merger& merger() const { return mapper_->mapper().merger(); }
+  const MapperCounters& counters() const { return mapper_->mapper().counters(); }
+
+  std::mutex mutex_;  // guards mapper_ and newest_
+  std::unique_ptr<ConcurrentMapper> mapper_;
+  ros::Time newest_;  // the newest input stamp: a map adjusted in the background is stamped with it
   std::string map_frame_, base_frame_, odom_frame_, autosave_path_;
   double tf_timeout_ = 0.5, marker_width_ = 0.03;
   bool publish_labels_ = false;
@@ -241,7 +242,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   ros::Publisher map_pub_, marker_pub_;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  ros::WallTimer diag_timer_, autosave_timer_;
+  ros::WallTimer diag_timer_, autosave_timer_, poll_timer_;
 };
 
 }  // namespace line_map_merging

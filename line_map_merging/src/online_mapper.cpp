@@ -6,9 +6,6 @@
 #include <future>
 #include <sstream>
 
-#include "line_map_merging/cae_rlsm.hpp"
-#include "line_map_merging/oto_ilsm.hpp"
-
 namespace line_map_merging
 {
 namespace
@@ -306,9 +303,47 @@ std::shared_ptr<const Merger> OnlineMapper::snapshot() const
 {
   // The online mergers hold plain containers: a copy is a consistent snapshot, taken in
   // milliseconds, where writing the file (fsync) takes tens.
-  if (const auto* cae = dynamic_cast<const CaeRlsm*>(merger_.get())) return std::make_shared<CaeRlsm>(*cae);
-  if (const auto* oto = dynamic_cast<const OtoIlsm*>(merger_.get())) return std::make_shared<OtoIlsm>(*oto);
-  return nullptr;
+  return merger_->clone();
+}
+
+OnlineMapper::OnlineMapper(const OnlineMapper& other, std::unique_ptr<Merger> merger)
+    : merger_(std::move(merger)),
+      params_(other.params_),
+      gate_(other.gate_),
+      nodes_(other.nodes_),
+      history_(other.history_),
+      continuous_(other.continuous_),
+      keyframe_stamps_(other.keyframe_stamps_),
+      keyframe_order_(other.keyframe_order_),
+      next_index_(other.next_index_),
+      last_clock_(other.last_clock_),
+      last_stamp_(other.last_stamp_),
+      revision_(other.revision_),
+      saved_revision_(other.saved_revision_),
+      last_save_(other.last_save_),
+      counters_(other.counters_)
+{
+}
+
+std::unique_ptr<OnlineMapper> OnlineMapper::clone() const
+{
+  std::unique_ptr<Merger> merger = merger_->clone();
+  if (!merger) return nullptr;
+  return std::unique_ptr<OnlineMapper>(new OnlineMapper(*this, std::move(merger)));
+}
+
+void OnlineMapper::adoptAutosave(OnlineMapper& previous)
+{
+  if (writer_.valid()) writer_.wait();
+  writer_ = std::move(previous.writer_);
+  writing_revision_ = previous.writing_revision_;
+  writing_since_ = previous.writing_since_;
+  last_save_ = previous.last_save_;
+  saved_revision_ = previous.saved_revision_;
+  // Revisions of both count on from the same one: above both, this map differs from any saved.
+  revision_ = std::max(revision_, previous.revision_) + 1;
+  counters_.autosaves = previous.counters_.autosaves;
+  counters_.autosave_failures = previous.counters_.autosave_failures;
 }
 
 OnlineMapper::~OnlineMapper()

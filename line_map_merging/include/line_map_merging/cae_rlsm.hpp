@@ -59,6 +59,7 @@ class CaeRlsm : public Merger
   std::size_t leafCount() const override { return leaves_.size(); }
   std::size_t segmentCount() const override { return nodes_.size(); }
   void reset() override;
+  std::unique_ptr<Merger> clone() const override { return std::make_unique<CaeRlsm>(*this); }
   void save(const std::string& path) const override;
   void load(const std::string& path) override;
 

@@ -108,6 +108,10 @@ class Merger
   /// Empties the map, its provenance and its keyframes (ids restart at 0).
   virtual void reset() = 0;
 
+  /// An independent copy of the whole state (for a snapshot, or to adjust a copy while merging goes
+  /// on); null for a merger that cannot be copied.
+  virtual std::unique_ptr<Merger> clone() const { return nullptr; }
+
   /// Writes the whole state to `path` atomically (temporary file, fsync, rename). Throws MapFileError.
   virtual void save(const std::string& /*path*/) const
   {

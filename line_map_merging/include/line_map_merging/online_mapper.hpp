@@ -148,6 +148,13 @@ class OnlineMapper
   /// A copy of the merger's state, for writing it while merging goes on (the autosave); null for a
   /// merger that cannot be copied.
   std::shared_ptr<const Merger> snapshot() const;
+  /// An independent copy of the whole mapper (map, keyframe records, gate, held scans, counters), to
+  /// adjust while this one goes on merging (concurrent_mapper.hpp); null when the merger cannot be
+  /// copied. The copy writes no autosave of this one's.
+  std::unique_ptr<OnlineMapper> clone() const;
+  /// Takes over `previous`'s autosave (a file being written, when the last one was, the counters) when
+  /// this mapper replaces it; the map counts as changed since that save.
+  void adoptAutosave(OnlineMapper& previous);
 
   const Merger& merger() const { return *merger_; }
   Merger& merger() { return *merger_; }
@@ -164,6 +171,8 @@ class OnlineMapper
   /// Where the map-level merge step (map segment against map segment) is to be scheduled once the
   /// merger offers one: after each keyframe and after each adjustment, on the merger's own state.
   void afterMapChange() { ++revision_; }
+
+  OnlineMapper(const OnlineMapper& other, std::unique_ptr<Merger> merger);
 
   /// What a scan leaves for a trajectory node to merge.
   struct HeldScan

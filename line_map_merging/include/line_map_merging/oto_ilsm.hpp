@@ -32,6 +32,7 @@ class OtoIlsm : public Merger
   std::size_t leafCount() const override { return leaf_count_; }
   std::size_t segmentCount() const override { return nodes_.size(); }
   void reset() override;
+  std::unique_ptr<Merger> clone() const override { return std::make_unique<OtoIlsm>(*this); }
 
   const FusionParams& params() const { return params_; }
 

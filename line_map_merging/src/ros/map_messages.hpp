@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "line_map_merging/merger.hpp"
+#include "line_map_merging/online_mapper.hpp"
 
 namespace line_map_merging
 {
@@ -64,6 +65,28 @@ inline std::optional<linemap::Pose2> lookupPose(const tf2_ros::Buffer& tf, const
   {
     return std::nullopt;
   }
+}
+
+/// A segment set with its poses from tf at its stamp: the laser in `map` (nothing without a valid
+/// transform), in `odom` (unless empty or `map`) and base -> laser (identity when tf has none or
+/// `base` is empty; `mount_found` says which).
+inline std::optional<StampedScan> toStampedScan(const tf2_ros::Buffer& tf,
+                                                const line_map_msgs::LineSegmentArray& msg,
+                                                const std::string& frame, const std::string& map,
+                                                const std::string& base, const std::string& odom,
+                                                bool& mount_found)
+{
+  StampedScan scan;
+  scan.stamp = msg.header.stamp.toSec();
+  const auto laser = lookupPose(tf, map, frame, msg.header.stamp);
+  if (!laser) return std::nullopt;
+  scan.laser = *laser;
+  const auto mount = base.empty() ? linemap::Pose2() : lookupPose(tf, base, frame, msg.header.stamp);
+  mount_found = mount.has_value();
+  scan.mount = mount.value_or(linemap::Pose2());
+  if (!odom.empty() && odom != map) scan.odom = lookupPose(tf, odom, frame, msg.header.stamp);
+  scan.segments = toSegments(msg);
+  return scan;
 }
 
 /// Runs `action`; returns its error message, empty on success.
