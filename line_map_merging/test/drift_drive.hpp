@@ -2,6 +2,8 @@
 // odometry drifts, and the back end's nodes at the true poses of scans that are no keyframes.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <vector>
 
 #include "line_map_merging/online_mapper.hpp"
@@ -57,5 +59,46 @@ struct Drive
     return out;
   }
 };
+
+/// The nodes of `run` at or before scan `last`.
+inline std::vector<StampedPose> nodesUpTo(const Drive& run, int last)
+{
+  std::vector<StampedPose> out;
+  for (const auto& n : run.nodes())
+    if (n.first <= run.stamps[last]) out.push_back(n);
+  return out;
+}
+
+/// The same keyframes (stamps, poses) and map (ids, endpoints) to 1e-9, and with `counters` the same
+/// scan and trajectory counters (made by the same calls).
+inline void expectSameMap(const line_map_merging::OnlineMapper& a, const line_map_merging::OnlineMapper& b,
+                          bool counters = true)
+{
+  EXPECT_EQ(a.keyframeStamps(), b.keyframeStamps());
+  const auto ka = a.merger().keyframes(), kb = b.merger().keyframes();
+  ASSERT_EQ(ka.size(), kb.size());
+  for (std::size_t i = 0; i < ka.size(); ++i)
+  {
+    EXPECT_EQ(ka[i].stamp, kb[i].stamp);
+    EXPECT_NEAR(ka[i].pose.x, kb[i].pose.x, 1e-9);
+    EXPECT_NEAR(ka[i].pose.y, kb[i].pose.y, 1e-9);
+    EXPECT_NEAR(ka[i].pose.theta, kb[i].pose.theta, 1e-9);
+  }
+  const auto ma = a.merger().map(), mb = b.merger().map();
+  ASSERT_EQ(ma.size(), mb.size());
+  for (std::size_t i = 0; i < ma.size(); ++i)
+  {
+    EXPECT_EQ(ma[i].id, mb[i].id);
+    EXPECT_LT((ma[i].segment.start - mb[i].segment.start).norm(), 1e-9);
+    EXPECT_LT((ma[i].segment.end - mb[i].segment.end).norm(), 1e-9);
+  }
+  if (!counters) return;
+  const auto &ca = a.counters(), &cb = b.counters();
+  EXPECT_EQ(ca.trajectories, cb.trajectories);
+  EXPECT_EQ(ca.adjustments, cb.adjustments);
+  EXPECT_EQ(ca.scans, cb.scans);
+  EXPECT_EQ(ca.below_gate, cb.below_gate);
+  EXPECT_EQ(ca.dropped, cb.dropped);
+}
 
 }  // namespace drift_drive

@@ -90,41 +90,6 @@ std::unique_ptr<OnlineMapper> cae(KeyframeSource source)
   return std::make_unique<OnlineMapper>(makeMerger("cae", linemap::ParamSet()), params(source));
 }
 
-/// The nodes of the drive up to scan `last`.
-std::vector<StampedPose> nodesUpTo(const Drive& run, int last)
-{
-  std::vector<StampedPose> out;
-  for (const auto& n : run.nodes())
-    if (n.first <= run.stamps[last]) out.push_back(n);
-  return out;
-}
-
-void expectSameMap(const OnlineMapper& a, const OnlineMapper& b)
-{
-  const auto ka = a.merger().keyframes(), kb = b.merger().keyframes();
-  ASSERT_EQ(ka.size(), kb.size());
-  for (std::size_t i = 0; i < ka.size(); ++i)
-  {
-    EXPECT_EQ(ka[i].stamp, kb[i].stamp);
-    EXPECT_NEAR(ka[i].pose.x, kb[i].pose.x, 1e-9);
-    EXPECT_NEAR(ka[i].pose.y, kb[i].pose.y, 1e-9);
-    EXPECT_NEAR(ka[i].pose.theta, kb[i].pose.theta, 1e-9);
-  }
-  const auto ma = a.merger().map(), mb = b.merger().map();
-  ASSERT_EQ(ma.size(), mb.size());
-  for (std::size_t i = 0; i < ma.size(); ++i)
-  {
-    EXPECT_EQ(ma[i].id, mb[i].id);
-    EXPECT_LT((ma[i].segment.start - mb[i].segment.start).norm(), 1e-9);
-    EXPECT_LT((ma[i].segment.end - mb[i].segment.end).norm(), 1e-9);
-  }
-  EXPECT_EQ(a.keyframeStamps(), b.keyframeStamps());
-  EXPECT_EQ(a.counters().trajectories, b.counters().trajectories);
-  EXPECT_EQ(a.counters().adjustments, b.counters().adjustments);
-  EXPECT_EQ(a.counters().scans, b.counters().scans);
-  EXPECT_EQ(a.counters().below_gate, b.counters().below_gate);
-  EXPECT_EQ(a.counters().dropped, b.counters().dropped);
-}
 }  // namespace
 
 TEST(ConcurrentMapper, ScansMergeWhileTheCopyIsAdjustedAndTheMapNeverIsHalfAdjusted)
