@@ -1,6 +1,7 @@
 #include "line_extraction/params.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 
 namespace linemap
@@ -15,6 +16,14 @@ double ParamSet::getDouble(const std::string& key, double fallback) const
   const double v = std::strtod(begin, &end);
   if (end == begin || *end != '\0' || errno == ERANGE)
     throw ParameterError("parameter '" + key + "': '" + it->second + "' is not a number");
+  return v;
+}
+
+double ParamSet::getNonNegative(const std::string& key, double fallback) const
+{
+  const double v = getDouble(key, fallback);
+  if (!std::isfinite(v) || v < 0.0)
+    throw ParameterError("parameter '" + key + "' must be finite and >= 0, got " + std::to_string(v));
   return v;
 }
 

@@ -58,8 +58,9 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     tf_listener_ = std::make_shared<tf2_ros::TransformListener>(*tf_);
     quality_pub_ = nh.advertise<line_map_msgs::MapQuality>("map_quality", 1, true);
     grid_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("lookup_table", 1, true);
-    scan_sub_.subscribe(nh, "scan", 50);
-    scan_filter_ = std::make_unique<Filter<sensor_msgs::LaserScan>>(scan_sub_, *tf_, map_frame_, 50, nh);
+    const auto queue = static_cast<std::uint32_t>(std::max(1, pnh.param("queue_size", 1000)));
+    scan_sub_.subscribe(nh, "scan", queue);
+    scan_filter_ = std::make_unique<Filter<sensor_msgs::LaserScan>>(scan_sub_, *tf_, map_frame_, queue, nh);
     scan_filter_->registerCallback(&LineMapEvalNodelet::onScan, this);
     scan_filter_->registerFailureCallback(
         [this](const sensor_msgs::LaserScan::ConstPtr& msg,
@@ -70,9 +71,9 @@ class LineMapEvalNodelet : public nodelet::Nodelet
           NODELET_WARN_THROTTLE(10.0, "line_map_eval: no transform %s -> %s at %.3f; scan dropped",
                                 map_frame_.c_str(), msg->header.frame_id.c_str(), msg->header.stamp.toSec());
         });
-    segment_sub_.subscribe(nh, "line_segments", 50);
+    segment_sub_.subscribe(nh, "line_segments", queue);
     segment_filter_ =
-        std::make_unique<Filter<line_map_msgs::LineSegmentArray>>(segment_sub_, *tf_, map_frame_, 50, nh);
+        std::make_unique<Filter<line_map_msgs::LineSegmentArray>>(segment_sub_, *tf_, map_frame_, queue, nh);
     segment_filter_->registerCallback(&LineMapEvalNodelet::onSegments, this);
     map_sub_ = nh.subscribe("line_map", 1, &LineMapEvalNodelet::onMap, this);
     // Every trajectory counts: its new nodes choose the stored scans (map_evaluator.hpp).

@@ -5,23 +5,11 @@
 
 namespace line_map_merging
 {
-namespace
-{
-double nonNegative(const linemap::ParamSet& params, const std::string& key, double fallback)
-{
-  const double value = params.getDouble(key, fallback);
-  if (!std::isfinite(value) || value < 0.0)
-    throw linemap::ParameterError("parameter '" + key + "' must be finite and >= 0, got " +
-                                  std::to_string(value));
-  return value;
-}
-}  // namespace
-
 KeyframeGateParams KeyframeGateParams::fromParams(const linemap::ParamSet& params)
 {
   KeyframeGateParams p;
-  p.distance = nonNegative(params, "keyframe_distance", p.distance);
-  p.angle = nonNegative(params, "keyframe_angle", p.angle);
+  p.distance = params.getNonNegative("keyframe_distance", p.distance);
+  p.angle = params.getNonNegative("keyframe_angle", p.angle);
   return p;
 }
 

@@ -10,14 +10,6 @@ namespace line_map_merging
 {
 namespace
 {
-double nonNegative(const linemap::ParamSet& params, const std::string& key, double fallback)
-{
-  const double value = params.getDouble(key, fallback);
-  if (!std::isfinite(value) || value < 0.0)
-    throw linemap::ParameterError("parameter '" + key + "' must be finite and >= 0, got " +
-                                  std::to_string(value));
-  return value;
-}
 
 bool finite(const linemap::Pose2& p)
 {
@@ -41,15 +33,15 @@ OnlineMapperParams OnlineMapperParams::fromParams(const linemap::ParamSet& param
 {
   OnlineMapperParams p;
   p.gate = KeyframeGateParams::fromParams(params);
-  p.stamp_tolerance = nonNegative(params, "stamp_tolerance", p.stamp_tolerance);
-  p.max_gap = nonNegative(params, "trajectory_max_gap", p.max_gap);
-  p.time_jump_tolerance = nonNegative(params, "time_jump_tolerance", p.time_jump_tolerance);
-  p.autosave_period = nonNegative(params, "autosave_period", p.autosave_period);
+  p.stamp_tolerance = params.getNonNegative("stamp_tolerance", p.stamp_tolerance);
+  p.max_gap = params.getNonNegative("trajectory_max_gap", p.max_gap);
+  p.time_jump_tolerance = params.getNonNegative("time_jump_tolerance", p.time_jump_tolerance);
+  p.autosave_period = params.getNonNegative("autosave_period", p.autosave_period);
   p.correction =
       correctionModeFromString("trajectory_correction", params.getString("trajectory_correction", "nearest"));
   p.keyframe_source =
       keyframeSourceFromString("keyframe_source", params.getString("keyframe_source", "auto"));
-  p.keyframe_buffer = nonNegative(params, "keyframe_buffer", p.keyframe_buffer);
+  p.keyframe_buffer = params.getNonNegative("keyframe_buffer", p.keyframe_buffer);
   return p;
 }
 

@@ -23,6 +23,8 @@ class ParamSet
 
   /// Value of `key`, or `fallback` when absent; throws ParameterError naming the key if malformed.
   double getDouble(const std::string& key, double fallback) const;
+  /// getDouble, and throws ParameterError naming the key unless the value is finite and >= 0.
+  double getNonNegative(const std::string& key, double fallback) const;
   int getInt(const std::string& key, int fallback) const;
   bool getBool(const std::string& key, bool fallback) const;
   std::string getString(const std::string& key, const std::string& fallback) const;
