@@ -71,7 +71,7 @@ class SlamNodelet : public nodelet::Nodelet
     buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(60.0));
     listener_ = std::make_unique<tf2_ros::TransformListener>(*buffer_, nh);
     path_pub_ = nh.advertise<nav_msgs::Path>("optimized_trajectory", 1, true);
-    scan_sub_ = nh.subscribe("scan", 100, &SlamNodelet::onScan, this);
+    scan_sub_ = nh.subscribe("scan", std::max(1, pnh.param("queue_size", 1000)), &SlamNodelet::onScan, this);
     diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
     diagnostics_->setHardwareID("none");
     diagnostics_->add("laser slam", this, &SlamNodelet::diagnose);

@@ -54,7 +54,9 @@ class CheckSlamPipeline(unittest.TestCase):
                       lambda: "slam %s, merging %s" % (bool(slam), bool(merging)), 60.0)
 
         lt.play(bag, RATE)
-        limit = lt.work_limit(stamps[-1] - stamps[0], RATE)
+        # A bound only: the SLAM may take its scans at 2x real time on a loaded machine (about 1.9x measured
+        # under stress-ng on both cores), however fast the bag plays.
+        limit = lt.work_limit(stamps[-1] - stamps[0], 2)
         lt.wait_until(lambda: int(slam.get("scans", "0")) >= SCANS, "the SLAM to handle all %d scans" % SCANS,
                       lambda: "%s scans" % slam.get("scans"), limit, gone=lt.gone_nodes("/tf"))
         lt.wait_until(lambda: paths and int(merging.get("adjustments", "0")) >= 1,
