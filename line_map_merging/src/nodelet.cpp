@@ -61,7 +61,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_, nh);
     map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
-    const int queue = std::max(1, pnh.param("queue_size", 100));
+    const int queue = std::max(1, pnh.param("queue_size", 1000));
     filter_ = std::make_unique<Filter>(*tf_, map_frame_, queue, nh);
     filter_->registerCallback(boost::bind(&LineMapMergingNodelet::onSegments, this, boost::placeholders::_1));
     filter_->registerFailureCallback(
