@@ -178,6 +178,12 @@ void emitRun(YAML::Emitter& out, const MergerRun& r)
     out << g.undetected_walls;
     key(out, "max_endpoint_error_mm");
     number(out, g.max_endpoint_error * kMm);
+    key(out, "mean_endpoint_error_mm");
+    number(out, g.mean_endpoint_error * kMm);
+    key(out, "unmapped_ends");
+    out << g.unmapped_ends;
+    key(out, "unseen_faces");
+    out << g.unseen_walls;
     key(out, "mean_vertex_error_mm");
     number(out, g.mean_vertex_error * kMm);
     key(out, "missed_corners");
@@ -359,10 +365,12 @@ std::string toMarkdown(const BatchResult& result)
     if (r.ground_truth)
     {
       const auto& g = *r.ground_truth;
-      md << "; ground truth: coverage " << fixed(g.coverage * 100.0, 1) << " %, " << g.undetected_walls
-         << " undetected walls, max endpoint error " << fixed(g.max_endpoint_error * kMm, 1)
-         << " mm, mean vertex error " << fixed(g.mean_vertex_error * kMm, 1) << " mm, " << g.missed_corners
-         << " of " << g.corners.size() << " corners missed";
+      md << "; ground truth over the " << g.walls.size() << " seen faces (" << g.unseen_walls
+         << " never seen, not scored): coverage " << fixed(g.coverage * 100.0, 1) << " %, "
+         << g.undetected_walls << " undetected, endpoint error mean " << fixed(g.mean_endpoint_error * kMm, 1)
+         << " / max " << fixed(g.max_endpoint_error * kMm, 1) << " mm, " << g.unmapped_ends
+         << " seen ends no segment reaches, mean vertex error " << fixed(g.mean_vertex_error * kMm, 1)
+         << " mm, " << g.missed_corners << " of " << g.corners.size() << " corners missed";
     }
     md << "\n";
     for (const auto& f : r.files) md << "  - `" << f << "`\n";

@@ -152,8 +152,16 @@ TEST(Batch, EveryMergerProducesEveryColumn)
     EXPECT_NEAR(m["longest_mm"].as<double>(), r.map.longest * 1000.0, 1e-3);
     EXPECT_NEAR(m["quality_pct"].as<double>(), r.quality.quality, 1e-3);
     EXPECT_NEAR(m["error_mm"].as<double>(), r.error.mean_error * 1000.0, 1e-3);
+    // Ground truth over what was seen: the crate's four sides at least are never seen in a sight.
+    const YAML::Node gt = m["ground_truth"];
+    ASSERT_TRUE(gt.IsMap());
+    EXPECT_EQ(gt["unseen_faces"].as<std::size_t>(), r.ground_truth->unseen_walls);
+    EXPECT_GE(r.ground_truth->unseen_walls, 4u);
+    EXPECT_EQ(gt["unmapped_ends"].as<std::size_t>(), r.ground_truth->unmapped_ends);
+    EXPECT_LE(r.ground_truth->mean_endpoint_error, r.ground_truth->max_endpoint_error);
   }
   const std::string md = toMarkdown(result);
+  EXPECT_NE(md.find("never seen, not scored"), std::string::npos);
   EXPECT_NE(md.find("| merger |"), std::string::npos);
   EXPECT_NE(md.find("| redundant pairs |"), std::string::npos);
   // The terminal table fits an 80-column terminal: a header of two lines and one row per merger.
