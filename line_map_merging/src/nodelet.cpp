@@ -104,6 +104,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     std::lock_guard<std::mutex> lock(mutex_);
     if (!mapper_->observeTime(ros::Time::now().toSec(), stamp)) return;
     tf_->clear();
+    newest_ = ros::Time();  // the old time line's stamps are ahead of every new one
     NODELET_WARN_THROTTLE(5.0,
                           "line_map_merging: time jumped back: tf buffer cleared, gate reset, map kept (%zu)",
                           counters().time_jumps);
@@ -147,8 +148,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     if (!frame.empty() && frame != map_frame_)
     {
       mapper_->countIgnoredTrajectory();
-      NODELET_WARN_THROTTLE(5.0,
-                            "line_map_merging: optimized_trajectory in frame '%s', expected '%s'; ignored",
+      NODELET_WARN_THROTTLE(5.0, "line_map_merging: optimized_trajectory in frame '%s', not '%s'; ignored",
                             path->header.frame_id.c_str(), map_frame_.c_str());
       return;
     }
