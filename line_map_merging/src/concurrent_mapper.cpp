@@ -61,9 +61,7 @@ bool ConcurrentMapper::addTrajectory(const std::vector<StampedPose>& base_poses)
   if (job_.valid())
   {
     log_.push_back({nullptr, base_poses});
-    const auto queued = static_cast<std::size_t>(
-        std::count_if(log_.begin(), log_.end(), [](const Event& e) { return !e.apply; }));
-    queued_max_ = std::max(queued_max_, queued);
+    queued_max_ = std::max(queued_max_, queuedTrajectories());
     return false;
   }
   if (background_ && start(base_poses)) return false;
@@ -138,6 +136,12 @@ bool ConcurrentMapper::takeResult()
   return swapped;
 }
 
+std::size_t ConcurrentMapper::queuedTrajectories() const
+{
+  return static_cast<std::size_t>(
+      std::count_if(log_.begin(), log_.end(), [](const Event& e) { return !e.apply; }));
+}
+
 bool ConcurrentMapper::poll()
 {
   if (!job_.valid() || job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
@@ -198,11 +202,9 @@ std::string ConcurrentMapper::autosave(const std::string& path, double now, bool
 std::vector<std::pair<std::string, std::string>> ConcurrentMapper::diagnostics() const
 {
   auto out = live_->diagnostics();
-  const auto queued = static_cast<std::size_t>(
-      std::count_if(log_.begin(), log_.end(), [](const Event& e) { return !e.apply; }));
   auto n = [](std::size_t v) { return std::to_string(v); };
   out.insert(out.end(), {{"adjusting in the background", job_.valid() ? "yes" : "no"},
-                         {"trajectories queued", n(queued)},
+                         {"trajectories queued", n(queuedTrajectories())},
                          {"most trajectories queued", n(queued_max_)},
                          {"background adjustments", n(background_adjustments_)},
                          {"failed background adjustments", n(background_failures_)},

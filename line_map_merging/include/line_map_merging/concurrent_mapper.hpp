@@ -73,6 +73,7 @@ class ConcurrentMapper
   bool start(const std::vector<StampedPose>& nodes);
   /// Takes the finished adjustment (waiting for it); whether the map changed.
   bool takeResult();
+  std::size_t queuedTrajectories() const;
 
   std::unique_ptr<OnlineMapper> live_;
   bool background_;
