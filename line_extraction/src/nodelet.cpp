@@ -17,6 +17,8 @@
 
 #include "line_extraction/line_extractor.hpp"
 #include "line_extraction/ros/param_loader.hpp"
+#include "line_extraction/ros/transport.hpp"
+#include "line_extraction/ros/wall_diagnostics.hpp"
 
 namespace line_extraction
 {
@@ -57,12 +59,9 @@ class LineExtractionRos
     // Room for bursts (a bag played fast, worker threads busy with a lookup table or an autosave):
     // with 10, a bag at 40x real time lost scans here, unseen by any counter. Extraction takes
     // microseconds, so a long queue adds no latency in steady state.
-    scan_sub_ = nh.subscribe("scan", 100, &LineExtractionRos::scanCallback, this);
-    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, private_nh);
-    diagnostics_->setHardwareID("none");
-    diagnostics_->add("line extraction", this, &LineExtractionRos::produceDiagnostics);
-    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0),
-                                     [this](const ros::WallTimerEvent&) { diagnostics_->update(); });
+    scan_sub_ = nh.subscribe("scan", 100, &LineExtractionRos::scanCallback, this, linemap_ros::noDelay());
+    diagnostics_ = std::make_unique<linemap_ros::WallDiagnostics>(nh, private_nh, "line extraction", this,
+                                                                  &LineExtractionRos::produceDiagnostics);
     ROS_INFO("line_extraction: algorithm '%s'%s", extractor_->params().algorithm.c_str(),
              extractor_->params().clustering ? " with breakpoint clustering" : "");
   }
@@ -205,8 +204,7 @@ class LineExtractionRos
   std::unique_ptr<LineExtractor> extractor_;
   ros::Publisher segments_pub_, markers_pub_;
   ros::Subscriber scan_sub_;
-  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  ros::WallTimer diag_timer_;
+  std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
   std::size_t scans_ = 0, rejected_scans_ = 0, inconsistent_angle_max_ = 0, geometry_changes_ = 0,
               segments_ = 0;
   double last_ms_ = 0.0;

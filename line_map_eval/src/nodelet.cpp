@@ -17,6 +17,8 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "line_extraction/ros/param_loader.hpp"
+#include "line_extraction/ros/transport.hpp"
+#include "line_extraction/ros/wall_diagnostics.hpp"
 #include "line_map_eval/online_evaluator.hpp"
 #include "ros/eval_messages.hpp"
 
@@ -49,17 +51,15 @@ class LineMapEvalNodelet : public nodelet::Nodelet
       NODELET_FATAL("line_map_eval: %s; the evaluator stays idle", e.what());
       return;
     }
-    map_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("map_frame", "map"));
-    base_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("base_frame", "base_link"));
-    odom_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("odom_frame", "odom"));
+    std::tie(map_frame_, base_frame_, odom_frame_) = linemap_ros::frameParams(pnh);
     // No filter tolerance: it would hold each scan until tf reached its stamp + tolerance, so the
     // last scans of a bag (or of a checker's step) never came through.
     tf_ = std::make_shared<tf2_ros::Buffer>(ros::Duration(600.0));
-    tf_listener_ = std::make_shared<tf2_ros::TransformListener>(*tf_);
+    tf_listener_ = std::make_shared<tf2_ros::TransformListener>(*tf_, true, linemap_ros::noDelay());
     quality_pub_ = nh.advertise<line_map_msgs::MapQuality>("map_quality", 1, true);
     grid_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("lookup_table", 1, true);
     const auto queue = static_cast<std::uint32_t>(std::max(1, pnh.param("queue_size", 1000)));
-    scan_sub_.subscribe(nh, "scan", queue);
+    scan_sub_.subscribe(nh, "scan", queue, linemap_ros::noDelay());
     scan_filter_ = std::make_unique<Filter<sensor_msgs::LaserScan>>(scan_sub_, *tf_, map_frame_, queue, nh);
     scan_filter_->registerCallback(&LineMapEvalNodelet::onScan, this);
     scan_filter_->registerFailureCallback(
@@ -71,21 +71,17 @@ class LineMapEvalNodelet : public nodelet::Nodelet
           NODELET_WARN_THROTTLE(10.0, "line_map_eval: no transform %s -> %s at %.3f; scan dropped",
                                 map_frame_.c_str(), msg->header.frame_id.c_str(), msg->header.stamp.toSec());
         });
-    segment_sub_.subscribe(nh, "line_segments", queue);
+    segment_sub_.subscribe(nh, "line_segments", queue, linemap_ros::noDelay());
     segment_filter_ =
         std::make_unique<Filter<line_map_msgs::LineSegmentArray>>(segment_sub_, *tf_, map_frame_, queue, nh);
     segment_filter_->registerCallback(&LineMapEvalNodelet::onSegments, this);
-    map_sub_ = nh.subscribe("line_map", 1, &LineMapEvalNodelet::onMap, this);
+    map_sub_ = nh.subscribe("line_map", 1, &LineMapEvalNodelet::onMap, this, linemap_ros::noDelay());
     // Every trajectory counts: its new nodes choose the stored scans (map_evaluator.hpp).
-    trajectory_sub_ = nh.subscribe("optimized_trajectory", 10, &LineMapEvalNodelet::onTrajectory, this);
+    trajectory_sub_ = nh.subscribe("optimized_trajectory", 10, &LineMapEvalNodelet::onTrajectory, this,
+                                   linemap_ros::noDelay());
     evaluate_srv_ = pnh.advertiseService("evaluate", &LineMapEvalNodelet::onEvaluate, this);
-    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
-    diagnostics_->setHardwareID("line_map_eval");
-    diagnostics_->add("evaluator", this, &LineMapEvalNodelet::diagnose);
-    // Wall time and force_update(): update() waits for the next period in ROS time, which never comes
-    // after the clock jumped back (rosbag play --loop).
-    diagnostics_timer_ = nh.createWallTimer(
-        ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_->force_update(); });
+    diagnostics_ = std::make_unique<linemap_ros::WallDiagnostics>(nh, pnh, "evaluator", this,
+                                                                  &LineMapEvalNodelet::diagnose);
     // A map that arrived within min_period of the last evaluation is published by this timer.
     publish_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.05, pnh.param("min_period", 1.0))),
                                         [this](const ros::WallTimerEvent&) { publish(); });
@@ -237,8 +233,8 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   ros::Subscriber map_sub_, trajectory_sub_;
   ros::Publisher quality_pub_, grid_pub_;
   ros::ServiceServer evaluate_srv_;
-  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  ros::WallTimer diagnostics_timer_, publish_timer_;
+  std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
+  ros::WallTimer publish_timer_;
 };
 
 }  // namespace line_map_eval

@@ -16,6 +16,8 @@
 #include <string>
 
 #include "line_extraction/ros/param_loader.hpp"
+#include "line_extraction/ros/transport.hpp"
+#include "line_extraction/ros/wall_diagnostics.hpp"
 #include "line_map_merging/concurrent_mapper.hpp"
 #include "ros/map_messages.hpp"
 
@@ -40,9 +42,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    map_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("map_frame", "map"));
-    base_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("base_frame", "base_link"));
-    odom_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("odom_frame", "odom"));
+    std::tie(map_frame_, base_frame_, odom_frame_) = linemap_ros::frameParams(pnh);
     tf_timeout_ = pnh.param("tf_timeout", 0.5);
     publish_labels_ = pnh.param("publish_labels", false);
     marker_width_ = pnh.param("marker_width", 0.03);
@@ -58,7 +58,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       throw;
     }
     tf_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(120.0));
-    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_, nh);
+    const ros::TransportHints hints = linemap_ros::noDelay();
+    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_, nh, true, hints);
     map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
     const int queue = std::max(1, pnh.param("queue_size", 1000));
@@ -69,8 +70,9 @@ class LineMapMergingNodelet : public nodelet::Nodelet
         { drop("no transform " + map_frame_ + " -> " + msg->header.frame_id); });
     segments_sub_ = nh.subscribe<line_map_msgs::LineSegmentArray>(
         "line_segments", queue,
-        boost::function<void(const SegmentsEvent&)>([this](const SegmentsEvent& e) { onRaw(e); }));
-    trajectory_sub_ = nh.subscribe("optimized_trajectory", 10, &LineMapMergingNodelet::onTrajectory, this);
+        boost::function<void(const SegmentsEvent&)>([this](const SegmentsEvent& e) { onRaw(e); }), {}, hints);
+    trajectory_sub_ =
+        nh.subscribe("optimized_trajectory", 10, &LineMapMergingNodelet::onTrajectory, this, hints);
     save_srv_ = pnh.advertiseService("save_map", &LineMapMergingNodelet::onSave, this);
     load_srv_ = pnh.advertiseService("load_map", &LineMapMergingNodelet::onLoad, this);
     reset_srv_ = pnh.advertiseService("reset_map", &LineMapMergingNodelet::onReset, this);
@@ -80,11 +82,9 @@ class LineMapMergingNodelet : public nodelet::Nodelet
                                            { autosave(ros::WallTime::now().toSec()); });
     else if (period > 0.0 || !autosave_path_.empty())
       NODELET_WARN("line_map_merging: autosave needs both ~autosave_period > 0 and ~autosave_path; off");
-    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
-    diagnostics_->setHardwareID("none");
-    diagnostics_->add("line map merging", this, &LineMapMergingNodelet::diagnose);
-    // Wall time and force_update(): update() waits in ROS time, stuck after the clock jumped back.
-    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), &LineMapMergingNodelet::tick, this);
+    // The clock also jumps back without scans: looked for before each report.
+    diagnostics_ = std::make_unique<linemap_ros::WallDiagnostics>(
+        nh, pnh, "line map merging", this, &LineMapMergingNodelet::diagnose, [this] { observeTime(0.0); });
     // A finished adjustment replaces the map at the next scan, or here when none comes.
     poll_timer_ = nh.createWallTimer(ros::WallDuration(0.02), &LineMapMergingNodelet::poll, this);
     NODELET_INFO("line_map_merging: method '%s' in frame '%s'", merger().name(), map_frame_.c_str());
@@ -211,12 +211,6 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     if (mapper_->poll()) publish(newest_);
   }
 
-  void tick(const ros::WallTimerEvent&)
-  {
-    observeTime(0.0);  // the clock also jumps without scans
-    diagnostics_->force_update();
-  }
-
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -241,8 +235,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   ros::Subscriber segments_sub_, trajectory_sub_;
   ros::Publisher map_pub_, marker_pub_;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_;
-  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  ros::WallTimer diag_timer_, autosave_timer_, poll_timer_;
+  std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
+  ros::WallTimer autosave_timer_, poll_timer_;
 };
 
 }  // namespace line_map_merging

@@ -19,6 +19,8 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "line_extraction/ros/param_loader.hpp"
+#include "line_extraction/ros/transport.hpp"
+#include "line_extraction/ros/wall_diagnostics.hpp"
 #include "line_map_merging/laser_slam.hpp"
 
 namespace line_map_merging
@@ -52,9 +54,7 @@ class SlamNodelet : public nodelet::Nodelet
   {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    map_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("map_frame", "map"));
-    odom_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("odom_frame", "odom"));
-    base_frame_ = linemap_ros::stripLeadingSlash(pnh.param<std::string>("base_frame", "base_link"));
+    std::tie(map_frame_, base_frame_, odom_frame_) = linemap_ros::frameParams(pnh);
     use_odometry_ = pnh.param("use_odometry", true);
     tf_timeout_ = pnh.param("tf_timeout", 0.1);
     publish_period_ = pnh.param("publish_period", 0.0);
@@ -69,19 +69,12 @@ class SlamNodelet : public nodelet::Nodelet
     }
     slam_ = std::make_unique<LaserSlam>(params);
     buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(60.0));
-    listener_ = std::make_unique<tf2_ros::TransformListener>(*buffer_, nh);
+    listener_ = std::make_unique<tf2_ros::TransformListener>(*buffer_, nh, true, linemap_ros::noDelay());
     path_pub_ = nh.advertise<nav_msgs::Path>("optimized_trajectory", 1, true);
-    scan_sub_ = nh.subscribe("scan", std::max(1, pnh.param("queue_size", 1000)), &SlamNodelet::onScan, this);
-    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
-    diagnostics_->setHardwareID("none");
-    diagnostics_->add("laser slam", this, &SlamNodelet::diagnose);
-    // Wall timer: the clock may jump back (rosbag play --loop) and ROS-time timers would stall.
-    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0),
-                                     [this](const ros::WallTimerEvent&)
-                                     {
-                                       std::lock_guard<std::mutex> lock(mutex_);
-                                       diagnostics_->force_update();
-                                     });
+    scan_sub_ = nh.subscribe("scan", std::max(1, pnh.param("queue_size", 1000)), &SlamNodelet::onScan, this,
+                             linemap_ros::noDelay());
+    diagnostics_ =
+        std::make_unique<linemap_ros::WallDiagnostics>(nh, pnh, "laser slam", this, &SlamNodelet::diagnose);
   }
 
   void onScan(const sensor_msgs::LaserScan::ConstPtr& msg)
@@ -187,6 +180,7 @@ class SlamNodelet : public nodelet::Nodelet
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   {
+    std::lock_guard<std::mutex> lock(mutex_);
     stat.summary(dropped_ ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
                  dropped_ ? "scans dropped (no base -> laser tf)" : "ok");
     for (const auto& [key, value] : slam_->diagnostics()) stat.add(key, value);
@@ -203,8 +197,7 @@ class SlamNodelet : public nodelet::Nodelet
   tf2_ros::TransformBroadcaster broadcaster_;
   ros::Subscriber scan_sub_;
   ros::Publisher path_pub_;
-  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  ros::WallTimer diag_timer_;
+  std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
   std::string map_frame_, odom_frame_, base_frame_;
   bool use_odometry_ = true, have_stamp_ = false;
   double tf_timeout_ = 0.1, publish_period_ = 0.0, last_stamp_ = 0.0, last_publish_ = 0.0;

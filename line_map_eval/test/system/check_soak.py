@@ -58,7 +58,10 @@ class Monitor:
     minus receipt of the scan with the same stamp (the merger stamps a map with its keyframe's
     scan). Sim time would scale the processing time by the replay rate, and the scan stamp is
     ahead of the last /clock tick by up to one clock period, so neither measures what a user waits.
-    Stamps repeat across passes: the scan table is cleared at each pass."""
+    Stamps repeat across passes: the scan table is cleared at each pass. Every subscription here
+    asks for TCP_NODELAY, as the nodelets' do: with Nagle's algorithm on the publisher's socket a
+    message can wait up to the receiver's 40 ms delayed acknowledgement, and the checker would
+    measure its own sockets."""
 
     def __init__(self):
         self.scan_wall = {}
@@ -69,9 +72,21 @@ class Monitor:
         self.last_map = None
         self.merging = {}
         self.evaluator = {}
-        self.sub_scan = rospy.Subscriber("scan", LaserScan, self._scan, queue_size=1000)
-        self.sub_map = rospy.Subscriber("line_map", LineMap, self._map, queue_size=100)
+        self.sub_scan = rospy.Subscriber("scan", LaserScan, self._scan, queue_size=1000, tcp_nodelay=True)
+        self.sub_map = rospy.Subscriber("line_map", LineMap, self._map, queue_size=100, tcp_nodelay=True)
         self.sub_diag = rospy.Subscriber("/diagnostics", DiagnosticArray, self._diag, queue_size=10)
+        self.segments_wall = {}
+        self.to_segments = []  # scan -> line_segments: transport and extraction
+        self.to_map = []  # line_segments -> line_map: tf, merging, transport
+        self.sub_segments = rospy.Subscriber("line_segments", LineSegmentArray, self._segments,
+                                             queue_size=1000, tcp_nodelay=True)
+
+    def _segments(self, msg):
+        now = time.time()
+        self.segments_wall[msg.header.stamp.to_nsec()] = now
+        t = self.scan_wall.get(msg.header.stamp.to_nsec())
+        if t is not None:
+            self.to_segments.append(now - t)
 
     def _scan(self, msg):
         self.scan_wall[msg.header.stamp.to_nsec()] = time.time()
@@ -91,6 +106,9 @@ class Monitor:
         t = self.scan_wall.get(msg.header.stamp.to_nsec())
         if t is not None:
             self.latencies.append(now - t)
+        t = self.segments_wall.get(msg.header.stamp.to_nsec())
+        if t is not None:
+            self.to_map.append(now - t)
 
     def _diag(self, msg):
         for status in msg.status:
@@ -131,6 +149,7 @@ class CheckSoak(unittest.TestCase):
         rss, keyframes, eval_scans, play_wall = [], [], [], 0.0
         for p in range(3):
             mon.scan_wall.clear()
+            mon.segments_wall.clear()
             before = mon.last_map.keyframes if mon.last_map else 0
             since = len(segments.messages)
             t0 = time.time()
@@ -160,10 +179,12 @@ class CheckSoak(unittest.TestCase):
         eval_jumps = mon.counter("time jumps", mon.evaluator)
         lat = sorted(mon.latencies)
         print("soak: %d scans (%.0f s of log) x 3 at rate %s: sustained %.1f x real time; latency scan -> "
-              "line_map median %.1f ms, p99 %.1f ms (%d maps); keyframes per pass %s; dropped scans %d; time "
+              "line_map median %.1f ms, p99 %.1f ms (%d maps; p99 scan -> line_segments %.1f ms, line_segments -> "
+              "line_map %.1f ms); keyframes per pass %s; dropped scans %d; time "
               "jumps %d (evaluator %d); replayed scans skipped %d; autosaves %d (failures %d); evaluator scans after each pass %s; VmRSS after each pass %s kB (pass 3 / pass 1 = %.3f); "
               "test %.0f s wall" % (scans, bag_s, rate, 3 * bag_s / play_wall, 1e3 * percentile(lat, 50),
-                                    1e3 * percentile(lat, 99), mon.maps, keyframes, dropped, jumps, eval_jumps,
+                                    1e3 * percentile(lat, 99), mon.maps, 1e3 * percentile(mon.to_segments, 99),
+                                    1e3 * percentile(mon.to_map, 99), keyframes, dropped, jumps, eval_jumps,
                                     mon.counter("replayed scans skipped"),
                                     mon.counter("autosaves"), mon.counter("autosave failures"), eval_scans, rss,
                                     rss[2] / float(rss[0]), time.time() - t_start))

@@ -8,6 +8,7 @@
 
 #include <sstream>
 #include <string>
+#include <tuple>
 
 #include "line_extraction/params.hpp"
 
@@ -56,6 +57,14 @@ inline linemap::ParamSet loadParamSet(const ros::NodeHandle& nh)
 inline std::string stripLeadingSlash(const std::string& frame)
 {
   return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+}
+
+/// The REP-105 frames every linemap nodelet reads: ~map_frame, ~base_frame, ~odom_frame.
+inline std::tuple<std::string, std::string, std::string> frameParams(const ros::NodeHandle& pnh)
+{
+  const auto frame = [&](const char* name, const char* fallback)
+  { return stripLeadingSlash(pnh.param<std::string>(name, fallback)); };
+  return {frame("map_frame", "map"), frame("base_frame", "base_link"), frame("odom_frame", "odom")};
 }
 
 }  // namespace linemap_ros
