@@ -3,12 +3,10 @@
 // messages, looks up tf, calls the core (online_evaluator.hpp), publishes.
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <line_map_msgs/Evaluate.h>
-#include <message_filters/subscriber.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
@@ -17,6 +15,7 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "line_extraction/ros/param_loader.hpp"
+#include "line_extraction/ros/tf_wait_queue.hpp"
 #include "line_extraction/ros/transport.hpp"
 #include "line_extraction/ros/wall_diagnostics.hpp"
 #include "line_map_eval/online_evaluator.hpp"
@@ -29,13 +28,13 @@ class LineMapEvalNodelet : public nodelet::Nodelet
  public:
   ~LineMapEvalNodelet() override
   {
-    scan_filter_.reset();
-    segment_filter_.reset();
+    scan_wait_.reset();
+    segment_wait_.reset();
   }
 
  private:
   template <class M>
-  using Filter = tf2_ros::MessageFilter<M>;
+  using Wait = linemap_ros::TfWaitQueue<M>;
 
   void onInit() override
   {
@@ -52,29 +51,35 @@ class LineMapEvalNodelet : public nodelet::Nodelet
       return;
     }
     std::tie(map_frame_, base_frame_, odom_frame_) = linemap_ros::frameParams(pnh);
-    // No filter tolerance: it would hold each scan until tf reached its stamp + tolerance, so the
-    // last scans of a bag (or of a checker's step) never came through.
     tf_ = std::make_shared<tf2_ros::Buffer>(ros::Duration(600.0));
     tf_listener_ = std::make_shared<tf2_ros::TransformListener>(*tf_, true, linemap_ros::noDelay());
     quality_pub_ = nh.advertise<line_map_msgs::MapQuality>("map_quality", 1, true);
     grid_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("lookup_table", 1, true);
     const auto queue = static_cast<std::uint32_t>(std::max(1, pnh.param("queue_size", 1000)));
-    scan_sub_.subscribe(nh, "scan", queue, linemap_ros::noDelay());
-    scan_filter_ = std::make_unique<Filter<sensor_msgs::LaserScan>>(scan_sub_, *tf_, map_frame_, queue, nh);
-    scan_filter_->registerCallback(&LineMapEvalNodelet::onScan, this);
-    scan_filter_->registerFailureCallback(
-        [this](const sensor_msgs::LaserScan::ConstPtr& msg,
-               tf2_ros::filter_failure_reasons::FilterFailureReason)
+    // Held until tf places them (no time limit: the evaluator has no tf_timeout), in arrival order.
+    scan_wait_ = std::make_unique<Wait<sensor_msgs::LaserScan>>(
+        *tf_, map_frame_, queue, ros::Duration(), nh, [this](const ScanEvent& e) { onScan(e.getMessage()); },
+        [this](const ScanEvent& e, const std::string& why)
         {
           std::lock_guard<std::mutex> lock(mutex_);
           core_->countDroppedScan();
-          NODELET_WARN_THROTTLE(10.0, "line_map_eval: no transform %s -> %s at %.3f; scan dropped",
-                                map_frame_.c_str(), msg->header.frame_id.c_str(), msg->header.stamp.toSec());
+          NODELET_WARN_THROTTLE(10.0, "line_map_eval: scan at %.3f dropped: %s",
+                                e.getConstMessage()->header.stamp.toSec(), why.c_str());
         });
-    segment_sub_.subscribe(nh, "line_segments", queue, linemap_ros::noDelay());
-    segment_filter_ =
-        std::make_unique<Filter<line_map_msgs::LineSegmentArray>>(segment_sub_, *tf_, map_frame_, queue, nh);
-    segment_filter_->registerCallback(&LineMapEvalNodelet::onSegments, this);
+    scan_sub_ = nh.subscribe<sensor_msgs::LaserScan>(
+        "scan", queue,
+        boost::function<void(const ScanEvent&)>([this](const ScanEvent& e) { scan_wait_->add(e); }), {},
+        linemap_ros::noDelay());
+    segment_wait_ = std::make_unique<Wait<line_map_msgs::LineSegmentArray>>(
+        *tf_, map_frame_, queue, ros::Duration(), nh,
+        [this](const SegmentsEvent& e) { onSegments(e.getMessage()); },
+        [this](const SegmentsEvent&, const std::string& why)
+        { NODELET_WARN_THROTTLE(10.0, "line_map_eval: segments dropped: %s", why.c_str()); });
+    segment_sub_ = nh.subscribe<line_map_msgs::LineSegmentArray>(
+        "line_segments", queue,
+        boost::function<void(const SegmentsEvent&)>([this](const SegmentsEvent& e)
+                                                    { segment_wait_->add(e); }),
+        {}, linemap_ros::noDelay());
     map_sub_ = nh.subscribe("line_map", 1, &LineMapEvalNodelet::onMap, this, linemap_ros::noDelay());
     // Every trajectory counts: its new nodes choose the stored scans (map_evaluator.hpp).
     trajectory_sub_ = nh.subscribe("optimized_trajectory", 10, &LineMapEvalNodelet::onTrajectory, this,
@@ -226,11 +231,11 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   std::string map_frame_, base_frame_, odom_frame_, laser_frame_;
   std::shared_ptr<tf2_ros::Buffer> tf_;
   std::shared_ptr<tf2_ros::TransformListener> tf_listener_;
-  message_filters::Subscriber<sensor_msgs::LaserScan> scan_sub_;
-  std::unique_ptr<Filter<sensor_msgs::LaserScan>> scan_filter_;
-  message_filters::Subscriber<line_map_msgs::LineSegmentArray> segment_sub_;
-  std::unique_ptr<Filter<line_map_msgs::LineSegmentArray>> segment_filter_;
-  ros::Subscriber map_sub_, trajectory_sub_;
+  using ScanEvent = ros::MessageEvent<const sensor_msgs::LaserScan>;
+  using SegmentsEvent = ros::MessageEvent<const line_map_msgs::LineSegmentArray>;
+  std::unique_ptr<Wait<sensor_msgs::LaserScan>> scan_wait_;
+  std::unique_ptr<Wait<line_map_msgs::LineSegmentArray>> segment_wait_;
+  ros::Subscriber scan_sub_, segment_sub_, map_sub_, trajectory_sub_;
   ros::Publisher quality_pub_, grid_pub_;
   ros::ServiceServer evaluate_srv_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;

@@ -6,7 +6,6 @@
 #include <line_map_msgs/SaveMap.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
-#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <cmath>
@@ -16,6 +15,7 @@
 #include <string>
 
 #include "line_extraction/ros/param_loader.hpp"
+#include "line_extraction/ros/tf_wait_queue.hpp"
 #include "line_extraction/ros/transport.hpp"
 #include "line_extraction/ros/wall_diagnostics.hpp"
 #include "line_map_merging/concurrent_mapper.hpp"
@@ -30,12 +30,11 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   {
     autosave_timer_.stop();
     poll_timer_.stop();
-    if (filter_) filter_->clear();
+    waiting_.reset();
     if (mapper_) autosave(INFINITY);  // the changes since the last autosave
   }
 
  private:
-  using Filter = tf2_ros::MessageFilter<line_map_msgs::LineSegmentArray>;
   using SegmentsEvent = ros::MessageEvent<const line_map_msgs::LineSegmentArray>;
 
   void onInit() override
@@ -63,11 +62,10 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
     const int queue = std::max(1, pnh.param("queue_size", 1000));
-    filter_ = std::make_unique<Filter>(*tf_, map_frame_, queue, nh);
-    filter_->registerCallback(boost::bind(&LineMapMergingNodelet::onSegments, this, boost::placeholders::_1));
-    filter_->registerFailureCallback(
-        [this](const line_map_msgs::LineSegmentArray::ConstPtr& msg, tf2_ros::FilterFailureReason)
-        { drop("no transform " + map_frame_ + " -> " + msg->header.frame_id); });
+    waiting_ = std::make_unique<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>>(
+        *tf_, map_frame_, queue, ros::Duration(tf_timeout_), nh,
+        [this](const SegmentsEvent& e) { onSegments(e); },
+        [this](const SegmentsEvent&, const std::string& why) { drop(why); });
     segments_sub_ = nh.subscribe<line_map_msgs::LineSegmentArray>(
         "line_segments", queue,
         boost::function<void(const SegmentsEvent&)>([this](const SegmentsEvent& e) { onRaw(e); }), {}, hints);
@@ -104,13 +102,14 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     std::lock_guard<std::mutex> lock(mutex_);
     if (!mapper_->observeTime(ros::Time::now().toSec(), stamp)) return;
     tf_->clear();
+    for (std::size_t n = waiting_->clear(); n > 0; --n) mapper_->countDropped();  // the old time line's
     newest_ = ros::Time();  // the old time line's stamps are ahead of every new one
     NODELET_WARN_THROTTLE(5.0,
                           "line_map_merging: time jumped back: tf buffer cleared, gate reset, map kept (%zu)",
                           counters().time_jumps);
   }
 
-  /// Before the tf filter: a zero stamp would be posed at the latest transform, and a frame unknown
+  /// Before the tf wait: a zero stamp would be posed at the latest transform, and a frame unknown
   /// to tf would wait unreported until the queue overflows. The map frame itself needs no tf.
   void onRaw(const SegmentsEvent& event)
   {
@@ -120,14 +119,12 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     observeTime(msg->header.stamp.toSec());
     if (frame.empty() || (frame != map_frame_ && !tf_->_frameExists(frame)))
       return drop("frame '" + msg->header.frame_id + "' is unknown to tf");
-    filter_->add(event);  // keeps the receipt time
+    waiting_->add(event);  // keeps the receipt time
   }
 
   void onSegments(const SegmentsEvent& event)
   {
     const auto& msg = event.getConstMessage();
-    if ((ros::Time::now() - event.getReceiptTime()).toSec() > tf_timeout_)
-      return drop("waited more than ~tf_timeout for tf");
     const std::string frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
     bool mount_found = true;
     const auto scan = toStampedScan(*tf_, *msg, frame, map_frame_, base_frame_, odom_frame_, mount_found);
@@ -231,7 +228,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   bool publish_labels_ = false;
   std::unique_ptr<tf2_ros::Buffer> tf_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  std::unique_ptr<Filter> filter_;
+  std::unique_ptr<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>> waiting_;
   ros::Subscriber segments_sub_, trajectory_sub_;
   ros::Publisher map_pub_, marker_pub_;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_;

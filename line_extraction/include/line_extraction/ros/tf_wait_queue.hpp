@@ -1,0 +1,156 @@
+// ROS side (not part of the ROS-free core): holds stamped messages until tf can place them.
+#pragma once
+
+#include <ros/callback_queue_interface.h>
+#include <ros/message_event.h>
+#include <ros/node_handle.h>
+#include <tf2/buffer_core.h>
+
+#include <atomic>
+#include <boost/make_shared.hpp>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "line_extraction/ros/param_loader.hpp"
+
+namespace linemap_ros
+{
+/// In place of tf2_ros::MessageFilter, whose bookkeeping loses messages: it registers a message's
+/// transformable request with the buffer before it puts the message in its list, so a transform
+/// arriving in between answers a request no listed message owns, and the message then waits for
+/// ever (seen under load in the parity rostests; later transforms did not release it).
+/// Here every change of the buffer schedules a pass over the held messages on the node handle's
+/// callback queue, which also runs the subscription that adds them: one thread, arrival order.
+template <class M>
+class TfWaitQueue
+{
+ public:
+  using Event = ros::MessageEvent<const M>;
+  using Ready = std::function<void(const Event&)>;
+  using Failed = std::function<void(const Event&, const std::string& why)>;
+
+  /// `capacity`: the oldest held message is dropped beyond it. `max_wait`: a message held longer
+  /// (ROS time since its receipt) is dropped; zero waits without a limit. A message older than the
+  /// buffer's reach (its newest common time minus the cache length) is dropped too: it never fits.
+  TfWaitQueue(tf2::BufferCore& tf, std::string target_frame, std::size_t capacity, ros::Duration max_wait,
+              ros::NodeHandle& nh, Ready ready, Failed failed)
+      : tf_(tf),
+        target_(std::move(target_frame)),
+        capacity_(std::max<std::size_t>(1, capacity)),
+        max_wait_(max_wait),
+        queue_(nh.getCallbackQueue()),
+        ready_(std::move(ready)),
+        failed_(std::move(failed))
+  {
+    changed_ = tf_._addTransformsChangedListener([this] { schedule(); });
+  }
+
+  ~TfWaitQueue()
+  {
+    tf_._removeTransformsChangedListener(changed_);
+    queue_->removeByID(owner());
+  }
+
+  TfWaitQueue(const TfWaitQueue&) = delete;  // the buffer and the callback queue call back into it
+  TfWaitQueue& operator=(const TfWaitQueue&) = delete;
+
+  /// On the callback queue given at construction (a subscription callback of the same node handle).
+  void add(const Event& event)
+  {
+    held_.push_back(event);
+    if (held_.size() > capacity_)
+    {
+      const Event oldest = held_.front();
+      held_.pop_front();
+      failed_(oldest, "more than " + std::to_string(capacity_) + " messages waiting for tf");
+    }
+    release();
+  }
+
+  /// Drops every held message (a time jump: their stamps belong to the old time line); how many.
+  std::size_t clear()
+  {
+    const std::size_t n = held_.size();
+    held_.clear();
+    return n;
+  }
+
+  std::size_t held() const { return held_.size(); }
+
+ private:
+  /// Hands on, in arrival order, every held message tf can now place; drops those that waited too
+  /// long or that tf can never place.
+  void release()
+  {
+    const ros::Time now = ros::Time::now();
+    for (auto it = held_.begin(); it != held_.end();)
+    {
+      const M& msg = *it->getConstMessage();
+      const std::string frame = stripLeadingSlash(msg.header.frame_id);
+      std::string why;
+      if (!max_wait_.isZero() && now - it->getReceiptTime() > max_wait_)
+        why = "waited longer than " + std::to_string(max_wait_.toSec()) + " s for tf";
+      else if (frame == target_ || tf_.canTransform(target_, frame, msg.header.stamp))
+        why.clear();
+      else if (beyondReach(frame, msg.header.stamp))
+        why = "stamped before the tf buffer's reach";
+      else
+      {
+        ++it;
+        continue;
+      }
+      const Event event = *it;
+      it = held_.erase(it);
+      why.empty() ? ready_(event) : failed_(event, why + " (" + target_ + " -> " + frame + ")");
+    }
+  }
+
+  bool beyondReach(const std::string& frame, const ros::Time& stamp) const
+  {
+    try
+    {
+      const ros::Time newest = tf_.lookupTransform(target_, frame, ros::Time()).header.stamp;
+      return newest.toSec() - tf_.getCacheLength().toSec() > stamp.toSec();
+    }
+    catch (const tf2::TransformException&)
+    {
+      return false;  // not connected yet
+    }
+  }
+
+  /// From tf's listener thread: one pass at a time is queued, whatever the number of transforms.
+  void schedule()
+  {
+    if (scheduled_.exchange(true)) return;
+    queue_->addCallback(boost::make_shared<Pass>(this), owner());
+  }
+
+  struct Pass : ros::CallbackInterface
+  {
+    explicit Pass(TfWaitQueue* q) : queue(q) {}
+    CallResult call() override
+    {
+      queue->scheduled_ = false;  // before the pass: a change during it schedules another
+      queue->release();
+      return Success;
+    }
+    TfWaitQueue* queue;
+  };
+
+  std::uint64_t owner() const { return reinterpret_cast<std::uint64_t>(this); }
+
+  tf2::BufferCore& tf_;
+  const std::string target_;
+  const std::size_t capacity_;
+  const ros::Duration max_wait_;
+  ros::CallbackQueueInterface* queue_;
+  Ready ready_;
+  Failed failed_;
+  std::deque<Event> held_;
+  std::atomic<bool> scheduled_{false};
+  boost::signals2::connection changed_;
+};
+}  // namespace linemap_ros
