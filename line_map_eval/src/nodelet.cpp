@@ -116,7 +116,8 @@ class LineMapEvalNodelet : public nodelet::Nodelet
       std::lock_guard<std::mutex> lock(mutex_);
       if (core_->observeTime(ros::Time::now().toSec(), header.stamp.toSec(), stream))
       {
-        NODELET_WARN_THROTTLE(10.0, "line_map_eval: time jumped backwards; tf buffer cleared");
+        NODELET_WARN_THROTTLE(10.0, "line_map_eval: time jumped backwards (%s); tf buffer cleared",
+                              core_->timeJumpCause().c_str());
         tf_->clear();
       }
     }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace line_map_eval
@@ -32,6 +33,13 @@ bool OnlineEvaluator::observeTime(double clock, double stamp, Stream stream)
   const bool stamp_back = last > 0.0 && stamp > 0.0 && last - stamp > tol;
   if (clock_back || stamp_back)
   {
+    char cause[160];
+    if (clock_back)
+      std::snprintf(cause, sizeof cause, "the clock went back from %.3f to %.3f s", last_clock_, clock);
+    else
+      std::snprintf(cause, sizeof cause, "a %s stamped %.3f s after one stamped %.3f s",
+                    stream == kScans ? "scan" : "segment set", stamp, last);
+    time_jump_cause_ = cause;
     ++counters_.time_jumps;
     last_stamp_[kScans] = last_stamp_[kSegments] = 0.0;
   }

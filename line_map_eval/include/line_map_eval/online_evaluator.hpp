@@ -55,6 +55,8 @@ class OnlineEvaluator
   /// play --loop): the caller drops what it holds of the old time line (tf buffer); the stored
   /// scans are kept (a replay adds none).
   bool observeTime(double clock, double stamp, Stream stream);
+  /// What the last time jump observeTime() reported was: the clock or a stamp, from and to.
+  const std::string& timeJumpCause() const { return time_jump_cause_; }
 
   /// Stores a keyframe scan (valid ranges as points in the laser frame) taken at `laser` (map
   /// frame); `odom` is the laser in the odometry frame. A geometry without a finite, non-zero
@@ -93,6 +95,7 @@ class OnlineEvaluator
   double map_stamp_ = 0.0;
   bool have_map_ = false, dirty_ = false;
   double last_clock_ = 0.0, last_stamp_[2] = {0.0, 0.0};
+  std::string time_jump_cause_;
   double last_evaluation_ = -1e300;
 };
 

@@ -68,7 +68,6 @@ class Driver:
         self.trajectory = rospy.Publisher("optimized_trajectory", Path, queue_size=10, latch=True)
         self.scans = self.trajectories = 0
         self.stamps = []  # of the scans published
-        self.last_tf, self.nudges = None, 0  # the newest /tf published; nudges sent
 
     def handled(self):
         """(segment sets the merger handled, scans and segment sets the evaluator took)."""
@@ -76,37 +75,13 @@ class Driver:
                 self.diag.counter(EVALUATOR, "scans") + self.diag.counter(EVALUATOR, "dropped scans (tf)"),
                 self.diag.counter(EVALUATOR, "segment sets"))
 
-    def nudge_tf(self):
-        """Publishes the newest /tf sent again, 0.1 ms later (before the next scan: the bag's scans are
-        >= 1 ms apart, and a lookup at a scan's stamp uses its own sample). Live, tf keeps coming; here
-        it pauses while the checker waits, and tf2's message filter can hold a message whose transform
-        arrived while it was being added until a later transform comes: under load, at the pause before
-        a trajectory, the evaluator held scan 1867 of 4000 (and in other runs the merger a segment set)
-        with every transform sent; one later transform, published by hand, let it through."""
-        if self.last_tf is None:
-            return None
-        import copy
-        extra = copy.deepcopy(self.last_tf)
-        for tr in extra.transforms:
-            tr.header.stamp += rospy.Duration(0.0001)
-        self.tf.publish(extra)
-        self.nudges += 1
-        return None
-
     def wait_fresh(self, predicate, awaited):
-        """Waits for diagnostics of both nodelets sent after now that satisfy `predicate`; nudges tf
-        every 2 s meanwhile (nudge_tf)."""
+        """Waits for diagnostics of both nodelets sent after now that satisfy `predicate`. No transform
+        is re-sent meanwhile: every scan published has its transform, and a message that tf can place
+        must come through (tf2_ros::MessageFilter once held one for ever; linemap's TfWaitQueue)."""
         since = dict(self.diag.received)
-        next_nudge = [time.time() + 2.0]
-
-        def nudging():
-            if time.time() >= next_nudge[0]:
-                next_nudge[0] = time.time() + 2.0
-                return self.nudge_tf()
-            return None
-
         lt.wait_until(lambda: all(self.diag.received.get(t, 0) > since.get(t, 0) for t in (MERGING, EVALUATOR))
-                      and (predicate() or nudging()), awaited,
+                      and predicate(), awaited,
                       lambda: "merger handled %d, evaluator %d scans / %d segment sets, trajectories %d / %d; "
                       "published %d scans, %d trajectories, received %d line_segments" % (
                           self.handled() + (self.diag.counter(MERGING, "trajectories"),
@@ -150,14 +125,13 @@ class Driver:
                 if msg is early:
                     continue
                 if topic == "/optimized_trajectory":
-                    # tf2's message filter passes a scan that came before its transform only when a
-                    # later transform arrives (one evaluator scan of 4000 waited for ever): the next
-                    # scan's /tf goes first. A lookup at a scan's stamp is the same with or without it.
+                    # A scan published before its transform can be placed only once a transform at or
+                    # after its stamp arrives: the next scan's /tf goes first. A lookup at a scan's
+                    # stamp is the same with or without it.
                     if i + 1 < len(messages) and messages[i + 1][0] == "/tf":
                         early = messages[i + 1][1]
                         self.clock.publish(Clock(clock=early.transforms[0].header.stamp))
                         self.tf.publish(early)
-                        self.last_tf = early
                     self.wait_scans_done("trajectory %d" % (self.trajectories + 1))
                     self.trajectory.publish(msg)
                     self.trajectories += 1
@@ -169,12 +143,10 @@ class Driver:
                 stamp = msg.transforms[0].header.stamp if topic == "/tf" else msg.header.stamp
                 self.clock.publish(Clock(clock=stamp))
                 (self.tf if topic == "/tf" else self.scan).publish(msg)
-                if topic == "/tf":
-                    self.last_tf = msg
                 if topic == "/scan":
                     self.scans += 1
                     self.stamps.append(msg.header.stamp.to_sec())
-                    # Keep every queue on the way (the publishers' >= 100, tf filters' 100) from
+                    # Keep every queue on the way (the publishers' >= 100, the tf waits' 1000) from
                     # overflowing under load: at most 8 scans in flight.
                     if self.scans > 8 and self.newest_segments() < self.stamps[-9] - 1e-6:
                         self.wait_extracted(self.stamps[-3], "scan %d" % (self.scans - 2), step=0.005)
@@ -188,7 +160,6 @@ class Driver:
                     tr.header.stamp += rospy.Duration(0.001)
                 self.clock.publish(Clock(clock=extra.transforms[0].header.stamp))
                 self.tf.publish(extra)
-                self.last_tf = extra
         self.wait_scans_done("the end of the bag")
 
 
@@ -231,9 +202,9 @@ class CheckParity(unittest.TestCase):
         stamps = sorted(k[1] for k in saved["keyframes"])
         segments = sorted((s["id"], s["segment"]) for s in saved["segments"])
         print("parity %s (%d scans, %d trajectories): replay %d keyframes, %d segments, %.2f %% (%.1f s); "
-              "nodelets %d keyframes, %d segments, %.2f %% (%.1f s driven, %d tf nudges)" % (
+              "nodelets %d keyframes, %d segments, %.2f %% (%.1f s driven)" % (
                   dataset, n_scans, driver.trajectories, len(replay["keyframe_stamps"]), len(replay["segments"]),
-                  replay["quality"], replay_s, len(stamps), len(segments), quality, nodelet_s, driver.nudges))
+                  replay["quality"], replay_s, len(stamps), len(segments), quality, nodelet_s))
         self.assertEqual(driver.trajectories, replay["trajectories"])
         # A segment set the nodelet dropped (no transform in time) would show as a missing keyframe below.
         self.assertEqual(driver.diag.counter(MERGING, "dropped scans"), 0, "the merger dropped segment sets")

@@ -5,6 +5,7 @@
 #include <ros/message_event.h>
 #include <ros/node_handle.h>
 #include <tf2/buffer_core.h>
+#include <tf2/exceptions.h>
 
 #include <atomic>
 #include <boost/make_shared.hpp>

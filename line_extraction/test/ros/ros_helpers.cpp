@@ -1,0 +1,157 @@
+// gtests of the ROS-side helpers, run by rostest (test/ros/ros_helpers.test): TfWaitQueue.
+// The transforms go straight into a tf2::BufferCore and the queue's passes run on a callback queue
+// of the test's own, spun by hand, so every step is an event the test causes.
+#include <geometry_msgs/TransformStamped.h>
+#include <gtest/gtest.h>
+#include <ros/callback_queue.h>
+#include <ros/ros.h>
+#include <sensor_msgs/LaserScan.h>
+#include <tf2/buffer_core.h>
+
+#include <string>
+#include <vector>
+
+#include "line_extraction/ros/tf_wait_queue.hpp"
+
+namespace
+{
+using Scan = sensor_msgs::LaserScan;
+using Event = ros::MessageEvent<const Scan>;
+using Queue = linemap_ros::TfWaitQueue<Scan>;
+
+struct TfWaitQueueTest : ::testing::Test
+{
+  TfWaitQueueTest() : buffer(ros::Duration(10.0)) { nh.setCallbackQueue(&callbacks); }
+
+  void setTf(double stamp, const std::string& child = "laser")
+  {
+    geometry_msgs::TransformStamped t;
+    t.header.frame_id = "map";
+    t.header.stamp = ros::Time(stamp);
+    t.child_frame_id = child;
+    t.transform.rotation.w = 1.0;
+    buffer.setTransform(t, "test");
+  }
+
+  Event scan(double stamp, const std::string& frame = "laser", ros::Time receipt = ros::Time::now())
+  {
+    auto msg = boost::make_shared<Scan>();
+    msg->header.frame_id = frame;
+    msg->header.stamp = ros::Time(stamp);
+    return Event(msg, receipt);
+  }
+
+  std::unique_ptr<Queue> make(std::size_t capacity = 100, double max_wait = 0.0)
+  {
+    return std::make_unique<Queue>(
+        buffer, "map", capacity, ros::Duration(max_wait), nh,
+        [this](const Event& e) { delivered.push_back(e.getConstMessage()->header.stamp.toSec()); },
+        [this](const Event& e, const std::string& why)
+        {
+          dropped.push_back(e.getConstMessage()->header.stamp.toSec());
+          reasons.push_back(why);
+        });
+  }
+
+  ros::NodeHandle nh;
+  ros::CallbackQueue callbacks;
+  tf2::BufferCore buffer;
+  std::vector<double> delivered, dropped;
+  std::vector<std::string> reasons;
+};
+
+TEST_F(TfWaitQueueTest, HoldsUntilTfReachesTheStampThenDeliversInArrivalOrder)
+{
+  auto queue = make();
+  for (double t : {1.0, 2.0, 3.0}) queue->add(scan(t));
+  EXPECT_TRUE(delivered.empty());
+  EXPECT_EQ(queue->held(), 3u);
+  setTf(0.0);
+  setTf(2.5);  // interpolation reaches 1 and 2, not 3
+  callbacks.callAvailable();
+  EXPECT_EQ(delivered, (std::vector<double>{1.0, 2.0}));
+  EXPECT_EQ(queue->held(), 1u);
+  setTf(4.0);
+  callbacks.callAvailable();
+  EXPECT_EQ(delivered, (std::vector<double>{1.0, 2.0, 3.0}));
+  EXPECT_EQ(queue->held(), 0u);
+  EXPECT_TRUE(dropped.empty());
+}
+
+TEST_F(TfWaitQueueTest, PlaceableMessagePassesAtOnceAndTheMapFrameNeedsNoTf)
+{
+  auto queue = make();
+  queue->add(scan(5.0, "map"));  // an empty buffer: the target frame itself
+  EXPECT_EQ(delivered, (std::vector<double>{5.0}));
+  setTf(0.0);
+  setTf(10.0);
+  queue->add(scan(7.0, "/laser"));  // a leading slash (ROS 1 tf) is tolerated
+  EXPECT_EQ(delivered, (std::vector<double>{5.0, 7.0}));
+  EXPECT_EQ(queue->held(), 0u);
+}
+
+TEST_F(TfWaitQueueTest, MessageHeldLongerThanTheLimitIsDroppedEvenWhenTfComes)
+{
+  auto queue = make(100, 0.5);
+  queue->add(scan(1.0, "laser", ros::Time::now() - ros::Duration(2.0)));
+  ASSERT_EQ(dropped, (std::vector<double>{1.0}));
+  EXPECT_NE(reasons[0].find("waited longer"), std::string::npos) << reasons[0];
+  queue->add(scan(2.0));  // just received: waits
+  setTf(0.0);
+  setTf(3.0);
+  callbacks.callAvailable();
+  EXPECT_EQ(delivered, (std::vector<double>{2.0}));
+}
+
+TEST_F(TfWaitQueueTest, BeyondCapacityTheOldestIsDropped)
+{
+  auto queue = make(2);
+  for (double t : {1.0, 2.0, 3.0}) queue->add(scan(t));
+  EXPECT_EQ(dropped, (std::vector<double>{1.0}));
+  EXPECT_EQ(queue->held(), 2u);
+  EXPECT_EQ(queue->clear(), 2u);
+  EXPECT_EQ(queue->held(), 0u);
+}
+
+TEST_F(TfWaitQueueTest, StampBeforeTheBuffersReachIsDropped)
+{
+  auto queue = make();
+  setTf(100.0);
+  setTf(101.0);
+  queue->add(scan(50.0));  // the buffer keeps 10 s: 50 can never be placed
+  EXPECT_EQ(dropped, (std::vector<double>{50.0}));
+  EXPECT_NE(reasons[0].find("reach"), std::string::npos) << reasons[0];
+  queue->add(scan(102.0));  // ahead of tf: waits
+  EXPECT_EQ(queue->held(), 1u);
+}
+
+TEST_F(TfWaitQueueTest, ManyTransformsScheduleOnePass)
+{
+  auto queue = make();
+  queue->add(scan(1.0));
+  for (int i = 0; i <= 100; ++i) setTf(0.05 * i);
+  EXPECT_EQ(callbacks.callOne(), ros::CallbackQueue::Called);
+  EXPECT_EQ(callbacks.callOne(), ros::CallbackQueue::Empty);
+  EXPECT_EQ(delivered, (std::vector<double>{1.0}));
+}
+
+TEST_F(TfWaitQueueTest, DestroyedQueueLeavesNoPassBehind)
+{
+  {
+    auto queue = make();
+    queue->add(scan(1.0));
+    setTf(0.0);  // schedules a pass
+  }
+  setTf(2.0);  // the listener is gone too
+  EXPECT_EQ(callbacks.callOne(), ros::CallbackQueue::Empty);
+  EXPECT_TRUE(delivered.empty());
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  ::testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_ros_helpers");
+  ros::NodeHandle nh;  // starts the node (ros::Time::now() is wall time: no use_sim_time)
+  return RUN_ALL_TESTS();
+}
