@@ -78,6 +78,25 @@ TEST_F(TfWaitQueueTest, HoldsUntilTfReachesTheStampThenDeliversInArrivalOrder)
   EXPECT_TRUE(dropped.empty());
 }
 
+TEST_F(TfWaitQueueTest, LaterMessageOfAFrameWaitsBehindAnEarlierOneThatWaits)
+{
+  auto queue = make();
+  setTf(2.0);
+  setTf(4.0);
+  setTf(2.0, "laser2");
+  setTf(4.0, "laser2");
+  callbacks.callAvailable();
+  queue->add(scan(1.0));            // before the data: waits (not beyond the 10 s reach)
+  queue->add(scan(3.0));            // placeable, but behind 1.0 of its frame
+  queue->add(scan(3.5, "laser2"));  // another frame is not held up
+  EXPECT_EQ(delivered, (std::vector<double>{3.5}));
+  EXPECT_EQ(queue->held(), 2u);
+  setTf(0.5);  // older data arrives: 1.0 can be placed, then 3.0
+  callbacks.callAvailable();
+  EXPECT_EQ(delivered, (std::vector<double>{3.5, 1.0, 3.0}));
+  EXPECT_TRUE(dropped.empty());
+}
+
 TEST_F(TfWaitQueueTest, PlaceableMessagePassesAtOnceAndTheMapFrameNeedsNoTf)
 {
   auto queue = make();

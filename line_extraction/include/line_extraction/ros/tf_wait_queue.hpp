@@ -7,6 +7,7 @@
 #include <tf2/buffer_core.h>
 #include <tf2/exceptions.h>
 
+#include <algorithm>
 #include <atomic>
 #include <boost/make_shared.hpp>
 #include <cstdint>
@@ -14,6 +15,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "line_extraction/ros/param_loader.hpp"
 
@@ -83,23 +85,31 @@ class TfWaitQueue
 
  private:
   /// Hands on, in arrival order, every held message tf can now place; drops those that waited too
-  /// long or that tf can never place.
+  /// long or that tf can never place. A frame's messages keep their order: behind one that must
+  /// still wait, the later ones of its frame wait too. (tf keeps arriving on the listener's thread
+  /// during a pass, so a later message may become placeable after an earlier one was found not to
+  /// be: passing it would reorder a sensor's stream, which under load reordered scans by more than
+  /// a second across the log's gaps and looked like time jumping back.)
   void release()
   {
     const ros::Time now = ros::Time::now();
+    std::vector<std::string> waiting_frames;
     for (auto it = held_.begin(); it != held_.end();)
     {
       const M& msg = *it->getConstMessage();
       const std::string frame = stripLeadingSlash(msg.header.frame_id);
+      const bool behind =
+          std::find(waiting_frames.begin(), waiting_frames.end(), frame) != waiting_frames.end();
       std::string why;
       if (!max_wait_.isZero() && now - it->getReceiptTime() > max_wait_)
         why = "waited longer than " + std::to_string(max_wait_.toSec()) + " s for tf";
-      else if (frame == target_ || tf_.canTransform(target_, frame, msg.header.stamp))
+      else if (!behind && (frame == target_ || tf_.canTransform(target_, frame, msg.header.stamp)))
         why.clear();
       else if (beyondReach(frame, msg.header.stamp))
         why = "stamped before the tf buffer's reach";
       else
       {
+        if (!behind) waiting_frames.push_back(frame);
         ++it;
         continue;
       }
