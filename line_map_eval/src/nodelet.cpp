@@ -25,13 +25,6 @@ namespace line_map_eval
 {
 class LineMapEvalNodelet : public nodelet::Nodelet
 {
- public:
-  ~LineMapEvalNodelet() override
-  {
-    scan_wait_.reset();
-    segment_wait_.reset();
-  }
-
  private:
   template <class M>
   using Wait = linemap_ros::TfWaitQueue<M>;
@@ -56,7 +49,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     quality_pub_ = nh.advertise<line_map_msgs::MapQuality>("map_quality", 1, true);
     grid_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("lookup_table", 1, true);
     const auto queue = static_cast<std::uint32_t>(std::max(1, pnh.param("queue_size", 1000)));
-    // Held until tf places them (no time limit: the evaluator has no tf_timeout), in arrival order.
+    // Held until tf places them (no time limit: the evaluator has no tf_timeout), each frame in order.
     scan_wait_ = std::make_unique<Wait<sensor_msgs::LaserScan>>(
         *tf_, map_frame_, queue, ros::Duration(), nh, [this](const ScanEvent& e) { onScan(e.getMessage()); },
         [this](const ScanEvent& e, const std::string& why)
@@ -66,20 +59,16 @@ class LineMapEvalNodelet : public nodelet::Nodelet
           NODELET_WARN_THROTTLE(10.0, "line_map_eval: scan at %.3f dropped: %s",
                                 e.getConstMessage()->header.stamp.toSec(), why.c_str());
         });
-    scan_sub_ = nh.subscribe<sensor_msgs::LaserScan>(
-        "scan", queue,
-        boost::function<void(const ScanEvent&)>([this](const ScanEvent& e) { scan_wait_->add(e); }), {},
-        linemap_ros::noDelay());
     segment_wait_ = std::make_unique<Wait<line_map_msgs::LineSegmentArray>>(
         *tf_, map_frame_, queue, ros::Duration(), nh,
         [this](const SegmentsEvent& e) { onSegments(e.getMessage()); },
         [this](const SegmentsEvent&, const std::string& why)
         { NODELET_WARN_THROTTLE(10.0, "line_map_eval: segments dropped: %s", why.c_str()); });
-    segment_sub_ = nh.subscribe<line_map_msgs::LineSegmentArray>(
-        "line_segments", queue,
-        boost::function<void(const SegmentsEvent&)>([this](const SegmentsEvent& e)
-                                                    { segment_wait_->add(e); }),
-        {}, linemap_ros::noDelay());
+    scan_wait_->subscribe(nh, "scan", queue,
+                          [this](const ScanEvent& e) { return arrive(e, OnlineEvaluator::kScans); });
+    segment_wait_->subscribe(nh, "line_segments", queue,
+                             [this](const SegmentsEvent& e)
+                             { return arrive(e, OnlineEvaluator::kSegments); });
     map_sub_ = nh.subscribe("line_map", 1, &LineMapEvalNodelet::onMap, this, linemap_ros::noDelay());
     // Every trajectory counts: its new nodes choose the stored scans (map_evaluator.hpp).
     trajectory_sub_ = nh.subscribe("optimized_trajectory", 10, &LineMapEvalNodelet::onTrajectory, this,
@@ -108,19 +97,25 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     }
   }
 
-  /// Notes the stamp (time jumping back clears the tf buffer) and looks up the laser's poses.
-  bool pose(const std_msgs::Header& header, OnlineEvaluator::Stream stream, linemap::Pose2& laser,
-            std::optional<linemap::Pose2>& odom)
+  /// In arrival order, before the tf wait: time jumping back (rosbag play --loop) clears the tf
+  /// buffer and the messages held for it, which belong to the old time line (held scans count as dropped).
+  template <class M>
+  bool arrive(const ros::MessageEvent<const M>& event, OnlineEvaluator::Stream stream)
   {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (core_->observeTime(ros::Time::now().toSec(), header.stamp.toSec(), stream))
-      {
-        NODELET_WARN_THROTTLE(10.0, "line_map_eval: time jumped backwards (%s); tf buffer cleared",
-                              core_->timeJumpCause().c_str());
-        tf_->clear();
-      }
-    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!core_->observeTime(ros::Time::now().toSec(), event.getConstMessage()->header.stamp.toSec(), stream))
+      return true;
+    NODELET_WARN_THROTTLE(10.0, "line_map_eval: time jumped backwards (%s); tf buffer cleared",
+                          core_->timeJumpCause().c_str());
+    tf_->clear();
+    segment_wait_->clear();
+    for (std::size_t n = scan_wait_->clear(); n > 0; --n) core_->countDroppedScan();
+    return true;
+  }
+
+  /// The laser's poses at the stamp.
+  bool pose(const std_msgs::Header& header, linemap::Pose2& laser, std::optional<linemap::Pose2>& odom)
+  {
     const std::string frame = linemap_ros::stripLeadingSlash(header.frame_id);
     const auto in_map = lookup(map_frame_, frame, header.stamp);
     if (!in_map) return false;
@@ -133,7 +128,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   {
     linemap::Pose2 laser;
     std::optional<linemap::Pose2> odom;
-    if (!pose(scan->header, OnlineEvaluator::kScans, laser, odom)) return;
+    if (!pose(scan->header, laser, odom)) return;
     laser_frame_ = linemap_ros::stripLeadingSlash(scan->header.frame_id);
     const ScanRanges ranges{scan->angle_min, scan->angle_increment, scan->range_min, scan->range_max,
                             scan->ranges};
@@ -147,7 +142,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   {
     linemap::Pose2 laser;
     std::optional<linemap::Pose2> odom;
-    if (!pose(msg->header, OnlineEvaluator::kSegments, laser, odom)) return;
+    if (!pose(msg->header, laser, odom)) return;
     std::vector<linemap::Segment2> segments = toSegments(*msg);
     std::lock_guard<std::mutex> lock(mutex_);
     core_->addSegments(msg->header.stamp.toSec(), std::move(segments), laser, odom);
@@ -231,12 +226,12 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   std::unique_ptr<OnlineEvaluator> core_;
   std::string map_frame_, base_frame_, odom_frame_, laser_frame_;
   std::shared_ptr<tf2_ros::Buffer> tf_;
-  std::shared_ptr<tf2_ros::TransformListener> tf_listener_;
   using ScanEvent = ros::MessageEvent<const sensor_msgs::LaserScan>;
   using SegmentsEvent = ros::MessageEvent<const line_map_msgs::LineSegmentArray>;
   std::unique_ptr<Wait<sensor_msgs::LaserScan>> scan_wait_;
   std::unique_ptr<Wait<line_map_msgs::LineSegmentArray>> segment_wait_;
-  ros::Subscriber scan_sub_, segment_sub_, map_sub_, trajectory_sub_;
+  std::shared_ptr<tf2_ros::TransformListener> tf_listener_;  // after the waits: its thread calls into them
+  ros::Subscriber map_sub_, trajectory_sub_;
   ros::Publisher quality_pub_, grid_pub_;
   ros::ServiceServer evaluate_srv_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;

@@ -30,6 +30,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   {
     autosave_timer_.stop();
     poll_timer_.stop();
+    tf_listener_.reset();  // its thread calls into the wait
     waiting_.reset();
     if (mapper_) autosave(INFINITY);  // the changes since the last autosave
   }
@@ -66,9 +67,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
         *tf_, map_frame_, queue, ros::Duration(tf_timeout_), nh,
         [this](const SegmentsEvent& e) { onSegments(e); },
         [this](const SegmentsEvent&, const std::string& why) { drop(why); });
-    segments_sub_ = nh.subscribe<line_map_msgs::LineSegmentArray>(
-        "line_segments", queue,
-        boost::function<void(const SegmentsEvent&)>([this](const SegmentsEvent& e) { onRaw(e); }), {}, hints);
+    waiting_->subscribe(nh, "line_segments", queue, [this](const SegmentsEvent& e) { return arrive(e); });
     trajectory_sub_ =
         nh.subscribe("optimized_trajectory", 10, &LineMapMergingNodelet::onTrajectory, this, hints);
     save_srv_ = pnh.advertiseService("save_map", &LineMapMergingNodelet::onSave, this);
@@ -109,17 +108,22 @@ class LineMapMergingNodelet : public nodelet::Nodelet
                           counters().time_jumps);
   }
 
-  /// Before the tf wait: a zero stamp would be posed at the latest transform, and a frame unknown
-  /// to tf would wait unreported until the queue overflows. The map frame itself needs no tf.
-  void onRaw(const SegmentsEvent& event)
+  /// Before the tf wait (false: turned away): a zero stamp would be posed at the latest transform,
+  /// and a frame unknown to tf would wait unreported until the queue overflows. The map frame itself
+  /// needs no tf.
+  bool arrive(const SegmentsEvent& event)
   {
     const auto& msg = event.getConstMessage();
     const std::string frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
-    if (msg->header.stamp.isZero()) return drop("stamped zero", true);
+    if (msg->header.stamp.isZero())
+    {
+      drop("stamped zero", true);
+      return false;
+    }
     observeTime(msg->header.stamp.toSec());
-    if (frame.empty() || (frame != map_frame_ && !tf_->_frameExists(frame)))
-      return drop("frame '" + msg->header.frame_id + "' is unknown to tf");
-    waiting_->add(event);  // keeps the receipt time
+    const bool known = !frame.empty() && (frame == map_frame_ || tf_->_frameExists(frame));
+    if (!known) drop("frame '" + msg->header.frame_id + "' is unknown to tf");
+    return known;
   }
 
   void onSegments(const SegmentsEvent& event)
@@ -229,7 +233,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   std::unique_ptr<tf2_ros::Buffer> tf_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>> waiting_;
-  ros::Subscriber segments_sub_, trajectory_sub_;
+  ros::Subscriber trajectory_sub_;
   ros::Publisher map_pub_, marker_pub_;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;

@@ -8,6 +8,7 @@
 #include <sensor_msgs/LaserScan.h>
 #include <tf2/buffer_core.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -45,7 +46,11 @@ struct TfWaitQueueTest : ::testing::Test
   {
     return std::make_unique<Queue>(
         buffer, "map", capacity, ros::Duration(max_wait), nh,
-        [this](const Event& e) { delivered.push_back(e.getConstMessage()->header.stamp.toSec()); },
+        [this](const Event& e)
+        {
+          delivered.push_back(e.getConstMessage()->header.stamp.toSec());
+          if (on_delivery) on_delivery();
+        },
         [this](const Event& e, const std::string& why)
         {
           dropped.push_back(e.getConstMessage()->header.stamp.toSec());
@@ -58,6 +63,7 @@ struct TfWaitQueueTest : ::testing::Test
   tf2::BufferCore buffer;
   std::vector<double> delivered, dropped;
   std::vector<std::string> reasons;
+  std::function<void()> on_delivery;  // runs after each delivery
 };
 
 TEST_F(TfWaitQueueTest, HoldsUntilTfReachesTheStampThenDeliversInArrivalOrder)
@@ -80,21 +86,25 @@ TEST_F(TfWaitQueueTest, HoldsUntilTfReachesTheStampThenDeliversInArrivalOrder)
 
 TEST_F(TfWaitQueueTest, LaterMessageOfAFrameWaitsBehindAnEarlierOneThatWaits)
 {
+  // tf arrives on the listener's thread during a pass: here the delivery of another frame's message
+  // inserts it, after laser 5.0 was found waiting and before laser 6.0 is looked at.
   auto queue = make();
-  setTf(2.0);
-  setTf(4.0);
-  setTf(2.0, "laser2");
-  setTf(4.0, "laser2");
+  for (double t : {0.0, 4.0}) setTf(t);
+  for (double t : {0.0, 10.0}) setTf(t, "laser2");
   callbacks.callAvailable();
-  queue->add(scan(1.0));            // before the data: waits (not beyond the 10 s reach)
-  queue->add(scan(3.0));            // placeable, but behind 1.0 of its frame
-  queue->add(scan(3.5, "laser2"));  // another frame is not held up
-  EXPECT_EQ(delivered, (std::vector<double>{3.5}));
-  EXPECT_EQ(queue->held(), 2u);
-  setTf(0.5);  // older data arrives: 1.0 can be placed, then 3.0
+  queue->add(scan(5.0));
+  queue->add(scan(12.0, "laser2"));
+  queue->add(scan(6.0));
+  EXPECT_TRUE(delivered.empty());
+  on_delivery = [this]
+  {
+    on_delivery = nullptr;
+    setTf(7.0);
+  };
+  setTf(13.0, "laser2");
+  callbacks.callAvailable();  // 12.0 passes, and laser's transform up to 7 arrives meanwhile
   callbacks.callAvailable();
-  EXPECT_EQ(delivered, (std::vector<double>{3.5, 1.0, 3.0}));
-  EXPECT_TRUE(dropped.empty());
+  EXPECT_EQ(delivered, (std::vector<double>{12.0, 5.0, 6.0}));  // laser's order kept
 }
 
 TEST_F(TfWaitQueueTest, PlaceableMessagePassesAtOnceAndTheMapFrameNeedsNoTf)
@@ -132,14 +142,14 @@ TEST_F(TfWaitQueueTest, BeyondCapacityTheOldestIsDropped)
   EXPECT_EQ(queue->held(), 0u);
 }
 
-TEST_F(TfWaitQueueTest, StampBeforeTheBuffersReachIsDropped)
+TEST_F(TfWaitQueueTest, StampBeforeTheBuffersDataIsDropped)
 {
   auto queue = make();
   setTf(100.0);
   setTf(101.0);
-  queue->add(scan(50.0));  // the buffer keeps 10 s: 50 can never be placed
+  queue->add(scan(50.0));  // before the buffer's data (which comes in time order): never placed
   EXPECT_EQ(dropped, (std::vector<double>{50.0}));
-  EXPECT_NE(reasons[0].find("reach"), std::string::npos) << reasons[0];
+  EXPECT_NE(reasons[0].find("before the tf buffer's data"), std::string::npos) << reasons[0];
   queue->add(scan(102.0));  // ahead of tf: waits
   EXPECT_EQ(queue->held(), 1u);
 }

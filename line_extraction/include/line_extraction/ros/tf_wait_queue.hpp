@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "line_extraction/ros/param_loader.hpp"
+#include "line_extraction/ros/transport.hpp"
 
 namespace linemap_ros
 {
@@ -36,8 +37,8 @@ class TfWaitQueue
   using Failed = std::function<void(const Event&, const std::string& why)>;
 
   /// `capacity`: the oldest held message is dropped beyond it. `max_wait`: a message held longer
-  /// (ROS time since its receipt) is dropped; zero waits without a limit. A message older than the
-  /// buffer's reach (its newest common time minus the cache length) is dropped too: it never fits.
+  /// (ROS time since its receipt) is dropped; zero waits without a limit. A message stamped before the
+  /// buffer's data for its chain is dropped too: it never fits (after a time jump, say).
   TfWaitQueue(tf2::BufferCore& tf, std::string target_frame, std::size_t capacity, ros::Duration max_wait,
               ros::NodeHandle& nh, Ready ready, Failed failed)
       : tf_(tf),
@@ -53,12 +54,27 @@ class TfWaitQueue
 
   ~TfWaitQueue()
   {
+    subscriber_.shutdown();
     tf_._removeTransformsChangedListener(changed_);
     queue_->removeByID(owner());
   }
 
   TfWaitQueue(const TfWaitQueue&) = delete;  // the buffer and the callback queue call back into it
   TfWaitQueue& operator=(const TfWaitQueue&) = delete;
+
+  /// Subscribes `topic` on the node handle given at construction (TCP_NODELAY) and holds what arrives;
+  /// `arrival` runs first, in arrival order, and may turn a message away (false).
+  void subscribe(ros::NodeHandle& nh, const std::string& topic, std::uint32_t queue_size,
+                 std::function<bool(const Event&)> arrival = {})
+  {
+    subscriber_ = nh.subscribe<M>(topic, queue_size,
+                                  boost::function<void(const Event&)>(
+                                      [this, arrival](const Event& e)
+                                      {
+                                        if (!arrival || arrival(e)) add(e);
+                                      }),
+                                  {}, noDelay());
+  }
 
   /// On the callback queue given at construction (a subscription callback of the same node handle).
   void add(const Event& event)
@@ -105,8 +121,8 @@ class TfWaitQueue
         why = "waited longer than " + std::to_string(max_wait_.toSec()) + " s for tf";
       else if (!behind && (frame == target_ || tf_.canTransform(target_, frame, msg.header.stamp)))
         why.clear();
-      else if (beyondReach(frame, msg.header.stamp))
-        why = "stamped before the tf buffer's reach";
+      else if (neverPlaceable(frame, msg.header.stamp))
+        why = "stamped before the tf buffer's data";
       else
       {
         if (!behind) waiting_frames.push_back(frame);
@@ -119,17 +135,13 @@ class TfWaitQueue
     }
   }
 
-  bool beyondReach(const std::string& frame, const ros::Time& stamp) const
+  /// tf data comes in time order: a stamp before the first transform of its chain (or one older
+  /// than the buffer keeps) can never be placed; tf2 calls it extrapolation into the past.
+  bool neverPlaceable(const std::string& frame, const ros::Time& stamp) const
   {
-    try
-    {
-      const ros::Time newest = tf_.lookupTransform(target_, frame, ros::Time()).header.stamp;
-      return newest.toSec() - tf_.getCacheLength().toSec() > stamp.toSec();
-    }
-    catch (const tf2::TransformException&)
-    {
-      return false;  // not connected yet
-    }
+    std::string error;
+    return !tf_.canTransform(target_, frame, stamp, &error) &&
+           error.find("into the past") != std::string::npos;
   }
 
   /// From tf's listener thread: one pass at a time is queued, whatever the number of transforms.
@@ -163,5 +175,6 @@ class TfWaitQueue
   std::deque<Event> held_;
   std::atomic<bool> scheduled_{false};
   boost::signals2::connection changed_;
+  ros::Subscriber subscriber_;  // last: unsubscribed first
 };
 }  // namespace linemap_ros
