@@ -68,7 +68,7 @@ class SlamNodelet : public nodelet::Nodelet
       NODELET_ERROR("slam: bad parameter (%s); running on the built-in defaults", e.what());
     }
     slam_ = std::make_unique<LaserSlam>(params);
-    buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(60.0));
+    buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(600.0));  // the SLAM may lag the bag
     listener_ = std::make_unique<tf2_ros::TransformListener>(*buffer_, nh, true, linemap_ros::noDelay());
     path_pub_ = nh.advertise<nav_msgs::Path>("optimized_trajectory", 1, true);
     scan_sub_ = nh.subscribe("scan", std::max(1, pnh.param("queue_size", 1000)), &SlamNodelet::onScan, this,
@@ -97,39 +97,21 @@ class SlamNodelet : public nodelet::Nodelet
       last_publish_ = 0.0;
     }
     const std::string laser_frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
-    std::optional<linemap::Pose2> mount;
-    try
+    std::string error;
+    std::optional<linemap::Pose2> mount = lookup(base_frame_, laser_frame, stamp, error);
+    if (!mount && (base_frame_ == laser_frame || !use_odometry_)) mount = linemap::Pose2();  // laser = base
+    if (!mount)
     {
-      mount = toPose(
-          buffer_->lookupTransform(base_frame_, laser_frame, stamp, ros::Duration(tf_timeout_)).transform);
-    }
-    catch (const tf2::TransformException& e)
-    {
-      if (base_frame_ == laser_frame || !use_odometry_)
-        mount = linemap::Pose2();  // laser only: laser = base
-      else
-      {
-        ++dropped_;
-        NODELET_WARN_THROTTLE(10.0, "slam: no tf %s -> %s (%s): scan dropped", base_frame_.c_str(),
-                              laser_frame.c_str(), e.what());
-        return;
-      }
+      ++dropped_;
+      NODELET_WARN_THROTTLE(10.0, "slam: no tf %s -> %s (%s): scan dropped", base_frame_.c_str(),
+                            laser_frame.c_str(), error.c_str());
+      return;
     }
     SlamScan scan;
     scan.stamp = stamp.toSec();
-    if (use_odometry_)
-    {
-      try
-      {
-        scan.odom = toPose(
-            buffer_->lookupTransform(odom_frame_, base_frame_, stamp, ros::Duration(tf_timeout_)).transform);
-      }
-      catch (const tf2::TransformException& e)
-      {
-        NODELET_WARN_THROTTLE(10.0, "slam: no odometry tf %s -> %s (%s): matching without it",
-                              odom_frame_.c_str(), base_frame_.c_str(), e.what());
-      }
-    }
+    if (use_odometry_ && !(scan.odom = lookup(odom_frame_, base_frame_, stamp, error)))
+      NODELET_WARN_THROTTLE(10.0, "slam: no odometry tf %s -> %s (%s): matching without it",
+                            odom_frame_.c_str(), base_frame_.c_str(), error.c_str());
     for (std::size_t i = 0; i < msg->ranges.size(); ++i)
     {
       const double r = msg->ranges[i];
@@ -144,6 +126,25 @@ class SlamNodelet : public nodelet::Nodelet
     if (slam_->graphOptimized() || (slam_->keyframeAdded() && publish_period_ > 0.0 &&
                                     ros::WallTime::now().toSec() - last_publish_ >= publish_period_))
       publishPath(stamp);
+  }
+
+  /// tf at the stamp, waiting up to ~tf_timeout (ROS time) for it, but not for a stamp before the
+  /// buffer's data: that never comes, and once a bag has ended the clock stops and so would the wait.
+  std::optional<linemap::Pose2> lookup(const std::string& target, const std::string& source,
+                                       const ros::Time& stamp, std::string& error)
+  {
+    if (!buffer_->canTransform(target, source, stamp, &error) &&
+        error.find("into the past") != std::string::npos)
+      return std::nullopt;
+    try
+    {
+      return toPose(buffer_->lookupTransform(target, source, stamp, ros::Duration(tf_timeout_)).transform);
+    }
+    catch (const tf2::TransformException& e)
+    {
+      error = e.what();
+      return std::nullopt;
+    }
   }
 
   void publishTf(const ros::Time& stamp, const std::optional<linemap::Pose2>& odom)
