@@ -128,19 +128,26 @@ class SlamNodelet : public nodelet::Nodelet
       publishPath(stamp);
   }
 
-  /// tf at the stamp, waiting up to ~tf_timeout (ROS time) for it, but not for a stamp before the
-  /// buffer's data: that never comes, and once a bag has ended the clock stops and so would the wait.
+  /// tf at the stamp, waiting up to ~tf_timeout for it to arrive: in ROS time, and at most that or 1 s
+  /// of wall time (tf2_ros' own wait runs on ROS time only, and the clock stops when a bag ends: a SLAM
+  /// behind the bag waited for ever). A stamp before the buffer's data is not waited for: it never comes.
   std::optional<linemap::Pose2> lookup(const std::string& target, const std::string& source,
                                        const ros::Time& stamp, std::string& error)
   {
-    if (!buffer_->canTransform(target, source, stamp, &error) &&
-        error.find("into the past") != std::string::npos)
-      return std::nullopt;
+    const ros::Time end = ros::Time::now() + ros::Duration(tf_timeout_);
+    const ros::WallTime wall_end = ros::WallTime::now() + ros::WallDuration(std::max(tf_timeout_, 1.0));
+    while (!buffer_->canTransform(target, source, stamp, &error))
+    {
+      if (error.find("into the past") != std::string::npos || ros::Time::now() >= end ||
+          ros::WallTime::now() >= wall_end)
+        return std::nullopt;
+      ros::WallDuration(0.001).sleep();
+    }
     try
     {
-      return toPose(buffer_->lookupTransform(target, source, stamp, ros::Duration(tf_timeout_)).transform);
+      return toPose(buffer_->lookupTransform(target, source, stamp).transform);
     }
-    catch (const tf2::TransformException& e)
+    catch (const tf2::TransformException& e)  // pruned since canTransform
     {
       error = e.what();
       return std::nullopt;
