@@ -70,7 +70,10 @@ class CheckScanOnlyBag(unittest.TestCase):
         log = open(os.path.join(lt.artifact_dir(), "scan_only_bag_%s.log" % name), "w")
         proc = subprocess.Popen(["roslaunch", os.path.join(lt.repo_root(), "launch", "replay.launch"),
                                  "bag:=" + self.bag, "rate:=1", "output:=screen"] + args,
-                                stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+                                stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
+                                # Unbuffered: roslaunch's own lines ("process has finished") reach the log as
+                                # they happen, not when its buffer fills or it exits.
+                                env=dict(os.environ, PYTHONUNBUFFERED="1"))
         try:
             lt.wait_until(lambda: maps.messages, "a line_map (%s)" % " ".join(args),
                           lambda: "none; see %s" % log.name, self.limit, gone=lambda: (
