@@ -18,6 +18,7 @@ CaeParams CaeParams::fromParams(const linemap::ParamSet& params)
   p.consistent_adjustment = params.getBool("consistent_adjustment", p.consistent_adjustment);
   p.spatial_index = params.getBool("spatial_index", p.spatial_index);
   p.map_merge = params.getBool("map_merge", p.map_merge);
+  p.absorb_contained = params.getBool("absorb_contained", p.absorb_contained);
   p.regroup_on_adjust = params.getBool("regroup_on_adjust", p.regroup_on_adjust);
   return p;
 }

@@ -77,6 +77,18 @@ bool meetEachOther(const Segment2& a, const Segment2& b, const FusionParams& par
   return meetsFusionConditions(a, b, params) || meetsFusionConditions(b, a, params);
 }
 
+bool liesWithin(const Segment2& outer, const Segment2& inner, const FusionParams& params)
+{
+  const Vec2 d = outer.end - outer.start;
+  const double length = d.norm();
+  if (!(length > 0.0) || !(headingDeviation(outer, inner) < 0.5 * linemap::kPi)) return false;
+  const Vec2 u = d / length;
+  const double a = (inner.start - outer.start).dot(u);
+  const double b = (inner.end - outer.start).dot(u);
+  return std::min(a, b) >= 0.0 && std::max(a, b) <= length &&
+         verticalDistance(outer, inner) <= params.max_distance;
+}
+
 void FusionMoments::add(const Segment2& s, double w)
 {
   const Vec2 d = s.end - s.start;

@@ -17,9 +17,9 @@ namespace line_map_merging
 {
 namespace
 {
-// 2: parameters gained 'weighting', 'map_merge' and 'regroup_on_adjust'. Version 1 files still load (see
-// load()).
-constexpr int kFormatVersion = 2;
+// 2: parameters gained 'weighting', 'map_merge' and 'regroup_on_adjust'. 3: 'absorb_contained'. Older
+// files still load (see load()).
+constexpr int kFormatVersion = 3;
 constexpr int kOldestFormatVersion = 1;
 
 void writeFileAtomically(const std::string& path, const std::string& text)
@@ -128,6 +128,7 @@ void CaeRlsm::save(const std::string& path) const
   out << YAML::Key << "weighting" << YAML::Value
       << (params_.fusion.weighting == FusionWeighting::length ? "length" : "count");
   out << YAML::Key << "map_merge" << YAML::Value << params_.map_merge;
+  out << YAML::Key << "absorb_contained" << YAML::Value << params_.absorb_contained;
   out << YAML::Key << "regroup_on_adjust" << YAML::Value << params_.regroup_on_adjust;
   out << YAML::EndMap;
   out << YAML::Key << "next_id" << YAML::Value << next_id_;
@@ -210,6 +211,9 @@ void CaeRlsm::load(const std::string& path)
                        "', expected 'length' or 'count'");
   params.fusion.weighting = weighting == "length" ? FusionWeighting::length : FusionWeighting::count;
   params.map_merge = p["map_merge"] ? read<bool>(path, p["map_merge"], "parameters/map_merge") : false;
+  // Files written before absorb_contained existed merged by the fusion conditions alone.
+  params.absorb_contained =
+      p["absorb_contained"] ? read<bool>(path, p["absorb_contained"], "parameters/absorb_contained") : false;
   params.regroup_on_adjust = p["regroup_on_adjust"]
                                  ? read<bool>(path, p["regroup_on_adjust"], "parameters/regroup_on_adjust")
                                  : false;

@@ -35,8 +35,10 @@ void CaeRlsm::indexRemove(std::uint64_t id, const Node& node)
 
 bool CaeRlsm::candidateMeets(const Segment2& map, const Segment2& scan, bool symmetric) const
 {
-  return symmetric ? meetEachOther(map, scan, params_.fusion)
-                   : meetsFusionConditions(map, scan, params_.fusion);
+  if (!symmetric) return meetsFusionConditions(map, scan, params_.fusion);
+  return meetEachOther(map, scan, params_.fusion) ||
+         (params_.absorb_contained &&
+          (liesWithin(map, scan, params_.fusion) || liesWithin(scan, map, params_.fusion)));
 }
 
 void CaeRlsm::findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out,

@@ -132,6 +132,32 @@ TEST(FusionConditions, SearchPaddingCoversEveryFusableSegment)
   EXPECT_LE(far.start.y(), 0.0 + p.searchPadding());
 }
 
+TEST(LiesWithin, ShortSegmentInsideTheBandWhateverItsHeading)
+{
+  using line_map_merging::liesWithin;
+  const FusionParams p;  // d_max = 0.1 m
+  const Segment2 wall = seg(0, 0, 5, 0);
+  // 0.7 m at 6 deg (beyond theta_max = 4 deg) centred on the wall: its ends lie 0.35 sin 6 deg =
+  // 0.0366 m from the line and project onto [2.152, 2.848] of [0, 5].
+  const Vec2 mid(2.5, 0.0);
+  const Segment2 tilted =
+      fromHeading(mid - 0.35 * Vec2(std::cos(6 * kDeg), std::sin(6 * kDeg)), 6 * kDeg, 0.7);
+  ASSERT_FALSE(meetsFusionConditions(wall, tilted, p));
+  EXPECT_TRUE(liesWithin(wall, tilted, p));
+  EXPECT_FALSE(liesWithin(tilted, wall, p));  // the wall projects far beyond the short one
+  // Raised by 0.06 m: its upper end is at 0.0966 m (inside), by 0.07 m at 0.1066 m (outside).
+  EXPECT_TRUE(liesWithin(
+      wall, seg(tilted.start.x(), tilted.start.y() + 0.06, tilted.end.x(), tilted.end.y() + 0.06), p));
+  EXPECT_FALSE(liesWithin(
+      wall, seg(tilted.start.x(), tilted.start.y() + 0.07, tilted.end.x(), tilted.end.y() + 0.07), p));
+  // The other face of a 5 cm thick wall: inside the band, but facing the other way.
+  EXPECT_FALSE(liesWithin(wall, seg(3, 0.05, 2, 0.05), p));
+  // Reaching 1 cm past the wall's end: not inside, though the fusion conditions would allow a gap.
+  EXPECT_TRUE(liesWithin(wall, seg(4.3, 0.02, 5.0, 0.02), p));
+  EXPECT_FALSE(liesWithin(wall, seg(4.31, 0.02, 5.01, 0.02), p));
+  EXPECT_FALSE(liesWithin(wall, seg(-0.01, 0.02, 0.69, 0.02), p));
+}
+
 TEST(FusionParams, RejectsBadValuesNamingTheKey)
 {
   linemap::ParamSet params;

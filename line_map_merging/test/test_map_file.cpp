@@ -14,6 +14,7 @@
 #include "line_map_merging/cae_rlsm.hpp"
 #include "synthetic_world.hpp"
 
+using line_map_merging::CaeParams;
 using line_map_merging::CaeRlsm;
 using line_map_merging::Keyframe;
 using line_map_merging::MapFileError;
@@ -94,7 +95,7 @@ TEST(MapFile, SaveLoadSaveGivesIdenticalFiles)
   const std::string a = slurp(first), b = slurp(second);
   EXPECT_GT(a.size(), 1000u);
   EXPECT_EQ(a, b);
-  EXPECT_EQ(a.rfind("format_version: 2", 0), 0u) << "format_version must come first";
+  EXPECT_EQ(a.rfind("format_version: 3", 0), 0u) << "format_version must come first";
   std::remove(first.c_str());
   std::remove(second.c_str());
 }
@@ -169,8 +170,8 @@ TEST(MapFile, BadFilesLeaveTheMapUntouched)
   expectRejected("", "empty", bad);
   expectRejected(std::string("\x01\x02garbage: [unclosed\n"), "garbage", bad);
   std::string wrong_version = text;
-  wrong_version.replace(0, std::string("format_version: 2").size(), "format_version: 3");
-  expectRejected(wrong_version, "wrong version", "format_version 3");
+  wrong_version.replace(0, std::string("format_version: 3").size(), "format_version: 4");
+  expectRejected(wrong_version, "wrong version", "format_version 4");
   std::string corrupt = text;
   const std::size_t pos = corrupt.find("segment: [") + 10;
   corrupt.replace(pos, 1, "x");
@@ -309,6 +310,25 @@ TEST(MapFileVersions, Version1FileLoadsWithTheHandBuiltContent)
   EXPECT_EQ(leaves[0].segment.end.x(), 3.0);
   EXPECT_EQ(leaves[1].keyframe, 1u);
   EXPECT_EQ(leaves[1].segment.start.x(), -2.0);
+}
+
+TEST(MapFileVersions, Version2FileLoadsWithoutAbsorbingContainedSegments)
+{
+  // Version 2 predates absorb_contained: its maps were merged by the fusion conditions alone, and
+  // adjust so after loading; a save writes the current version with the flag.
+  CaeParams params;
+  ASSERT_TRUE(params.absorb_contained);
+  CaeRlsm m(params);
+  m.load(kMapFiles + "map_v2.yaml");
+  EXPECT_TRUE(m.params().map_merge);
+  EXPECT_FALSE(m.params().absorb_contained);
+  EXPECT_EQ(m.segmentCount(), 4u);
+  const std::string path = tempPath("v2_resaved.yaml");
+  m.save(path);
+  const YAML::Node saved = YAML::LoadFile(path);
+  std::remove(path.c_str());
+  EXPECT_EQ(saved["format_version"].as<int>(), currentFormatVersion());
+  EXPECT_FALSE(saved["parameters"]["absorb_contained"].as<bool>());
 }
 
 TEST(MapFileVersions, UnknownVersionAndDamagedCopiesNameTheFileAndKeepTheMap)

@@ -212,3 +212,33 @@ TEST(MapMerge, SegmentsThatMeetOnlyWithTheOtherAsMapSegmentAreMerged)
     EXPECT_LT(std::abs(linemap::normalizeAngle(map[0].segment.heading() - a)), 0.5 * a);
   }
 }
+
+TEST(MapMerge, ASegmentInsideAnothersBandIsAbsorbedBeyondThetaMax)
+{
+  // A 5 m wall, then a 0.7 m glimpse of it fitted 6 deg off (beyond theta_max = 4 deg) whose ends lie
+  // 0.037 m from the wall's line and project onto the wall: the fusion conditions fail both ways
+  // round (heading), the segment lies inside the wall's d_max band. The other face of a 0.05 m wall
+  // beside them, equally inside the band but facing the other way, must stay.
+  const double a = 6.0 * linemap::kPi / 180.0;
+  const Vec2 u(std::cos(a), std::sin(a)), mid(2.5, 0.0);
+  const Segment2 wall(Vec2(0, 0), Vec2(5, 0)), glimpse(mid - 0.35 * u, mid + 0.35 * u);
+  const Segment2 other_face(Vec2(3.5, -0.05), Vec2(1.5, -0.05));
+  ASSERT_FALSE(line_map_merging::meetEachOther(wall, glimpse, line_map_merging::FusionParams()));
+  for (bool absorb : {false, true})
+  {
+    CaeParams params;
+    params.absorb_contained = absorb;
+    CaeRlsm merger(params);
+    merger.addKeyframe(keyframeOf(0, Pose2(1, 1, 0.2), {wall}));
+    merger.addKeyframe(keyframeOf(1, Pose2(2, 1.5, -0.4), {glimpse}));
+    merger.addKeyframe(keyframeOf(2, Pose2(2, -1.5, 0.4), {other_face}));
+    const auto map = merger.map();
+    ASSERT_EQ(map.size(), absorb ? 2u : 3u);
+    if (!absorb) continue;
+    EXPECT_EQ(merger.leaves(0).size(), 2u);  // the wall kept its id and took the glimpse's leaf
+    // Length weighting: 0.7 m at 6 deg tilts the 5 m wall by about 0.7 / 5.7 * 6 = 0.7 deg, and its
+    // extent stays the wall's (the glimpse projects inside it).
+    EXPECT_LT(std::abs(map[0].segment.heading()), 1.0 * linemap::kPi / 180.0);
+    EXPECT_NEAR(map[0].segment.length(), 5.0, 0.01);
+  }
+}

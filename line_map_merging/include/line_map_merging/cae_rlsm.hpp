@@ -33,12 +33,17 @@ struct CaeParams
   /// the consistency pass after MP-GMA uses the same symmetric test. Off = the paper's behaviour,
   /// where two map segments born apart stay apart unless one scan segment bridges them.
   bool map_merge = true;
+  /// With map_merge: a map segment lying wholly inside another's fusion band (liesWithin) is merged
+  /// into it even when their headings differ by more than theta_max, as short segments fitted to a
+  /// wall's noisy glimpses do. Off = only the three fusion conditions.
+  bool absorb_contained = true;
   /// After MP-GMA (with consistent_adjustment): regroup the leaves from scratch, OTM-ILSM over every
   /// leaf in arrival order under the new poses, instead of re-fusing each map segment's own leaves;
   /// ids carry over by the leaves. Groups formed on drifted poses otherwise stay as formed.
   bool regroup_on_adjust = true;
 
-  /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge".
+  /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge",
+  /// "absorb_contained", "regroup_on_adjust".
   static CaeParams fromParams(const linemap::ParamSet& params);
 };
 
@@ -91,7 +96,8 @@ class CaeRlsm : public Merger
   /// Returns the id of the map segment that now holds the leaf.
   std::uint64_t insertSegment(const Segment2& world, std::uint32_t leaf);
   /// Map segments but `exclude` that meet the fusion conditions with `scan` as S, or with either as
-  /// M when `symmetric` (map segment against map segment); in id order.
+  /// M when `symmetric` (map segment against map segment; then also either lying within the other,
+  /// with absorb_contained); in id order.
   void findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out,
                       bool symmetric = false);
   /// Read-only, thread-safe: whether findCandidates would find any. Needs a fresh index (or the

@@ -57,6 +57,13 @@ bool meetsFusionConditions(const Segment2& map, const Segment2& scan, const Fusi
 /// the map segment M (they are asymmetric: a short segment beside a long one meets them one way).
 bool meetEachOther(const Segment2& a, const Segment2& b, const FusionParams& params);
 
+/// Whether `inner` lies wholly inside the fusion band of `outer`: it faces the same side (heading
+/// deviation below 90 deg, so the other face of a wall never qualifies), both its endpoints lie within
+/// d_max of outer's line, and both project onto outer itself. Such a segment describes nothing outer
+/// does not; its heading, fitted over a shorter baseline, may still differ by more than theta_max
+/// (at most asin(2 d_max / its length)).
+bool liesWithin(const Segment2& outer, const Segment2& inner, const FusionParams& params);
+
 struct WeightedSegment
 {
   Segment2 segment;
