@@ -122,7 +122,8 @@ TEST_F(TfWaitQueueTest, PlaceableMessagePassesAtOnceAndTheMapFrameNeedsNoTf)
 TEST_F(TfWaitQueueTest, MessageHeldLongerThanTheLimitIsDroppedEvenWhenTfComes)
 {
   auto queue = make(100, 0.5);
-  queue->add(scan(1.0, "laser", ros::Time::now() - ros::Duration(2.0)));
+  queue->add(scan(1.0, "laser", ros::Time::now() - ros::Duration(2.0)),
+             ros::WallTime::now() - ros::WallDuration(2.0));
   ASSERT_EQ(dropped, (std::vector<double>{1.0}));
   EXPECT_NE(reasons[0].find("waited longer"), std::string::npos) << reasons[0];
   queue->add(scan(2.0));  // just received: waits
@@ -130,6 +131,23 @@ TEST_F(TfWaitQueueTest, MessageHeldLongerThanTheLimitIsDroppedEvenWhenTfComes)
   setTf(3.0);
   callbacks.callAvailable();
   EXPECT_EQ(delivered, (std::vector<double>{2.0}));
+}
+
+TEST_F(TfWaitQueueTest, LimitMustPassOnBothClocks)
+{
+  // A bag played at rate 20: 2 s of ROS time went by in 0.1 s of wall time, and a SLAM publishing
+  // map -> odom after its optimisation is not late yet. A paused bag: wall time went by, ROS time
+  // did not. Either message still waits, and is delivered when tf comes.
+  auto queue = make(100, 0.5);
+  queue->add(scan(1.0, "laser", ros::Time::now() - ros::Duration(2.0)),
+             ros::WallTime::now() - ros::WallDuration(0.1));
+  queue->add(scan(2.0, "laser", ros::Time::now()), ros::WallTime::now() - ros::WallDuration(2.0));
+  setTf(0.0);  // a pass; neither is placeable yet
+  callbacks.callAvailable();
+  EXPECT_TRUE(dropped.empty());
+  setTf(3.0);
+  callbacks.callAvailable();
+  EXPECT_EQ(delivered, (std::vector<double>{1.0, 2.0}));
 }
 
 TEST_F(TfWaitQueueTest, BeyondCapacityTheOldestIsDropped)

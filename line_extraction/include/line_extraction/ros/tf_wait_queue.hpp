@@ -36,8 +36,11 @@ class TfWaitQueue
   using Ready = std::function<void(const Event&)>;
   using Failed = std::function<void(const Event&, const std::string& why)>;
 
-  /// `capacity`: the oldest held message is dropped beyond it. `max_wait`: a message held longer
-  /// (ROS time since its receipt) is dropped; zero waits without a limit. A message stamped before the
+  /// `capacity`: the oldest held message is dropped beyond it. `max_wait`: a message held longer on
+  /// both clocks, ROS time since its receipt and wall time since it was added, is dropped; zero waits
+  /// without a limit. ROS time alone would give a tf publisher (a SLAM optimising) 25 ms of wall time at
+  /// a bag's rate 20 (the Intel demo dropped 818 scans so, 95.6 -> 88.9 %); wall time alone would drop
+  /// what waits while the bag is paused. A message stamped before the
   /// buffer's data for its chain is dropped too: it never fits (after a time jump, say).
   TfWaitQueue(tf2::BufferCore& tf, std::string target_frame, std::size_t capacity, ros::Duration max_wait,
               ros::NodeHandle& nh, Ready ready, Failed failed)
@@ -77,12 +80,13 @@ class TfWaitQueue
   }
 
   /// On the callback queue given at construction (a subscription callback of the same node handle).
-  void add(const Event& event)
+  /// `added`: the wall time the wait starts from (a test may date it back).
+  void add(const Event& event, const ros::WallTime& added = ros::WallTime::now())
   {
-    held_.push_back(event);
+    held_.push_back({event, added});
     if (held_.size() > capacity_)
     {
-      const Event oldest = held_.front();
+      const Event oldest = held_.front().event;
       held_.pop_front();
       failed_(oldest, "more than " + std::to_string(capacity_) + " messages waiting for tf");
     }
@@ -109,15 +113,17 @@ class TfWaitQueue
   void release()
   {
     const ros::Time now = ros::Time::now();
+    const ros::WallTime wall_now = ros::WallTime::now();
     std::vector<std::string> waiting_frames;
     for (auto it = held_.begin(); it != held_.end();)
     {
-      const M& msg = *it->getConstMessage();
+      const M& msg = *it->event.getConstMessage();
       const std::string frame = stripLeadingSlash(msg.header.frame_id);
       const bool behind =
           std::find(waiting_frames.begin(), waiting_frames.end(), frame) != waiting_frames.end();
       std::string why;
-      if (!max_wait_.isZero() && now - it->getReceiptTime() > max_wait_)
+      if (!max_wait_.isZero() && now - it->event.getReceiptTime() > max_wait_ &&
+          (wall_now - it->added).toSec() > max_wait_.toSec())
         why = "waited longer than " + std::to_string(max_wait_.toSec()) + " s for tf";
       else if (!behind && (frame == target_ || tf_.canTransform(target_, frame, msg.header.stamp)))
         why.clear();
@@ -129,7 +135,7 @@ class TfWaitQueue
         ++it;
         continue;
       }
-      const Event event = *it;
+      const Event event = it->event;
       it = held_.erase(it);
       why.empty() ? ready_(event) : failed_(event, why + " (" + target_ + " -> " + frame + ")");
     }
@@ -172,7 +178,12 @@ class TfWaitQueue
   ros::CallbackQueueInterface* queue_;
   Ready ready_;
   Failed failed_;
-  std::deque<Event> held_;
+  struct Held
+  {
+    Event event;
+    ros::WallTime added;
+  };
+  std::deque<Held> held_;
   std::atomic<bool> scheduled_{false};
   boost::signals2::connection changed_;
   ros::Subscriber subscriber_;  // last: unsubscribed first
