@@ -19,6 +19,7 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "line_extraction/ros/param_loader.hpp"
+#include "line_extraction/ros/tf_wait_queue.hpp"
 #include "line_extraction/ros/transport.hpp"
 #include "line_extraction/ros/wall_diagnostics.hpp"
 #include "line_map_merging/laser_slam.hpp"
@@ -138,7 +139,7 @@ class SlamNodelet : public nodelet::Nodelet
     const ros::WallTime wall_end = ros::WallTime::now() + ros::WallDuration(std::max(tf_timeout_, 1.0));
     while (!buffer_->canTransform(target, source, stamp, &error))
     {
-      if (error.find("into the past") != std::string::npos || ros::Time::now() >= end ||
+      if (linemap_ros::extrapolatesIntoThePast(error) || ros::Time::now() >= end ||
           ros::WallTime::now() >= wall_end)
         return std::nullopt;
       ros::WallDuration(0.001).sleep();

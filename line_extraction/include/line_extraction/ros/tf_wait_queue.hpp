@@ -22,6 +22,14 @@
 
 namespace linemap_ros
 {
+/// Whether a tf2 canTransform/lookup error says the stamp lies before the data of its chain (tf2's
+/// "extrapolation into the past"): tf data comes in time order, so such a stamp is never placed
+/// however long one waits (after a time jump, say, or older than the buffer keeps).
+inline bool extrapolatesIntoThePast(const std::string& tf_error)
+{
+  return tf_error.find("into the past") != std::string::npos;
+}
+
 /// In place of tf2_ros::MessageFilter, whose bookkeeping loses messages: it registers a message's
 /// transformable request with the buffer before it puts the message in its list, so a transform
 /// arriving in between answers a request no listed message owns, and the message then waits for
@@ -40,8 +48,8 @@ class TfWaitQueue
   /// both clocks, ROS time since its receipt and wall time since it was added, is dropped; zero waits
   /// without a limit. ROS time alone would give a tf publisher (a SLAM optimising) 25 ms of wall time at
   /// a bag's rate 20 (the Intel demo dropped 818 scans so, 95.6 -> 88.9 %); wall time alone would drop
-  /// what waits while the bag is paused. A message stamped before the
-  /// buffer's data for its chain is dropped too: it never fits (after a time jump, say).
+  /// what waits while the bag is paused. A message stamped before the buffer's data for its chain is
+  /// dropped too: it never fits (extrapolatesIntoThePast).
   TfWaitQueue(tf2::BufferCore& tf, std::string target_frame, std::size_t capacity, ros::Duration max_wait,
               ros::NodeHandle& nh, Ready ready, Failed failed)
       : tf_(tf),
@@ -141,13 +149,10 @@ class TfWaitQueue
     }
   }
 
-  /// tf data comes in time order: a stamp before the first transform of its chain (or one older
-  /// than the buffer keeps) can never be placed; tf2 calls it extrapolation into the past.
   bool neverPlaceable(const std::string& frame, const ros::Time& stamp) const
   {
     std::string error;
-    return !tf_.canTransform(target_, frame, stamp, &error) &&
-           error.find("into the past") != std::string::npos;
+    return !tf_.canTransform(target_, frame, stamp, &error) && extrapolatesIntoThePast(error);
   }
 
   /// From tf's listener thread: one pass at a time is queued, whatever the number of transforms.
