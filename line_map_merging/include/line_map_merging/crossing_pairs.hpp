@@ -24,4 +24,10 @@ struct CrossingPair
 /// negative or non-finite min_overhang.
 std::vector<CrossingPair> findCrossingPairs(const std::vector<linemap::Segment2>& map, double min_overhang);
 
+/// The test of findCrossingPairs for one pair (no argument checks): whether a and b cross with both
+/// overhanging the intersection by more than min_overhang; if so and point is given, the
+/// intersection goes there.
+bool segmentsCross(const linemap::Segment2& a, const linemap::Segment2& b, double min_overhang,
+                   linemap::Vec2* point = nullptr);
+
 }  // namespace line_map_merging
