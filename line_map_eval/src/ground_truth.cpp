@@ -21,7 +21,8 @@ using linemap::Vec2;
 std::vector<VisibleWall> visibleWallPieces(const std::vector<Segment2>& walls, const Pose2& laser_pose,
                                            double angle_min, double angle_increment,
                                            const std::vector<int>& hit_wall,
-                                           const std::vector<double>& hit_range, std::size_t min_beams)
+                                           const std::vector<double>& hit_range, std::size_t min_beams,
+                                           const std::vector<std::vector<std::size_t>>& curves)
 {
   if (hit_wall.size() != hit_range.size())
     throw std::invalid_argument("visibleWallPieces: hit_wall and hit_range differ in size");
@@ -48,14 +49,101 @@ std::vector<VisibleWall> visibleWallPieces(const std::vector<Segment2>& walls, c
     s.t_max = std::max(s.t_max, t);
     ++s.beams;
   }
-  std::vector<VisibleWall> out;
+  std::vector<VisibleWall> all;
   for (const auto& [w, s] : spans)
   {
-    if (s.beams < min_beams) continue;
     const Vec2 d = walls[w].end - walls[w].start;
-    out.push_back({w, Segment2(walls[w].start + s.t_min * d, walls[w].start + s.t_max * d), s.beams});
+    all.push_back({w, Segment2(walls[w].start + s.t_min * d, walls[w].start + s.t_max * d), s.beams});
   }
+  std::vector<bool> keep(all.size(), false);
+  for (const auto& sight : sights(walls, all, curves))
+  {
+    std::size_t beams = 0;
+    for (const std::size_t i : sight) beams += all[i].beams;
+    if (beams >= min_beams)
+      for (const std::size_t i : sight) keep[i] = true;
+  }
+  std::vector<VisibleWall> out;
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (keep[i]) out.push_back(all[i]);
   return out;
+}
+
+namespace
+{
+/// Whether two faces share an end (consecutive chords of a curve do, exactly).
+bool meet(const Segment2& a, const Segment2& b)
+{
+  constexpr double kMeet = 1e-6;  // [m]
+  for (const Vec2& p : {a.start, a.end})
+    for (const Vec2& q : {b.start, b.end})
+      if ((p - q).norm() <= kMeet) return true;
+  return false;
+}
+}  // namespace
+
+std::vector<std::vector<std::size_t>> sights(const std::vector<Segment2>& walls,
+                                             const std::vector<VisibleWall>& visible,
+                                             const std::vector<std::vector<std::size_t>>& curves)
+{
+  // Where each visible face sits in a curve.
+  std::map<std::size_t, std::pair<std::size_t, std::size_t>> place;  // face -> (curve, position)
+  for (std::size_t c = 0; c < curves.size(); ++c)
+    for (std::size_t k = 0; k < curves[c].size(); ++k)
+    {
+      if (curves[c][k] >= walls.size())
+        throw std::invalid_argument("ground truth: curves[" + std::to_string(c) + "] lists face " +
+                                    std::to_string(curves[c][k]) + " of " + std::to_string(walls.size()));
+      place[curves[c][k]] = {c, k};
+    }
+  std::vector<std::vector<std::size_t>> groups;
+  // Per curve, the visible index at each position (npos: not visible in this scan).
+  constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  std::map<std::size_t, std::vector<std::size_t>> on_curve;
+  for (std::size_t i = 0; i < visible.size(); ++i)
+  {
+    const auto it = place.find(visible[i].wall);
+    if (it == place.end())
+    {
+      groups.push_back({i});
+      continue;
+    }
+    auto& at = on_curve[it->second.first];
+    if (at.empty()) at.assign(curves[it->second.first].size(), kNone);
+    at[it->second.second] = i;
+  }
+  for (const auto& [c, at] : on_curve)
+  {
+    const auto& faces = curves[c];
+    const std::size_t n = faces.size();
+    const auto linked = [&](std::size_t k)  // position k and the next one form one run
+    {
+      return at[k] != kNone && at[(k + 1) % n] != kNone && meet(walls[faces[k]], walls[faces[(k + 1) % n]]);
+    };
+    // Start the runs after a break, so a run across the seam of a closed curve stays whole.
+    std::size_t first = 0;
+    while (first < n && (at[first] == kNone || (n > 1 && linked((first + n - 1) % n)))) ++first;
+    if (first == n)  // closed curve visible all around, or nothing to start from
+    {
+      std::vector<std::size_t> all;
+      for (const std::size_t i : at)
+        if (i != kNone) all.push_back(i);
+      if (!all.empty()) groups.push_back(all);
+      continue;
+    }
+    for (std::size_t step = 0; step < n; ++step)
+    {
+      const std::size_t k = (first + step) % n;
+      if (at[k] == kNone) continue;
+      const bool continues = step > 0 && linked((k + n - 1) % n);
+      if (!continues) groups.emplace_back();
+      groups.back().push_back(at[k]);
+    }
+  }
+  std::sort(groups.begin(), groups.end(),
+            [](const auto& a, const auto& b)
+            { return *std::min_element(a.begin(), a.end()) < *std::min_element(b.begin(), b.end()); });
+  return groups;
 }
 
 std::string truthPathForBag(const std::string& bag_path)
@@ -178,6 +266,7 @@ class TruthParser
     t.laser.range_max = number(require(laser, "range_max", "laser/range_max"), "laser/range_max");
     t.laser.sigma = number(require(laser, "sigma", "laser/sigma"), "laser/sigma");
     t.laser.spurious = number(require(laser, "spurious", "laser/spurious"), "laser/spurious");
+    if (laser["sigma_slope"]) t.laser.sigma_slope = number(laser["sigma_slope"], "laser/sigma_slope");
     t.base_to_laser = pose(require(root, "base_to_laser", "base_to_laser"), "base_to_laser");
     if (root["min_beams"]) t.min_beams = count(root["min_beams"], "min_beams");
 
@@ -191,6 +280,7 @@ class TruthParser
       w.segment = segment(require(solids[i], "segment", key + "/segment"), key + "/segment");
       w.thickness = number(require(solids[i], "thickness", key + "/thickness"), key + "/thickness");
       if (!(w.thickness >= 0.0)) fail(key + "/thickness", "must be >= 0", solids[i]["thickness"]);
+      if (solids[i]["arc"]) w.arc = static_cast<int>(count(solids[i]["arc"], key + "/arc"));
       t.solids.push_back(w);
     }
 
@@ -198,6 +288,26 @@ class TruthParser
     if (!walls.IsSequence()) fail("walls", "expected a list", walls);
     for (std::size_t i = 0; i < walls.size(); ++i)
       t.walls.push_back(segment(walls[i], "walls[" + std::to_string(i) + "]"));
+
+    if (const YAML::Node curves = root["curves"])
+    {
+      if (!curves.IsSequence()) fail("curves", "expected a list of lists of face indices", curves);
+      for (std::size_t i = 0; i < curves.size(); ++i)
+      {
+        const std::string key = "curves[" + std::to_string(i) + "]";
+        if (!curves[i].IsSequence()) fail(key, "expected a list of face indices", curves[i]);
+        t.curves.emplace_back();
+        for (std::size_t j = 0; j < curves[i].size(); ++j)
+        {
+          const std::size_t f = count(curves[i][j], key + "[" + std::to_string(j) + "]");
+          if (f >= t.walls.size())
+            fail(key + "[" + std::to_string(j) + "]",
+                 "index " + std::to_string(f) + " is beyond the " + std::to_string(t.walls.size()) + " walls",
+                 curves[i][j]);
+          t.curves.back().push_back(f);
+        }
+      }
+    }
 
     const YAML::Node scans = require(root, "scans", "scans");
     if (!scans.IsSequence()) fail("scans", "expected a list", scans);
@@ -245,7 +355,9 @@ void writeGroundTruth(const GroundTruth& t, const std::string& path)
   out << "laser: {beams: " << t.laser.beams << ", angle_min: " << num(t.laser.angle_min)
       << ", angle_increment: " << num(t.laser.angle_increment) << ", range_min: " << num(t.laser.range_min)
       << ", range_max: " << num(t.laser.range_max) << ", sigma: " << num(t.laser.sigma)
-      << ", spurious: " << num(t.laser.spurious) << "}\n";
+      << ", spurious: " << num(t.laser.spurious);
+  if (t.laser.sigma_slope != 0.0) out << ", sigma_slope: " << num(t.laser.sigma_slope);
+  out << "}\n";
   out << "base_to_laser: " << list({t.base_to_laser.x, t.base_to_laser.y, t.base_to_laser.theta}) << "\n";
   out << "min_beams: " << t.min_beams << "\n";
   out << "# the world's walls: centre line and thickness (0: thin, seen from both sides)\n";
@@ -253,11 +365,23 @@ void writeGroundTruth(const GroundTruth& t, const std::string& path)
   for (const auto& w : t.solids)
     out << "  - {segment: "
         << list({w.segment.start.x(), w.segment.start.y(), w.segment.end.x(), w.segment.end.y()})
-        << ", thickness: " << num(w.thickness) << "}\n";
+        << ", thickness: " << num(w.thickness) << (w.arc >= 0 ? ", arc: " + std::to_string(w.arc) : "")
+        << "}\n";
   out << "# the true lines: faces of the solids, directed with free space on the left\n";
   out << "walls:" << (t.walls.empty() ? " []" : "") << "\n";
   for (const auto& w : t.walls)
     out << "  - " << list({w.start.x(), w.start.y(), w.end.x(), w.end.y()}) << "\n";
+  if (!t.curves.empty())
+  {
+    out << "# the faces of each curved surface (an arc's side), in order along it\n";
+    out << "curves:\n";
+    for (const auto& c : t.curves)
+    {
+      out << "  - [";
+      for (std::size_t i = 0; i < c.size(); ++i) out << (i ? ", " : "") << c[i];
+      out << "]\n";
+    }
+  }
   out << "scans:" << (t.scans.empty() ? " []" : "") << "\n";
   for (const auto& s : t.scans)
   {

@@ -136,8 +136,12 @@ void GroundTruthParams::validate() const
 SeenParts seenParts(const GroundTruth& truth, double min_piece_length, std::size_t min_piece_beams)
 {
   SeenParts seen(truth.walls.size());
+  std::vector<std::pair<double, double>> interval;
   for (std::size_t k = 0; k < truth.scans.size(); ++k)
-    for (const VisibleWall& v : truth.scans[k].visible)
+  {
+    const auto& visible = truth.scans[k].visible;
+    interval.clear();
+    for (const VisibleWall& v : visible)
     {
       if (v.wall >= truth.walls.size())
         throw std::invalid_argument("ground truth: scans[" + std::to_string(k) + "] sees wall " +
@@ -147,10 +151,23 @@ SeenParts seenParts(const GroundTruth& truth, double min_piece_length, std::size
       const Vec2 u = (face.end - face.start) / length;
       double a = u.dot(v.segment.start - face.start), b = u.dot(v.segment.end - face.start);
       if (a > b) std::swap(a, b);
-      a = std::clamp(a, 0.0, length);
-      b = std::clamp(b, 0.0, length);
-      if (b - a >= min_piece_length && b > a && v.beams >= min_piece_beams) seen[v.wall].emplace_back(a, b);
+      interval.emplace_back(std::clamp(a, 0.0, length), std::clamp(b, 0.0, length));
     }
+    // A sight (a piece, or the pieces of a curve seen together) is long and dense enough as a whole.
+    for (const auto& sight : sights(truth.walls, visible, truth.curves))
+    {
+      double length = 0.0;
+      std::size_t beams = 0;
+      for (const std::size_t i : sight)
+      {
+        length += interval[i].second - interval[i].first;
+        beams += visible[i].beams;
+      }
+      if (length < min_piece_length || beams < min_piece_beams) continue;
+      for (const std::size_t i : sight)
+        if (interval[i].second > interval[i].first) seen[visible[i].wall].push_back(interval[i]);
+    }
+  }
   for (auto& parts : seen)
   {
     std::sort(parts.begin(), parts.end());
@@ -174,7 +191,8 @@ std::vector<Vec2> findCorners(const std::vector<Segment2>& walls, const GroundTr
 
 GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls, const SeenParts& seen,
                                              const std::vector<Segment2>& map,
-                                             const GroundTruthParams& params)
+                                             const GroundTruthParams& params,
+                                             const std::vector<std::vector<std::size_t>>& curves)
 {
   params.validate();
   checkFinite(walls, "face");
@@ -188,6 +206,22 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
   std::vector<std::vector<std::size_t>> assoc(walls.size());
   // seen_end[face][0 / 1]: the face's start / end was seen.
   std::vector<std::array<bool, 2>> seen_end(walls.size(), {false, false});
+  // joint[face][end]: where consecutive chords of a curve meet: no end of a wall.
+  std::vector<std::array<bool, 2>> joint(walls.size(), {false, false});
+  for (const auto& curve : curves)
+    for (std::size_t k = 0; k < curve.size(); ++k)
+    {
+      if (curve[k] >= walls.size())
+        throw std::invalid_argument("ground truth metrics: a curve lists face " + std::to_string(curve[k]) +
+                                    " of " + std::to_string(walls.size()));
+      const std::size_t a = curve[k], b = curve[(k + 1) % curve.size()];
+      if (a == b || b >= walls.size()) continue;  // one face; b out of range is reported at its turn
+      for (std::size_t ea = 0; ea < 2; ++ea)
+        for (std::size_t eb = 0; eb < 2; ++eb)
+          if (((ea ? walls[a].end : walls[a].start) - (eb ? walls[b].end : walls[b].start)).norm() <=
+              params.corner_tolerance)
+            joint[a][ea] = joint[b][eb] = true;
+    }
   for (std::size_t w = 0; w < walls.size(); ++w)
   {
     const Segment2& wall = walls[w];
@@ -228,8 +262,8 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
     }
     score.coverage = static_cast<double>(covered) / static_cast<double>(samples);
 
-    seen_end[w] = {seen[w].front().first <= params.coverage_tolerance,
-                   seen[w].back().second >= length - params.coverage_tolerance};
+    seen_end[w] = {!joint[w][0] && seen[w].front().first <= params.coverage_tolerance,
+                   !joint[w][1] && seen[w].back().second >= length - params.coverage_tolerance};
     score.seen_endpoints = std::size_t(seen_end[w][0]) + std::size_t(seen_end[w][1]);
     if (assoc[w].empty())
     {
@@ -308,8 +342,9 @@ GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth, const std
                                              const GroundTruthParams& params)
 {
   params.validate();
-  return evaluateAgainstGroundTruth(
-      truth.walls, seenParts(truth, params.min_seen_length, params.min_seen_beams), map, params);
+  return evaluateAgainstGroundTruth(truth.walls,
+                                    seenParts(truth, params.min_seen_length, params.min_seen_beams), map,
+                                    params, truth.curves);
 }
 
 GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,

@@ -98,7 +98,8 @@ std::vector<double> measureScan(const std::vector<RayHit>& hits, const LaserMode
     else
     {
       r = hits[i].range;
-      if (std::isfinite(r) && laser.sigma > 0.0) r = std::max(0.0, r + laser.sigma * rng.normal());
+      const double sigma = std::isfinite(r) ? laser.sigmaAt(r) : 0.0;
+      if (sigma > 0.0) r = std::max(0.0, r + sigma * rng.normal());
     }
     ranges[i] = r < laser.range_max ? r : kInf;
   }
@@ -247,11 +248,13 @@ SimulationResult simulate(const World& input, const SimulationOptions& options)
   GroundTruth& gt = res.truth;
   gt.world = w.name;
   gt.laser = {laser.beams,     laser.angleMin(), laser.angleIncrement(), laser.range_min,
-              laser.range_max, laser.sigma,      laser.spurious};
+              laser.range_max, laser.sigma,      laser.spurious,         laser.sigma_slope};
   gt.base_to_laser = laser.mounting;
   gt.min_beams = w.min_visible_beams;
   gt.solids = w.walls;
-  gt.walls = faceSegments(wallFaces(w.walls));
+  const std::vector<WallFace> faces = wallFaces(w.walls);
+  gt.walls = faceSegments(faces);
+  gt.curves = curveFaces(w.walls, faces);
 
   Random laser_rng(w.seed, 1);
   std::vector<int> hit_wall(laser.beams);
@@ -280,7 +283,7 @@ SimulationResult simulate(const World& input, const SimulationOptions& options)
     }
     gt.scans.push_back({stamp, laser_pose,
                         visibleWallPieces(gt.walls, laser_pose, laser.angleMin(), laser.angleIncrement(),
-                                          hit_wall, hit_range, w.min_visible_beams)});
+                                          hit_wall, hit_range, w.min_visible_beams, gt.curves)});
     if (options.on_scan) options.on_scan(k + 1, count);
   }
   return res;

@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <utility>
 
 namespace line_map_eval
@@ -60,6 +61,37 @@ std::pair<double, double> insideInterval(const Vec2& p, const Vec2& d, const Rec
   return {s0, s1};
 }
 
+constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+
+Vec2 leftNormal(const Segment2& s)
+{
+  const Vec2 u = (s.end - s.start) / s.length();
+  return {-u.y(), u.x()};
+}
+
+/// The piece of the same arc that ends where wall i starts (next = false) or starts where it ends
+/// (next = true), or kNone.
+std::size_t arcNeighbour(const std::vector<Wall>& walls, std::size_t i, bool next)
+{
+  if (walls[i].arc < 0) return kNone;
+  for (std::size_t j = 0; j < walls.size(); ++j)
+    if (j != i && walls[j].arc == walls[i].arc &&
+        (next ? walls[j].segment.start == walls[i].segment.end
+              : walls[j].segment.end == walls[i].segment.start))
+      return j;
+  return kNone;
+}
+
+/// Offset from the joint of two consecutive pieces to the corner of their solids on the left: along
+/// the bisector of their normals, to where both left sides meet. Symmetric in its computation, so
+/// both pieces get the very same corners and share their end edge exactly.
+Vec2 mitre(const Wall& first, const Wall& second)
+{
+  const Vec2 n1 = leftNormal(first.segment), n2 = leftNormal(second.segment);
+  const Vec2 m = (n1 + n2).normalized();
+  return (0.5 * first.thickness / (0.5 * (m.dot(n1) + m.dot(n2)))) * m;
+}
+
 /// Whether b continues a: collinear, same direction, touching or overlapping.
 bool joins(const Segment2& a, const Segment2& b)
 {
@@ -108,23 +140,27 @@ std::vector<WallFace> wallFaces(const std::vector<Wall>& walls)
       candidates.push_back({Segment2(c.end, c.start), i});
       continue;
     }
+    const std::size_t before = arcNeighbour(walls, i, false), after = arcNeighbour(walls, i, true);
     double extend_start = 0.0, extend_end = 0.0;
     for (std::size_t j = 0; j < walls.size(); ++j)
     {
       if (j == i || walls[j].thickness == 0.0) continue;
       const Segment2& o = walls[j].segment;
-      if (linemap::distanceToSegment(c.start, o.start, o.end) <= kTouch)
+      if (before == kNone && linemap::distanceToSegment(c.start, o.start, o.end) <= kTouch)
         extend_start = std::max(extend_start, 0.5 * walls[j].thickness);
-      if (linemap::distanceToSegment(c.end, o.start, o.end) <= kTouch)
+      if (after == kNone && linemap::distanceToSegment(c.end, o.start, o.end) <= kTouch)
         extend_end = std::max(extend_end, 0.5 * walls[j].thickness);
     }
     const Vec2 u = (c.end - c.start) / c.length();
-    const Vec2 n(-u.y(), u.x());  // left of the centre line
-    const Vec2 a = c.start - extend_start * u, b = c.end + extend_end * u, h = 0.5 * walls[i].thickness * n;
-    solids[i] = {a + h, b + h, b - h, a - h};
+    const Vec2 a = c.start - extend_start * u, b = c.end + extend_end * u,
+               h = 0.5 * walls[i].thickness * leftNormal(c);
+    const Vec2 hs = before == kNone ? h : mitre(walls[before], walls[i]);
+    const Vec2 he = after == kNone ? h : mitre(walls[i], walls[after]);
+    solids[i] = {a + hs, b + he, b - he, a - hs};
     solid[i] = true;
     for (std::size_t k = 0; k < 4; ++k)
-      candidates.push_back({Segment2(solids[i][k], solids[i][(k + 1) % 4]), i});
+      if (!(k == 1 && after != kNone) && !(k == 3 && before != kNone))  // a mitred end has no cap
+        candidates.push_back({Segment2(solids[i][k], solids[i][(k + 1) % 4]), i});
   }
 
   // Remove what lies inside other solids.
@@ -172,6 +208,66 @@ std::vector<WallFace> wallFaces(const std::vector<Wall>& walls)
           ++j;
   }
   return faces;
+}
+
+std::vector<Wall> arcPieces(const Arc& arc, double thickness, double max_sagitta, int index)
+{
+  const double sweep = arc.end - arc.start;
+  if (!(arc.radius > 0.0) || !std::isfinite(arc.radius))
+    throw std::invalid_argument("arc: radius must be > 0, got " + std::to_string(arc.radius));
+  if (!(max_sagitta > 0.0))
+    throw std::invalid_argument("arc: the sagitta bound must be > 0, got " + std::to_string(max_sagitta));
+  if (!(std::abs(sweep) > 1e-9) || !std::isfinite(sweep))
+    throw std::invalid_argument("arc: zero sweep (start and end angles are equal)");
+  if (std::abs(sweep) > 2.0 * linemap::kPi + 1e-9)
+    throw std::invalid_argument("arc: the sweep exceeds 360 degrees");
+  // Largest step with sagitta r (1 - cos(step / 2)) <= max_sagitta.
+  const double step = 2.0 * std::acos(std::clamp(1.0 - max_sagitta / arc.radius, -1.0, 1.0));
+  const double max_step = std::min(step, 0.25 * linemap::kPi);
+  const auto pieces = static_cast<std::size_t>(std::ceil(std::abs(sweep) / max_step - 1e-9));
+  const bool closed = std::abs(std::abs(sweep) - 2.0 * linemap::kPi) <= 1e-9;
+  std::vector<Vec2> vertices;
+  for (std::size_t k = 0; k <= pieces; ++k)
+  {
+    const double a = arc.start + sweep * static_cast<double>(k) / static_cast<double>(pieces);
+    vertices.push_back(closed && k == pieces ? vertices.front()
+                                             : arc.centre + arc.radius * Vec2(std::cos(a), std::sin(a)));
+  }
+  std::vector<Wall> out;
+  for (std::size_t k = 0; k < pieces; ++k)
+    out.push_back({Segment2(vertices[k], vertices[k + 1]), thickness, index});
+  return out;
+}
+
+std::vector<std::vector<std::size_t>> curveFaces(const std::vector<Wall>& walls,
+                                                 const std::vector<WallFace>& faces)
+{
+  int arcs = 0;
+  for (const Wall& w : walls) arcs = std::max(arcs, w.arc + 1);
+  // Per arc and side: (piece, position along it, face).
+  std::vector<std::vector<std::tuple<std::size_t, double, std::size_t>>> sides(
+      2 * static_cast<std::size_t>(arcs));
+  for (std::size_t f = 0; f < faces.size(); ++f)
+  {
+    const std::size_t w = faces[f].wall;
+    if (w >= walls.size() || walls[w].arc < 0) continue;
+    const Segment2& c = walls[w].segment;
+    const Vec2 u = (c.end - c.start) / c.length();
+    const Segment2& s = faces[f].segment;
+    const double along = u.dot((s.end - s.start) / s.length());
+    if (std::abs(along) < 0.5) continue;  // an end cap
+    sides[2 * static_cast<std::size_t>(walls[w].arc) + (along > 0.0 ? 0 : 1)].emplace_back(
+        w, u.dot(s.midpoint() - c.start), f);
+  }
+  std::vector<std::vector<std::size_t>> out;
+  for (auto& side : sides)
+  {
+    if (side.empty()) continue;
+    std::sort(side.begin(), side.end());
+    out.emplace_back();
+    for (const auto& entry : side) out.back().push_back(std::get<2>(entry));
+  }
+  return out;
 }
 
 std::vector<Segment2> faceSegments(const std::vector<WallFace>& faces)

@@ -15,6 +15,36 @@ namespace
 {
 using linemap::Vec2;
 
+std::string baseName(const std::string& path)
+{
+  const auto slash = path.find_last_of('/');
+  std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
+  const auto dot = base.rfind('.');
+  return dot == std::string::npos ? base : base.substr(0, dot);
+}
+
+YAML::Node loadYaml(const std::string& text, const std::string& source)
+{
+  try
+  {
+    return YAML::Load(text);
+  }
+  catch (const YAML::ParserException& e)
+  {
+    throw std::runtime_error(source + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
+                             ": " + e.msg);
+  }
+}
+
+std::string readFile(const std::string& path, const char* what)
+{
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the " + what);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
 class WorldParser
 {
  public:
@@ -93,22 +123,71 @@ class WorldParser
     return s.str();
   }
 
+  /// The `laser` block (of a world or a sensor profile): the keys it gives replace those of `out`.
+  void laser(const YAML::Node& laser, LaserModel& out) const
+  {
+    checkKeys(laser, "laser",
+              {"beams", "fov_deg", "range_min", "range_max", "sigma", "sigma_slope", "spurious", "mounting"});
+    if (laser["beams"])
+    {
+      const double b = number(laser["beams"], "laser/beams");
+      if (b < 2 || b != std::floor(b))
+        fail("laser/beams", "must be an integer >= 2, got " + toString(b), laser["beams"]);
+      out.beams = static_cast<std::size_t>(b);
+    }
+    double fov_deg = out.fov * 180.0 / linemap::kPi;
+    optionalNumber(laser, "laser", "fov_deg", fov_deg, 0.0, true, 360.0);
+    out.fov = fov_deg * linemap::kPi / 180.0;
+    optionalNumber(laser, "laser", "range_min", out.range_min, 0.0, false);
+    optionalNumber(laser, "laser", "range_max", out.range_max, 0.0, true);
+    if (out.range_max <= out.range_min)
+      fail("laser/range_max", "must exceed laser/range_min (" + toString(out.range_min) + ")", laser);
+    optionalNumber(laser, "laser", "sigma", out.sigma, 0.0, false);
+    optionalNumber(laser, "laser", "sigma_slope", out.sigma_slope, 0.0, false);
+    optionalNumber(laser, "laser", "spurious", out.spurious, 0.0, false, 1.0);
+    if (laser["mounting"])
+    {
+      const auto v = numbers(laser["mounting"], "laser/mounting", 3, "[x, y, theta]");
+      out.mounting = linemap::Pose2(v[0], v[1], linemap::normalizeAngle(v[2]));
+    }
+  }
+
+  /// An arc entry [cx, cy, radius, start_deg, end_deg] as its chain of pieces.
+  std::vector<Wall> arc(const YAML::Node& n, const std::string& key, double thickness, double sagitta,
+                        int index) const
+  {
+    const auto v = numbers(n, key, 5, "[cx, cy, radius, start_deg, end_deg]");
+    if (!(v[2] > 0.0)) fail(key, "the radius must be > 0, got " + toString(v[2]), n);
+    if (v[3] == v[4]) fail(key, "the arc has zero sweep (start_deg = end_deg = " + toString(v[3]) + ")", n);
+    if (std::abs(v[4] - v[3]) > 360.0)
+      fail(key, "the sweep end_deg - start_deg must be at most 360, got " + toString(v[4] - v[3]), n);
+    constexpr double deg = linemap::kPi / 180.0;
+    return arcPieces({Vec2(v[0], v[1]), v[2], v[3] * deg, v[4] * deg}, thickness, sagitta, index);
+  }
+
+  SensorProfile profile(const YAML::Node& root, const LaserModel& base) const
+  {
+    if (!root.IsDefined() || root.IsNull()) fail("(top level)", "the file is empty", root);
+    checkKeys(root, "", {"name", "laser"});
+    SensorProfile p;
+    p.name = root["name"] ? root["name"].as<std::string>() : baseName(source_);
+    p.laser = base;
+    if (!root["laser"]) fail("laser", "missing key (the sensor's laser block, as in a world file)", root);
+    laser(root["laser"], p.laser);
+    return p;
+  }
+
   World parse(const YAML::Node& root) const
   {
     World w;
     w.source = source_;
     if (!root.IsDefined() || root.IsNull()) fail("(top level)", "the file is empty", root);
     checkKeys(root, "",
-              {"name", "seed", "walls", "wall_thickness", "path", "laser", "odometry", "min_visible_beams"});
+              {"name", "seed", "walls", "wall_thickness", "arc_sagitta", "path", "laser", "odometry",
+               "min_visible_beams"});
 
     if (root["name"]) w.name = root["name"].as<std::string>();
-    if (w.name.empty())
-    {
-      const auto slash = source_.find_last_of('/');
-      std::string base = slash == std::string::npos ? source_ : source_.substr(slash + 1);
-      const auto dot = base.rfind('.');
-      w.name = dot == std::string::npos ? base : base.substr(0, dot);
-    }
+    if (w.name.empty()) w.name = baseName(source_);
     if (root["seed"])
     {
       const double s = number(root["seed"], "seed");
@@ -130,12 +209,20 @@ class WorldParser
       if (w.wall_thickness < 0.0)
         fail("wall_thickness", "must be >= 0, got " + toString(w.wall_thickness), root["wall_thickness"]);
     }
+    if (root["arc_sagitta"])
+    {
+      w.arc_sagitta = number(root["arc_sagitta"], "arc_sagitta");
+      if (!(w.arc_sagitta > 0.0))
+        fail("arc_sagitta", "must be > 0, got " + toString(w.arc_sagitta), root["arc_sagitta"]);
+    }
     const YAML::Node walls = root["walls"];
-    if (!walls)
-      fail("walls", "missing key (a list of [x1, y1, x2, y2] or {segment: [x1, y1, x2, y2], thickness: t})",
-           root);
+    const char* kWallForms =
+        "[x1, y1, x2, y2], {segment: [x1, y1, x2, y2], thickness: t} or {arc: [cx, cy, radius, start_deg, "
+        "end_deg], thickness: t}";
+    if (!walls) fail("walls", std::string("missing key (a list of ") + kWallForms + ")", root);
     if (!walls.IsSequence() || walls.size() == 0)
-      fail("walls", "expected a non-empty list of [x1, y1, x2, y2] or {segment: [...], thickness: t}", walls);
+      fail("walls", std::string("expected a non-empty list of ") + kWallForms, walls);
+    int arcs = 0;
     for (std::size_t i = 0; i < walls.size(); ++i)
     {
       const std::string key = "walls[" + std::to_string(i) + "]";
@@ -144,9 +231,19 @@ class WorldParser
       const bool with_thickness = walls[i].IsMap();
       if (with_thickness)
       {
-        checkKeys(walls[i], key, {"segment", "thickness"});
-        if (!walls[i]["segment"]) fail(key + "/segment", "missing key ([x1, y1, x2, y2])", walls[i]);
+        checkKeys(walls[i], key, {"segment", "arc", "thickness"});
+        if (walls[i]["segment"] && walls[i]["arc"])
+          fail(key, "give either segment or arc, not both", walls[i]);
+        if (!walls[i]["segment"] && !walls[i]["arc"])
+          fail(key + "/segment",
+               "missing key ([x1, y1, x2, y2], or arc: [cx, cy, radius, start_deg, end_deg])", walls[i]);
         optionalNumber(walls[i], key, "thickness", wall.thickness, 0.0, false);
+        if (const YAML::Node a = walls[i]["arc"])
+        {
+          const auto pieces = arc(a, key + "/arc", wall.thickness, w.arc_sagitta, arcs++);
+          w.walls.insert(w.walls.end(), pieces.begin(), pieces.end());
+          continue;
+        }
       }
       // (A new Node, not an assignment: assigning a yaml-cpp Node overwrites the node it refers to.)
       const YAML::Node at = with_thickness ? walls[i]["segment"] : walls[i];
@@ -186,32 +283,7 @@ class WorldParser
       w.path.scans = static_cast<std::size_t>(n);
     }
 
-    if (const YAML::Node laser = root["laser"])
-    {
-      checkKeys(laser, "laser",
-                {"beams", "fov_deg", "range_min", "range_max", "sigma", "spurious", "mounting"});
-      if (laser["beams"])
-      {
-        const double b = number(laser["beams"], "laser/beams");
-        if (b < 2 || b != std::floor(b))
-          fail("laser/beams", "must be an integer >= 2, got " + toString(b), laser["beams"]);
-        w.laser.beams = static_cast<std::size_t>(b);
-      }
-      double fov_deg = w.laser.fov * 180.0 / linemap::kPi;
-      optionalNumber(laser, "laser", "fov_deg", fov_deg, 0.0, true, 360.0);
-      w.laser.fov = fov_deg * linemap::kPi / 180.0;
-      optionalNumber(laser, "laser", "range_min", w.laser.range_min, 0.0, false);
-      optionalNumber(laser, "laser", "range_max", w.laser.range_max, 0.0, true);
-      if (w.laser.range_max <= w.laser.range_min)
-        fail("laser/range_max", "must exceed laser/range_min (" + toString(w.laser.range_min) + ")", laser);
-      optionalNumber(laser, "laser", "sigma", w.laser.sigma, 0.0, false);
-      optionalNumber(laser, "laser", "spurious", w.laser.spurious, 0.0, false, 1.0);
-      if (laser["mounting"])
-      {
-        const auto v = numbers(laser["mounting"], "laser/mounting", 3, "[x, y, theta]");
-        w.laser.mounting = linemap::Pose2(v[0], v[1], linemap::normalizeAngle(v[2]));
-      }
-    }
+    if (const YAML::Node l = root["laser"]) laser(l, w.laser);
 
     if (const YAML::Node odo = root["odometry"])
     {
@@ -252,28 +324,35 @@ double segmentDistance(const Vec2& p1, const Vec2& p2, const Vec2& q1, const Vec
 
 World parseWorld(const std::string& yaml_text, const std::string& source)
 {
-  YAML::Node root;
-  try
-  {
-    root = YAML::Load(yaml_text);
-  }
-  catch (const YAML::ParserException& e)
-  {
-    throw std::runtime_error(source + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
-                             ": " + e.msg);
-  }
-  World w = WorldParser(source).parse(root);
+  World w = WorldParser(source).parse(loadYaml(yaml_text, source));
   validateWorld(w);
   return w;
 }
 
 World loadWorld(const std::string& path)
 {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open the world file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parseWorld(text.str(), path);
+  return parseWorld(readFile(path, "world file"), path);
+}
+
+SensorProfile parseSensorProfile(const std::string& yaml_text, const std::string& source,
+                                 const LaserModel& base)
+{
+  return WorldParser(source).profile(loadYaml(yaml_text, source), base);
+}
+
+SensorProfile loadSensorProfile(const std::string& path, const LaserModel& base)
+{
+  return parseSensorProfile(readFile(path, "sensor profile"), path, base);
+}
+
+World withSensorProfile(const World& world, const std::string& profile_path)
+{
+  World w = world;
+  const SensorProfile p = loadSensorProfile(profile_path, world.laser);
+  w.laser = p.laser;
+  w.name = world.name + " / " + p.name;
+  validateWorld(w);
+  return w;
 }
 
 void validateWorld(const World& w)
@@ -292,6 +371,8 @@ void validateWorld(const World& w)
   if (!(w.laser.range_max > w.laser.range_min) || w.laser.range_min < 0.0)
     fail("laser/range_max", "0 <= range_min < range_max is required");
   if (!(w.laser.sigma >= 0.0)) fail("laser/sigma", "must be >= 0");
+  if (!(w.laser.sigma_slope >= 0.0)) fail("laser/sigma_slope", "must be >= 0");
+  if (!(w.arc_sagitta > 0.0)) fail("arc_sagitta", "must be > 0");
   if (!(w.laser.spurious >= 0.0 && w.laser.spurious <= 1.0)) fail("laser/spurious", "must be in [0, 1]");
 
   const auto& wp = w.path.waypoints;

@@ -21,6 +21,7 @@
 #include "line_map_eval/relations.hpp"
 #include "line_map_eval/report.hpp"
 #include "line_map_eval/slam_recording.hpp"
+#include "line_map_eval/world.hpp"
 #include "line_map_merging/merger.hpp"
 
 namespace fs = std::filesystem;
@@ -35,7 +36,7 @@ void usage(std::ostream& out)
   out << "usage: linemap_batch DATASET [--corrected LOG | --slam [--relations FILE]] [--extractor NAME]\n"
          "                     [--merger NAME]...\n"
          "                     [--param key=value]... [--config FILE]... [--config-dir DIR] [--out DIR]\n"
-         "                     [--every N] [--no-progress] [--no-figures] [--help]\n"
+         "                     [--every N] [--sensor FILE] [--no-progress] [--no-figures] [--help]\n"
          "\n"
          "DATASET is a raw CARMEN log (with --corrected: its corrected keyframe log), a corrected or\n"
          "pre-registered CARMEN log alone, a world file (config/worlds/*.yaml, simulated in-process) or a\n"
@@ -59,6 +60,8 @@ void usage(std::ostream& out)
          "  --out DIR         write DIR/report.json, DIR/report.md and DIR/<merger>/ figures and map\n"
          "                    files (default: linemap_batch_out)\n"
          "  --every N         keyframes between trajectory corrections (default 50; 0: only at the end)\n"
+         "  --sensor FILE     (a world file) simulate with this sensor profile (config/sensors/*.yaml):\n"
+         "                    its laser block replaces the world's key by key\n"
          "  --no-progress     no progress bars\n"
          "  --no-figures      write the reports and map files only\n"
          "  --replay          (a .bag) feed the bag's messages in bag order to the online mapper and\n"
@@ -108,7 +111,7 @@ int main(int argc, char** argv)
   std::string dataset_path, corrected, config_dir, out_dir = "linemap_batch_out";
   std::vector<std::string> configs, overrides;
   bool replay = false, slam = false;
-  std::string relations;
+  std::string relations, sensor;
   BatchOptions options;
   options.progress = isatty(STDERR_FILENO) != 0;
   try
@@ -162,6 +165,8 @@ int main(int argc, char** argv)
         options.figure_formats = 0;
       else if (arg == "--slam")
         slam = true;
+      else if (arg == "--sensor")
+        sensor = value();
       else if (arg == "--relations")
         relations = value();
       else if (arg == "--replay")
@@ -215,6 +220,9 @@ int main(int argc, char** argv)
       applyOverride(options.params, o);
     }
     options.out_dir = out_dir;
+    if (!sensor.empty() && !isWorldFile(dataset_path))
+      throw std::invalid_argument("--sensor goes with a world file (config/worlds/*.yaml), not " +
+                                  dataset_path);
 
     if (replay)
     {
@@ -273,7 +281,9 @@ int main(int argc, char** argv)
       ProgressBar bar("simulate", 0, options.progress);
       SimulationOptions sim;
       sim.on_scan = [&bar](std::size_t done, std::size_t) { bar.update(done); };
-      dataset = loadSimulatedWorld(dataset_path, sim);
+      World world = loadWorld(dataset_path);
+      if (!sensor.empty()) world = withSensorProfile(world, sensor);
+      dataset = simulatedDataset(world, sim);
       bar.finish();
     }
     else if (fs::path(dataset_path).extension() == ".bag")

@@ -32,6 +32,8 @@ Simulates one lap of the world's closed path and writes
                   pose and the visible face pieces
 
 options (override the world file):
+  --sensor FILE      a sensor profile (config/sensors/*.yaml): its laser block replaces the
+                     world's key by key
   --seed N           random seed (noise, spurious readings, odometry drift)
   --scans N          N scans spread evenly over one lap (default: one every path/scan_period)
   --beams N          beams over the same field of view
@@ -81,7 +83,7 @@ double parseNumber(const std::string& option, const char* text, double min, doub
 int main(int argc, char** argv)
 {
   using namespace line_map_eval;
-  std::string world_path, bag_path;
+  std::string world_path, bag_path, sensor_path;
   SimulationOptions options;
   std::size_t every = 0;
   bool progress = true;
@@ -98,6 +100,8 @@ int main(int argc, char** argv)
       std::cout << kUsage;
       return 0;
     }
+    else if (arg == "--sensor")
+      sensor_path = value();
     else if (arg == "--seed")
       options.seed = static_cast<std::uint32_t>(parseCount(arg, value(), 0, 4294967295ull));
     else if (arg == "--scans")
@@ -127,7 +131,8 @@ int main(int argc, char** argv)
 
   try
   {
-    const World world = loadWorld(world_path);
+    World world = loadWorld(world_path);
+    if (!sensor_path.empty()) world = withSensorProfile(world, sensor_path);
     const auto t0 = std::chrono::steady_clock::now();
     SimulationResult sim;
     {
@@ -148,9 +153,11 @@ int main(int argc, char** argv)
     std::cout << "simulate_world: " << w.name << " (" << world_path << "): " << w.walls.size()
               << " walls, path " << sim.path_length << " m, " << rec.scans.size() << " scans of "
               << w.laser.beams << " beams over " << w.laser.fov * 180.0 / linemap::kPi << " deg\n";
-    std::cout << "simulate_world: range noise " << std::setprecision(3) << w.laser.sigma << " m, "
-              << std::setprecision(1) << 100.0 * w.laser.spurious << " % spurious, seed " << w.seed
-              << ", odometry drift " << (w.odometry.isZero() ? "off" : "on") << "\n";
+    std::cout << "simulate_world: range noise " << std::setprecision(3) << w.laser.sigma << " m"
+              << (w.laser.sigma_slope > 0.0 ? " + " + std::to_string(w.laser.sigma_slope) + " x range" : "")
+              << ", range_max " << std::setprecision(1) << w.laser.range_max << " m, " << std::setprecision(1)
+              << 100.0 * w.laser.spurious << " % spurious, seed " << w.seed << ", odometry drift "
+              << (w.odometry.isZero() ? "off" : "on") << "\n";
     const linemap::Pose2 err = rec.keyframes.back().pose.inverse() * rec.scans.back().odom;
     std::cout << "simulate_world: odometry error at the last scan " << std::setprecision(3)
               << std::hypot(err.x, err.y) << " m, " << std::abs(err.theta) * 180.0 / linemap::kPi

@@ -50,6 +50,7 @@ struct TruthLaser
   double range_max = 0.0;
   double sigma = 0.0;
   double spurious = 0.0;
+  double sigma_slope = 0.0;  ///< range noise std sigma + sigma_slope r (key absent: 0)
 };
 
 struct GroundTruth
@@ -61,17 +62,32 @@ struct GroundTruth
   std::vector<Wall> solids;   ///< the world's walls (centre lines and thicknesses)
   /// The true lines: the faces of `solids` (wallFaces()), free side on the left.
   std::vector<linemap::Segment2> walls;
+  /// The faces of each curved surface (a side of an arc: curveFaces()), in order along it. A curve
+  /// is seen as a whole: a scan sights its consecutive visible faces together, as an extractor fits
+  /// lines across the chords of a curve (key `curves`, absent: none).
+  std::vector<std::vector<std::size_t>> curves;
   std::vector<TruthScan> scans;
 };
 
 /// The wall pieces one scan sees: `hit_wall[i]` is the wall (face) beam i's noiseless ray ends
 /// on (-1: none or beyond range) and `hit_range[i]` its true range; beam i points at
 /// laser_pose.theta + angle_min + i * angle_increment. A wall hit by >= min_beams beams is
-/// listed with the span between its extreme hit points, sorted by wall index.
+/// listed with the span between its extreme hit points, sorted by wall index. A face of one of
+/// `curves` counts with its sight (sights()): its pieces are listed when together hit by >= min_beams.
 std::vector<VisibleWall> visibleWallPieces(const std::vector<linemap::Segment2>& walls,
                                            const linemap::Pose2& laser_pose, double angle_min,
                                            double angle_increment, const std::vector<int>& hit_wall,
-                                           const std::vector<double>& hit_range, std::size_t min_beams);
+                                           const std::vector<double>& hit_range, std::size_t min_beams,
+                                           const std::vector<std::vector<std::size_t>>& curves = {});
+
+/// The sights of one scan's visible pieces: indices into `visible`, one group per piece of a
+/// straight face, and one per run of consecutive faces of a curve that are all visible in the scan
+/// and share their ends (the last and first faces of a closed curve too), in order of their first
+/// piece. `walls` are the faces `visible` and `curves` index; throws std::invalid_argument for a
+/// curve listing a face beyond them.
+std::vector<std::vector<std::size_t>> sights(const std::vector<linemap::Segment2>& walls,
+                                             const std::vector<VisibleWall>& visible,
+                                             const std::vector<std::vector<std::size_t>>& curves);
 
 /// OUT.bag -> OUT.truth.yaml (any other name gets ".truth.yaml" appended).
 std::string truthPathForBag(const std::string& bag_path);

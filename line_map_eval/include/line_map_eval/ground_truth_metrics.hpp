@@ -41,8 +41,9 @@ struct GroundTruthParams
 /// the face's start.
 using SeenParts = std::vector<std::vector<std::pair<double, double>>>;
 
-/// The union, per face of `truth.walls`, of the visible pieces of every scan that are at least
-/// `min_piece_length` long and hit by at least `min_piece_beams` beams.
+/// The union, per face of `truth.walls`, of the visible pieces of every scan whose sight (sights():
+/// the piece alone, or the run of consecutive faces of a curve it is part of) is at least
+/// `min_piece_length` long and hit by at least `min_piece_beams` beams in total.
 SeenParts seenParts(const GroundTruth& truth, double min_piece_length, std::size_t min_piece_beams = 0);
 
 struct WallScore
@@ -103,12 +104,15 @@ struct GroundTruthResult
 /// map segment associated with one of its faces (a segment on the other side of a 10 cm wall is
 /// not a vertex of this corner). Throws std::invalid_argument naming the face or segment for
 /// non-finite coordinates or a zero-length face, or when `seen` does not have one entry per face.
+/// Where consecutive faces of one of `curves` meet is a joint of chords, not the end of a wall: such
+/// ends are never seen, mapped or scored, so the endpoint figures keep to the true wall ends.
 GroundTruthResult evaluateAgainstGroundTruth(const std::vector<linemap::Segment2>& walls,
                                              const SeenParts& seen, const std::vector<linemap::Segment2>& map,
-                                             const GroundTruthParams& params);
+                                             const GroundTruthParams& params,
+                                             const std::vector<std::vector<std::size_t>>& curves = {});
 
 /// Against a simulation's ground truth: its faces over their parts seen in sights (seenParts with
-/// min_seen_length and min_seen_beams).
+/// min_seen_length and min_seen_beams), its curves' joints excluded.
 GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth,
                                              const std::vector<linemap::Segment2>& map,
                                              const GroundTruthParams& params);

@@ -50,7 +50,7 @@ std::vector<RayHit> castScan(const std::vector<linemap::Segment2>& faces, const 
                              const LaserModel& laser);
 
 /// Measured ranges from true hits. Each beam is, with probability `laser.spurious`, a
-/// reading uniform in [0, range_max); otherwise the true range plus N(0, sigma^2).
+/// reading uniform in [0, range_max); otherwise the true range r plus N(0, laser.sigmaAt(r)^2).
 /// A beam whose result is no hit or >= range_max reads +inf (REP 117: no return; it is
 /// also > range_max, so LaserScan consumers discard it). `spurious_flags` (optional)
 /// receives 1 for the beams made spurious.

@@ -19,12 +19,16 @@ struct LaserModel
   double fov = linemap::kPi;               ///< [rad]; YAML key fov_deg in degrees
   double range_min = 0.02;                 ///< [m]
   double range_max = 30.0;                 ///< [m]
-  double sigma = 0.01;                     ///< Gaussian range noise [m]
+  double sigma = 0.01;                     ///< Gaussian range noise at range 0 [m]
+  double sigma_slope = 0.0;                ///< growth of the noise std with range [m per m]
   double spurious = 0.0;                   ///< fraction of readings replaced by uniform [0, range_max]
   linemap::Pose2 mounting{0.1, 0.0, 0.0};  ///< base_link -> laser
 
   double angleMin() const { return -0.5 * fov; }
   double angleIncrement() const { return beams > 1 ? fov / static_cast<double>(beams - 1) : 0.0; }
+  /// Std of the range noise of a reading at true range r: sigma + sigma_slope r (spot size and
+  /// return energy degrade with distance, so far readings scatter more).
+  double sigmaAt(double r) const { return sigma + sigma_slope * r; }
 };
 
 /// Odometry error accumulated per scan step (random walks plus a systematic curve).
@@ -59,12 +63,18 @@ struct PathModel
 /// as two lines 10 cm apart, as in a real building.
 inline constexpr double kDefaultWallThickness = 0.10;
 
+/// Largest sagitta of an arc's pieces when the world file has no `arc_sagitta` [m]: half the
+/// smallest range noise std of our sensor profiles, so no laser tells the chain from the true
+/// arc, while the pieces stay tens of centimetres long on radii of metres.
+inline constexpr double kDefaultArcSagitta = 0.005;
+
 struct World
 {
   std::string name;    ///< YAML `name`, else the file's base name
   std::string source;  ///< the file it came from (for messages)
   std::vector<Wall> walls;
   double wall_thickness = kDefaultWallThickness;  ///< YAML `wall_thickness`: of walls without their own [m]
+  double arc_sagitta = kDefaultArcSagitta;        ///< YAML `arc_sagitta`: bound of the arcs' pieces [m]
   PathModel path;
   LaserModel laser;
   OdometryModel odometry;
@@ -78,6 +88,21 @@ World loadWorld(const std::string& path);
 
 /// Same from YAML text; `source` names it in error messages.
 World parseWorld(const std::string& yaml_text, const std::string& source);
+
+/// A sensor profile (config/sensors/*.yaml): an optional `name` and a `laser` block with the keys
+/// of a world's `laser` block, which replace those of `base` key by key (a key it omits keeps the
+/// world's value). Throws std::runtime_error naming the file, the key and the line.
+struct SensorProfile
+{
+  std::string name;  ///< YAML `name`, else the file's base name
+  LaserModel laser;
+};
+SensorProfile loadSensorProfile(const std::string& path, const LaserModel& base = {});
+SensorProfile parseSensorProfile(const std::string& yaml_text, const std::string& source,
+                                 const LaserModel& base = {});
+
+/// `world` seen with the sensor of `profile_path`: its laser replaced, its name "<world> / <profile>".
+World withSensorProfile(const World& world, const std::string& profile_path);
 
 /// Checks the values and that every leg of the path keeps `clearance` from every wall's surface
 /// (its centre line less half its thickness); throws std::runtime_error naming `world.source`
