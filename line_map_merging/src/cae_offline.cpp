@@ -5,7 +5,7 @@ namespace line_map_merging
 {
 CaeOffline::CaeOffline(const CaeParams& params) : params_(params)
 {
-  params_.fusion.validate();
+  params_.validate();
 }
 
 std::vector<MapSegment> CaeOffline::compute() const

@@ -20,12 +20,27 @@ CaeParams CaeParams::fromParams(const linemap::ParamSet& params)
   p.map_merge = params.getBool("map_merge", p.map_merge);
   p.absorb_contained = params.getBool("absorb_contained", p.absorb_contained);
   p.regroup_on_adjust = params.getBool("regroup_on_adjust", p.regroup_on_adjust);
+  p.resolve_crossings = params.getBool("resolve_crossings", p.resolve_crossings);
+  p.crossing_overhang = params.getDouble("crossing_overhang", p.crossing_overhang);
+  p.crossing_chain_angle = params.getDouble("crossing_chain_angle", p.crossing_chain_angle);
+  p.validate();
   return p;
+}
+
+void CaeParams::validate() const
+{
+  fusion.validate();
+  if (!(crossing_overhang >= 0.0 && std::isfinite(crossing_overhang)))
+    throw linemap::ParameterError("parameter 'crossing_overhang': " + std::to_string(crossing_overhang) +
+                                  " is not a finite distance >= 0 m");
+  if (!(crossing_chain_angle >= 0.0 && crossing_chain_angle < 0.5 * linemap::kPi))
+    throw linemap::ParameterError("parameter 'crossing_chain_angle': " +
+                                  std::to_string(crossing_chain_angle) + " is not in [0, pi/2) rad");
 }
 
 CaeRlsm::CaeRlsm(const CaeParams& params) : params_(params)
 {
-  params_.fusion.validate();
+  params_.validate();
 }
 
 AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
@@ -68,7 +83,13 @@ AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
     touched.insert(insertSegment(global, leaf));
     ++result.merged;
   }
-  if (params_.map_merge) mergeMapSegments(std::move(touched));
+  std::set<std::uint64_t> changed;
+  if (params_.map_merge) mergeMapSegments(touched, &changed);
+  if (params_.resolve_crossings)
+  {
+    changed.insert(touched.begin(), touched.end());
+    resolveCrossings(std::move(changed));
+  }
   return result;
 }
 

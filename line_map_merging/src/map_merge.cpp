@@ -12,7 +12,7 @@ namespace line_map_merging
 {
 namespace bgi = boost::geometry::index;
 
-std::size_t CaeRlsm::mergeMapSegments(std::set<std::uint64_t> pending)
+std::size_t CaeRlsm::mergeMapSegments(std::set<std::uint64_t> pending, std::set<std::uint64_t>* changed)
 {
   std::size_t merged = 0;
   std::vector<std::uint64_t> candidates;
@@ -45,6 +45,7 @@ std::size_t CaeRlsm::mergeMapSegments(std::set<std::uint64_t> pending)
     target.moments = moments;
     target.segment = line.segment();
     indexInsert(candidates.front(), target);
+    if (changed) changed->insert(candidates.front());
     // The fused segment moved and grew: it may now meet others.
     pending.insert(candidates.front());
   }
@@ -62,17 +63,25 @@ std::size_t CaeRlsm::regroup()
   index_.clear();
   index_stale_ = false;
   // OTM-ILSM over every leaf in arrival order, keyframe by keyframe, as if merged on these poses.
+  // The same steps after each keyframe as addKeyframe.
   std::set<std::uint64_t> touched;
+  const auto endOfKeyframe = [&]
+  {
+    std::set<std::uint64_t> changed;
+    if (params_.map_merge) mergeMapSegments(touched, &changed);
+    if (params_.resolve_crossings)
+    {
+      changed.insert(touched.begin(), touched.end());
+      resolveCrossings(std::move(changed));
+    }
+    touched.clear();
+  };
   for (std::uint32_t l = 0; l < leaves_.size(); ++l)
   {
-    if (params_.map_merge && l > 0 && leaves_[l].slot != leaves_[l - 1].slot)
-    {
-      mergeMapSegments(std::move(touched));
-      touched.clear();
-    }
+    if (l > 0 && leaves_[l].slot != leaves_[l - 1].slot) endOfKeyframe();
     touched.insert(insertSegment(worldLeaf(l), l));
   }
-  if (params_.map_merge) mergeMapSegments(std::move(touched));
+  endOfKeyframe();
 
   // Ids follow the leaves: in order of their smallest old id, each new segment takes the smallest
   // old id of its leaves that no segment took before it; a segment whose old ids are all taken (a

@@ -115,6 +115,15 @@ std::vector<std::uint32_t> CaeRlsm::splitInconsistentLeaves(Node& node) const
   }
 }
 
+void CaeRlsm::resolveAllCrossings()
+{
+  // Re-fusing restored every segment's full extent from its leaves: the crossings come back.
+  if (!params_.resolve_crossings) return;
+  std::set<std::uint64_t> all;
+  for (const auto& entry : nodes_) all.insert(all.end(), entry.first);
+  resolveCrossings(std::move(all));
+}
+
 void CaeRlsm::rebuildIndex()
 {
   index_stale_ = false;
@@ -245,7 +254,11 @@ AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap:
               });
   // Every box moved: the index is rebuilt in one go (bulk loading) when next searched.
   index_stale_ = true;
-  if (!params_.consistent_adjustment) return result;
+  if (!params_.consistent_adjustment)
+  {
+    resolveAllCrossings();
+    return result;
+  }
 
   // Split leaves re-enter in their original (chronological) order, through OTM-ILSM.
   std::vector<std::uint32_t> orphans;
@@ -254,6 +267,7 @@ AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap:
   result.split = orphans.size();
   for (std::uint32_t l : orphans) insertSegment(worldLeaf(l), l);
   result.merged = mergeConsistentSegments(arena);
+  resolveAllCrossings();
   return result;
 }
 

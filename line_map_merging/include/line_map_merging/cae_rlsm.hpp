@@ -41,10 +41,21 @@ struct CaeParams
   /// leaf in arrival order under the new poses, instead of re-fusing each map segment's own leaves;
   /// ids carry over by the leaves. Groups formed on drifted poses otherwise stay as formed.
   bool regroup_on_adjust = true;
+  /// Crossing resolution (crossing_resolution.cpp): no two map segments may cross (both running on past
+  /// their intersection by more than crossing_overhang). A pair crossing at up to crossing_chain_angle
+  /// (same facing side) is one bent wall: its originals are split at the bend, each side re-fused
+  /// separately, and the two pieces cut at the vertex into a chain. A pair crossing at a larger angle
+  /// loses its least supported arm (a T). Off = the paper's behaviour.
+  bool resolve_crossings = true;
+  double crossing_overhang = 0.01;  ///< [m] overhangs up to this are not crossings (an exact T or L)
+  double crossing_chain_angle = 20.0 * linemap::kPi / 180.0;  ///< [rad] largest heading deviation of a chain
 
   /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge",
-  /// "absorb_contained", "regroup_on_adjust".
+  /// "absorb_contained", "regroup_on_adjust", "resolve_crossings", "crossing_overhang",
+  /// "crossing_chain_angle".
   static CaeParams fromParams(const linemap::ParamSet& params);
+  /// Throws linemap::ParameterError naming the key for an out-of-range value.
+  void validate() const;
 };
 
 class CaeRlsm : public Merger
@@ -108,7 +119,16 @@ class CaeRlsm : public Merger
   /// Map-level merge (map_merge.cpp): merges each pending map segment with the map segments it meets
   /// the conditions with, either way round, re-queueing the result, until none is left; the smallest
   /// id survives and takes the others' leaves. Returns how many map segments were merged away.
-  std::size_t mergeMapSegments(std::set<std::uint64_t> pending);
+  /// `changed` (optional) receives the ids of the surviving segments that a merge changed.
+  std::size_t mergeMapSegments(std::set<std::uint64_t> pending, std::set<std::uint64_t>* changed = nullptr);
+  /// Crossing resolution (crossing_resolution.cpp): resolves every crossing of the pending map segments,
+  /// re-queueing what it changes, until none of them crosses another. Returns how many pairs it resolved.
+  std::size_t resolveCrossings(std::set<std::uint64_t> pending);
+  /// One crossing pair at `x`, a < b. `trim_only`: cut, never move originals or merge.
+  void resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool trim_only,
+                   std::set<std::uint64_t>& pending);
+  /// Merges map segment `from` into `into` (leaves, re-fused); the caller re-queues `into`.
+  void absorbNode(std::uint64_t into, std::uint64_t from);
   /// Rebuilds the map from the leaves under the current poses (map_merge.cpp); each new map segment
   /// keeps the smallest old id among its leaves' not taken by a segment before it. Returns the count.
   std::size_t regroup();
@@ -124,6 +144,8 @@ class CaeRlsm : public Merger
   std::vector<std::uint32_t> splitInconsistentLeaves(Node& node) const;
   std::size_t mergeConsistentSegments(tbb::task_arena& arena);
   void rebuildIndex();
+  /// resolveCrossings over every map segment (with resolve_crossings), after re-fusing.
+  void resolveAllCrossings();
 
   CaeParams params_;
   std::vector<KeyframeInfo> keyframes_;  // by slot, in arrival order

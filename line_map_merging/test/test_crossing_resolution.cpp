@@ -1,0 +1,218 @@
+// Crossing resolution in CAE-RLSM: a wall bent by 3 degrees, seen piece by piece (and, near the bend,
+// as single unsplit chords), must come out as a chain meeting at the bend, incrementally and after
+// MP-GMA re-fuses it under a changed trajectory; the provenance stays whole.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "line_map_merging/cae_rlsm.hpp"
+#include "line_map_merging/crossing_pairs.hpp"
+#include "synthetic_world.hpp"
+
+using line_map_merging::CaeParams;
+using line_map_merging::CaeRlsm;
+using line_map_merging::Keyframe;
+using line_map_merging::MapSegment;
+using linemap::Pose2;
+using linemap::Segment2;
+using linemap::Vec2;
+
+namespace
+{
+const double kBend = 3.0 * linemap::kPi / 180.0;
+// The wall runs east with its free side (north) on the left: (0, 0) -> bend (6, 0) -> (12, 6 tan 3deg).
+const Vec2 kStart(0.0, 0.0), kVertex(6.0, 0.0), kEnd(12.0, 6.0 * std::tan(kBend));
+
+struct Walk
+{
+  std::vector<Pose2> truth;
+  std::vector<Keyframe> keyframes;
+  std::size_t leaves = 0;
+};
+
+/// Keyframes every 0.5 m along y = 2 m, seeing the wall within 3.5 m. A view across the bend is split
+/// there unless one side is shorter than 1 m: then it is one straight chord between its visible ends
+/// (less than 5 cm off the wall, within an extractor's tolerance). Posed at `believed` (truth when empty).
+Walk walk(const std::vector<Pose2>& believed = {})
+{
+  Walk w;
+  const Segment2 arm1(kStart, kVertex), arm2(kVertex, kEnd);
+  for (int i = 0; i <= 24; ++i)
+  {
+    const Pose2 truth(0.5 * i, 2.0, 0.0);
+    w.truth.push_back(truth);
+    const auto p1 = synthetic::visiblePart(arm1, truth.translation(), 3.5, 0.3);
+    const auto p2 = synthetic::visiblePart(arm2, truth.translation(), 3.5, 0.3);
+    std::vector<Segment2> world;
+    if (p1 && p2 && std::min(p1->length(), p2->length()) < 1.0)
+      world.emplace_back(p1->start, p2->end);
+    else
+    {
+      if (p1) world.push_back(*p1);
+      if (p2) world.push_back(*p2);
+    }
+    Keyframe k;
+    k.index = static_cast<std::uint64_t>(i);
+    k.stamp = i;
+    k.pose = believed.empty() ? truth : believed[static_cast<std::size_t>(i)];
+    const Pose2 inv = truth.inverse();
+    for (const Segment2& s : world) k.segments.push_back(s.transformed(inv));
+    w.leaves += k.segments.size();
+    w.keyframes.push_back(k);
+  }
+  return w;
+}
+
+std::vector<Segment2> segmentsOf(const std::vector<MapSegment>& map)
+{
+  std::vector<Segment2> out;
+  for (const MapSegment& m : map) out.push_back(m.segment);
+  return out;
+}
+
+/// The map must be a chain of two pieces, one per arm, meeting within 1 cm of each other and within
+/// 5 cm of the true bend (6, 0); every leaf must be under a map segment.
+void expectChain(const CaeRlsm& cae, std::size_t leaves)
+{
+  const std::vector<MapSegment> map = cae.map();
+  EXPECT_TRUE(line_map_merging::findCrossingPairs(segmentsOf(map), 0.0).empty());
+  ASSERT_EQ(map.size(), 2u);
+  const bool first_west = map[0].segment.start.x() < map[1].segment.start.x();
+  const Segment2& west = map[first_west ? 0 : 1].segment;
+  const Segment2& east = map[first_west ? 1 : 0].segment;
+  // Each piece follows its arm: headings 0 and 3 deg (a chord of both would be about 1.5 deg).
+  EXPECT_NEAR(west.heading(), 0.0, 0.3 * linemap::kPi / 180.0);
+  EXPECT_NEAR(east.heading(), kBend, 0.3 * linemap::kPi / 180.0);
+  EXPECT_NEAR(west.start.x(), kStart.x(), 0.05);
+  EXPECT_NEAR(east.end.x(), kEnd.x(), 0.05);
+  EXPECT_LT((west.end - east.start).norm(), 0.01) << "the pieces do not meet";
+  EXPECT_LT((west.end - kVertex).norm(), 0.05) << "vertex (" << west.end.x() << ", " << west.end.y() << ")";
+  // Provenance: every original under exactly one map segment.
+  std::size_t total = 0;
+  for (const MapSegment& m : map)
+  {
+    EXPECT_EQ(cae.leaves(m.id).size(), m.merged_count);
+    total += m.merged_count;
+  }
+  EXPECT_EQ(total, leaves);
+  EXPECT_EQ(cae.leafCount(), leaves);
+}
+
+/// A believed trajectory off the truth: heading drifting by 0.1 deg per keyframe, y by 1 cm.
+std::vector<Pose2> drifted()
+{
+  std::vector<Pose2> out;
+  for (int i = 0; i <= 24; ++i) out.emplace_back(0.5 * i, 2.0 + 0.01 * i, 0.1 * i * linemap::kPi / 180.0);
+  return out;
+}
+
+std::vector<std::pair<std::uint64_t, Pose2>> poses(const std::vector<Pose2>& p)
+{
+  std::vector<std::pair<std::uint64_t, Pose2>> out;
+  for (std::size_t i = 0; i < p.size(); ++i) out.emplace_back(i, p[i]);
+  return out;
+}
+}  // namespace
+
+TEST(CrossingResolution, BentWallCrossesWithoutIt)
+{
+  // The configuration is one that needs the resolution: without it, two chords cross in an X.
+  CaeParams params;
+  params.resolve_crossings = false;
+  CaeRlsm cae(params);
+  for (const Keyframe& k : walk().keyframes) cae.addKeyframe(k);
+  EXPECT_EQ(line_map_merging::findCrossingPairs(segmentsOf(cae.map()), 0.1).size(), 1u);
+}
+
+TEST(CrossingResolution, BentWallBecomesAChain)
+{
+  CaeRlsm cae;
+  const Walk w = walk();
+  for (const Keyframe& k : w.keyframes) cae.addKeyframe(k);
+  expectChain(cae, w.leaves);
+}
+
+TEST(CrossingResolution, ChainAfterMpGmaWithAChangedTrajectory)
+{
+  // Merged on a drifted trajectory, then adjusted to the true one: every adjustment path re-fuses
+  // from the provenance and must end in the same chain.
+  for (int mode = 0; mode < 3; ++mode)
+  {
+    SCOPED_TRACE(mode == 0 ? "regroup" : mode == 1 ? "re-fuse + consistency pass" : "re-fuse only (paper)");
+    CaeParams params;
+    params.regroup_on_adjust = mode == 0;
+    params.consistent_adjustment = mode < 2;
+    CaeRlsm cae(params);
+    const Walk w = walk(drifted());
+    for (const Keyframe& k : w.keyframes) cae.addKeyframe(k);
+    const auto result = cae.adjust(poses(w.truth));
+    EXPECT_EQ(result.moved, w.truth.size());
+    if (mode < 2) expectChain(cae, w.leaves);
+    // The paper's MP-GMA keeps the groups formed on the drifted poses: no chain to expect, but no
+    // crossing either, and no leaf lost.
+    EXPECT_TRUE(line_map_merging::findCrossingPairs(segmentsOf(cae.map()), 0.0).empty());
+    EXPECT_EQ(cae.leafCount(), w.leaves);
+  }
+}
+
+TEST(CrossingResolution, MapFileKeepsTheCutSegments)
+{
+  CaeRlsm cae;
+  const Walk w = walk();
+  for (const Keyframe& k : w.keyframes) cae.addKeyframe(k);
+  const std::string path = ::testing::TempDir() + "crossing_resolution_map.yaml";
+  cae.save(path);
+  CaeRlsm loaded;
+  loaded.load(path);
+  const auto a = cae.map(), b = loaded.map();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i)
+  {
+    EXPECT_EQ(a[i].id, b[i].id);
+    EXPECT_EQ(a[i].segment.start, b[i].segment.start);
+    EXPECT_EQ(a[i].segment.end, b[i].segment.end);
+    EXPECT_EQ(a[i].merged_count, b[i].merged_count);
+  }
+  expectChain(loaded, w.leaves);
+  // Re-fused from the loaded provenance at unchanged poses, the chain forms again.
+  loaded.adjust(poses(w.truth));
+  expectChain(loaded, w.leaves);
+  std::remove(path.c_str());
+}
+
+TEST(CrossingResolution, WallThroughAnotherLosesItsOvershoot)
+{
+  // A wall along y = 0 from x = 0 to 4 (free side north), and a wall along x = 2 running north whose
+  // segment starts 0.3 m south of it: 90 deg apart, so two walls; the least supported arm, the
+  // overshoot (4 x 0.3 m against 4 x 2 m, 4 x 2 m and 4 x 3 m), is cut at (2, 0): a T.
+  CaeRlsm cae;
+  for (int i = 0; i < 4; ++i)
+  {
+    Keyframe k;
+    k.index = i;
+    k.stamp = i;
+    k.pose = Pose2(0.0, 0.0, 0.0);
+    k.segments = {Segment2(Vec2(0, 0), Vec2(4, 0)), Segment2(Vec2(2, -0.3), Vec2(2, 3))};
+    cae.addKeyframe(k);
+  }
+  const auto map = cae.map();
+  ASSERT_EQ(map.size(), 2u);
+  EXPECT_NEAR((map[0].segment.start - Vec2(0, 0)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((map[0].segment.end - Vec2(4, 0)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((map[1].segment.start - Vec2(2, 0)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((map[1].segment.end - Vec2(2, 3)).norm(), 0.0, 1e-9);
+  EXPECT_EQ(map[0].merged_count + map[1].merged_count, 8u);
+}
+
+TEST(CrossingResolution, BadParametersThrow)
+{
+  CaeParams params;
+  params.crossing_overhang = -0.01;
+  EXPECT_THROW(CaeRlsm{params}, linemap::ParameterError);
+  params.crossing_overhang = 0.01;
+  params.crossing_chain_angle = 0.5 * linemap::kPi;
+  EXPECT_THROW(CaeRlsm{params}, linemap::ParameterError);
+}
