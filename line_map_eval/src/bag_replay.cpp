@@ -48,11 +48,11 @@ ReplayResult replayBag(const BagContents& bag, const ReplayOptions& options)
     s.laser = laser;
     s.odom = odom;
     s.mount = mount;
-    for (const auto& seg : extractor.extract(scanInput(rec.geometry, scan.ranges)).segments)
+    const ScanGeometry& g = rec.geometryOf(scan);
+    for (const auto& seg : extractor.extract(scanInput(g, scan.ranges)).segments)
       s.segments.emplace_back(seg.start, seg.end);
     // The evaluator nodelet receives the scan and the extractor's segments as the merger does.
-    const ScanRanges ranges{rec.geometry.angle_min, rec.geometry.angle_increment, rec.geometry.range_min,
-                            rec.geometry.range_max, scan.ranges};
+    const ScanRanges ranges{g.angle_min, g.angle_increment, g.range_min, g.range_max, scan.ranges};
     evaluator.addScan(scan.stamp, ranges, laser, odom);
     evaluator.addSegments(scan.stamp, s.segments, laser, odom);
     mapper.addScan(s);

@@ -58,6 +58,8 @@ class Fields
   Fields(const char* type, const std::vector<std::string_view>& tokens) : type_(type), tokens_(tokens) {}
 
   std::size_t remaining() const { return tokens_.size() - pos_; }
+  /// Field number (1-based, the message type being field 1) of the last field read.
+  std::size_t field() const { return pos_; }
 
   double number(const char* what)
   {
@@ -115,14 +117,16 @@ class Fields
 
 constexpr std::size_t kMaxBeams = 100000;
 
-/// Reads `n` readings; when fewer numeric fields than announced are present before the
-/// `trailer` fields, reports "expected n ..., got m" rather than a confusing parse error.
+/// Reads `n` readings; when fewer fields than the n readings and the `trailer` fields after them
+/// remain, reports the counts rather than a confusing parse error.
 void readValues(Fields& f, std::size_t n, std::size_t trailer, const char* what, std::vector<float>& out)
 {
   if (f.remaining() < n + trailer)
   {
     const std::size_t available = f.remaining() >= trailer ? f.remaining() - trailer : 0;
-    f.fail("expected " + std::to_string(n) + " " + what + ", got " + std::to_string(available));
+    f.fail("expected " + std::to_string(n) + " " + what + ", got " + std::to_string(available) + " (" +
+           std::to_string(f.remaining()) + " fields left for the " + what + " and the " +
+           std::to_string(trailer) + " fields after them)");
   }
   out.resize(n);
   for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<float>(f.number(what));
@@ -161,20 +165,50 @@ void parseFlaser(Fields& f, CarmenScan& s)
   parseTrailer(f, s.timestamp, s.logger_timestamp);
 }
 
-void parseRobotLaser1(Fields& f, CarmenScan& s)
+/// The laser fields shared by ROBOTLASER1 and RAWLASERx, up to the remissions. `trailer`: the
+/// number of fields after the remissions.
+void parseLaserFields(Fields& f, CarmenScan& s, std::size_t trailer)
 {
-  s.type = CarmenScanType::RobotLaser1;
   s.laser_type = f.integer("laser_type");
   s.start_angle = f.number("start_angle");
   s.field_of_view = f.number("field_of_view");
+  const std::string fov_field = std::to_string(f.field());
   s.angular_resolution = f.number("angular_resolution");
+  const std::string res_field = std::to_string(f.field());
   s.max_range = f.number("maximum_range");
   s.accuracy = f.number("accuracy");
   s.remission_mode = f.integer("remission_mode");
+  if (!(s.angular_resolution > 0.0))
+    f.fail("angular_resolution (field " + res_field + ") must be positive, got " +
+           std::to_string(s.angular_resolution));
+  if (s.field_of_view < 0.0)
+    f.fail("field_of_view (field " + fov_field + ") must not be negative, got " +
+           std::to_string(s.field_of_view));
   const std::size_t n = f.count("num_readings", kMaxBeams);
-  readValues(f, n, 1 + 14, "ranges", s.ranges);
+  // The beams span the field of view to within half a beam: n = fov/res (interlaced scans) or
+  // fov/res + 1 (a beam at both ends).
+  const double beams = s.field_of_view / s.angular_resolution;
+  if (static_cast<double>(n) < beams - 0.5 || static_cast<double>(n) > beams + 1.5)
+  {
+    const long lo = static_cast<long>(std::ceil(beams - 0.5)),
+               hi = static_cast<long>(std::floor(beams + 1.5));
+    std::string expected = std::to_string(lo);
+    for (long k = lo + 1; k <= hi; ++k) expected += (k == hi ? " or " : ", ") + std::to_string(k);
+    f.fail("num_readings (field " + std::to_string(f.field()) + ") is " + std::to_string(n) +
+           ", but field_of_view " + std::to_string(s.field_of_view) + " at angular_resolution " +
+           std::to_string(s.angular_resolution) + " (fields " + fov_field + ", " + res_field + ") holds " +
+           expected + " beams");
+  }
+  readValues(f, n, 1 + trailer, "ranges", s.ranges);
   const std::size_t m = f.count("num_remissions", kMaxBeams);
-  readValues(f, m, 14, "remissions", s.remissions);
+  readValues(f, m, trailer, "remissions", s.remissions);
+}
+
+void parseRobotLaser1(Fields& f, CarmenScan& s)
+{
+  s.type = CarmenScanType::RobotLaser1;
+  // After the remissions: 6 pose fields, tv, rv, 3 safety fields, timestamp, hostname, logger_timestamp.
+  parseLaserFields(f, s, 14);
   s.laser_pose = readPose(f, "laser_pose_x", "laser_pose_y", "laser_pose_theta");
   s.robot_pose = readPose(f, "robot_pose_x", "robot_pose_y", "robot_pose_theta");
   s.tv = f.number("tv");
@@ -183,6 +217,23 @@ void parseRobotLaser1(Fields& f, CarmenScan& s)
   s.side_safety_dist = f.number("side_safety_dist");
   s.turn_axis = f.number("turn_axis");
   parseTrailer(f, s.timestamp, s.logger_timestamp);
+}
+
+void parseRawLaser(Fields& f, CarmenScan& s, int index)
+{
+  s.type = CarmenScanType::RawLaser;
+  s.raw_laser = index;
+  parseLaserFields(f, s, 3);  // timestamp, hostname, logger_timestamp
+  parseTrailer(f, s.timestamp, s.logger_timestamp);
+}
+
+/// x of "RAWLASERx" (1..4), else 0.
+int rawLaserIndex(std::string_view type)
+{
+  constexpr std::string_view prefix = "RAWLASER";
+  if (type.size() != prefix.size() + 1 || type.substr(0, prefix.size()) != prefix) return 0;
+  const char c = type.back();
+  return c >= '1' && c <= '4' ? c - '0' : 0;
 }
 
 void parseOdom(Fields& f, CarmenOdom& o)
@@ -262,12 +313,15 @@ CarmenLog parseCarmenLog(const std::string& text, const std::string& name, const
         ++log.skipped_unknown;
         continue;
       }
-      if (type == "FLASER" || type == "ROBOTLASER1")
+      const int raw_laser = rawLaserIndex(type);
+      if (type == "FLASER" || type == "ROBOTLASER1" || raw_laser > 0)
       {
-        const bool flaser = type == "FLASER";
-        Fields f(flaser ? "FLASER" : "ROBOTLASER1", tokens);
+        static const char* const kRawNames[] = {"", "RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4"};
+        Fields f(raw_laser > 0 ? kRawNames[raw_laser] : type == "FLASER" ? "FLASER" : "ROBOTLASER1", tokens);
         CarmenScan scan;
-        if (flaser)
+        if (raw_laser > 0)
+          parseRawLaser(f, scan, raw_laser);
+        else if (type == "FLASER")
           parseFlaser(f, scan);
         else
           parseRobotLaser1(f, scan);
@@ -399,6 +453,25 @@ ScanGeometry carmenBeamGeometry(std::size_t beam_count, double no_return, double
   g.angle_min = -0.5 * static_cast<double>(beam_count - 1) * g.angle_increment;
   g.range_min = range_min;
   g.range_max = no_return - 0.005;
+  return g;
+}
+
+ScanGeometry carmenScanGeometry(const CarmenScan& scan, double no_return, double range_min)
+{
+  if (scan.type == CarmenScanType::FLaser)
+  {
+    if (!(no_return > 0.0)) throw std::invalid_argument("carmenScanGeometry: FLASER needs a no-return value");
+    return carmenBeamGeometry(scan.ranges.size(), no_return, range_min);
+  }
+  const std::size_t n = scan.ranges.size();
+  ScanGeometry g;
+  g.beam_count = n;
+  g.angle_min = scan.start_angle;
+  g.angle_increment = scan.angular_resolution > 0.0 || n < 2
+                          ? scan.angular_resolution
+                          : scan.field_of_view / static_cast<double>(n - 1);
+  g.range_min = range_min;
+  g.range_max = (no_return > 0.0 ? no_return : scan.max_range) - 0.005;
   return g;
 }
 

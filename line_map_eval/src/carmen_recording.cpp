@@ -1,6 +1,7 @@
 #include "line_map_eval/carmen_recording.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -38,91 +39,142 @@ Pose2 interpolateOdom(const std::vector<const CarmenOdom*>& odom, double t)
   const double dt = b.timestamp - a.timestamp;
   return dt > 0.0 ? linemap::interpolate(a.pose, b.pose, (t - a.timestamp) / dt) : b.pose;
 }
+
+bool sameGeometry(const ScanGeometry& a, const ScanGeometry& b)
+{
+  return a.angle_min == b.angle_min && a.angle_increment == b.angle_increment &&
+         a.beam_count == b.beam_count && a.range_min == b.range_min && a.range_max == b.range_max;
+}
+
+bool hasPose(const CarmenScan& s)
+{
+  return s.type != CarmenScanType::RawLaser;
+}
 }  // namespace
 
 Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const CarmenRecordingOptions& options,
                      CarmenRecordingReport* report)
 {
-  if (raw.scans.empty()) throw std::runtime_error(raw.path + ": no FLASER or ROBOTLASER1 scans");
+  if (raw.scans.empty()) throw std::runtime_error(raw.path + ": no FLASER, ROBOTLASER1 or RAWLASER scans");
   if (!(options.min_stamp_step > 0.0)) throw std::invalid_argument("fromCarmen: min_stamp_step must be > 0");
   CarmenRecordingReport info;
-  const CarmenScan& first = raw.scans.front();
-  const std::size_t beams = first.ranges.size();
-  for (const CarmenScan& s : raw.scans)
+  const std::size_t n =
+      options.max_scans > 0 ? std::min(options.max_scans, raw.scans.size()) : raw.scans.size();
+
+  // One laser per recording: RAWLASER1..4 are four different sensors.
+  int raw_laser = 0;
+  for (std::size_t i = 0; i < n; ++i)
   {
-    if (s.ranges.size() != beams)
-      throw std::runtime_error(raw.path + ":" + std::to_string(s.line) + ": scan has " +
-                               std::to_string(s.ranges.size()) + " readings, the log's first scan " +
-                               std::to_string(beams));
+    const CarmenScan& s = raw.scans[i];
+    if (s.type != CarmenScanType::RawLaser) continue;
+    if (raw_laser != 0 && s.raw_laser != raw_laser)
+      throw std::runtime_error(raw.path + ":" + std::to_string(s.line) + ": RAWLASER" +
+                               std::to_string(s.raw_laser) + " after RAWLASER" + std::to_string(raw_laser) +
+                               ": a recording holds the scans of one laser");
+    raw_laser = s.raw_laser;
   }
+
+  // Beam geometry, scan by scan: ROBOTLASER1/RAWLASER lines state theirs (and their maximum range,
+  // the no-return value), FLASER's follows from its beam count.
+  bool need_floor = options.no_return_range <= 0.0;
+  if (need_floor)
+  {
+    need_floor = false;
+    for (std::size_t i = 0; i < n && !need_floor; ++i)
+      need_floor = raw.scans[i].type == CarmenScanType::FLaser || !(raw.scans[i].max_range > 0.0);
+  }
+  const double floor = need_floor ? carmenNoReturnFloor(raw) : 0.0;
+  const auto geometryOf = [&](const CarmenScan& s)
+  {
+    double no_return = options.no_return_range;
+    if (!(no_return > 0.0))
+      no_return = s.type != CarmenScanType::FLaser && s.max_range > 0.0 ? s.max_range : floor;
+    if (!(no_return > 0.0))
+      throw std::runtime_error(raw.path + ":" + std::to_string(s.line) +
+                               ": no no-return value (no positive reading in the log)");
+    ScanGeometry g;
+    try
+    {
+      g = carmenScanGeometry(s, no_return, options.range_min);
+    }
+    catch (const std::invalid_argument& e)
+    {
+      throw std::runtime_error(raw.path + ":" + std::to_string(s.line) + ": " + e.what());
+    }
+    if (options.max_usable_range > 0.0) g.range_max = std::min(g.range_max, options.max_usable_range);
+    info.no_return_range = info.no_return_range > 0.0 ? std::min(info.no_return_range, no_return) : no_return;
+    return g;
+  };
 
   Recording rec;
   rec.source = raw.path;
-  info.no_return_range = options.no_return_range > 0.0 ? options.no_return_range : carmenNoReturnFloor(raw);
-  if (first.type == CarmenScanType::RobotLaser1)
-  {
-    if (options.no_return_range <= 0.0 && first.max_range > 0.0) info.no_return_range = first.max_range;
-    rec.geometry.beam_count = beams;
-    rec.geometry.angle_min = first.start_angle;
-    rec.geometry.angle_increment = first.angular_resolution > 0.0 || beams < 2
-                                       ? first.angular_resolution
-                                       : first.field_of_view / static_cast<double>(beams - 1);
-    rec.geometry.range_min = options.range_min;
-    rec.geometry.range_max = info.no_return_range - 0.005;
-  }
-  else
-  {
-    rec.geometry = carmenBeamGeometry(beams, info.no_return_range, options.range_min);
-  }
-  if (options.max_usable_range > 0.0)
-    rec.geometry.range_max = std::min(rec.geometry.range_max, options.max_usable_range);
+  rec.geometry = geometryOf(raw.scans.front());
+  std::vector<ScanGeometry> distinct{rec.geometry};
 
   // Laser mounting on base_link.
-  if (parseOffset(raw, rec.base_to_laser))
+  const bool front_laser = raw_laser <= 1;
+  const CarmenScan* posed = nullptr;  // the first scan with a laser and a robot pose
+  for (std::size_t i = 0; i < n && !posed; ++i)
+    if (hasPose(raw.scans[i])) posed = &raw.scans[i];
+  if (front_laser && parseOffset(raw, rec.base_to_laser))
     info.mounting_source = "PARAM robot_frontlaser_offset of " + raw.path;
-  else if (corrected && parseOffset(*corrected, rec.base_to_laser))
+  else if (front_laser && corrected && parseOffset(*corrected, rec.base_to_laser))
     info.mounting_source = "PARAM robot_frontlaser_offset of " + corrected->path;
-  else
+  else if (posed)
   {
-    rec.base_to_laser = first.robot_pose.inverse() * first.laser_pose;
+    rec.base_to_laser = posed->robot_pose.inverse() * posed->laser_pose;
     info.mounting_source = "laser pose relative to robot pose of the first scan";
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      const CarmenScan& s = raw.scans[i];
+      if (!hasPose(s)) continue;
+      const Pose2 d = rec.base_to_laser.inverse() * (s.robot_pose.inverse() * s.laser_pose);
+      info.max_mounting_shift = std::max(info.max_mounting_shift, std::hypot(d.x, d.y));
+      info.max_mounting_turn = std::max(info.max_mounting_turn, std::abs(linemap::normalizeAngle(d.theta)));
+    }
   }
+  else
+    info.mounting_source = "none (identity): RAWLASER lines carry no pose";
   const Pose2 laser_to_base = rec.base_to_laser.inverse();
 
-  const std::size_t n =
-      options.max_scans > 0 ? std::min(options.max_scans, raw.scans.size()) : raw.scans.size();
+  // Odometry of the scans with poses: their robot pose unless it never changes.
   const auto moves = [&](auto pose_of)
   {
-    for (std::size_t i = 1; i < n; ++i)
-      if (!samePose(pose_of(raw.scans[i]), pose_of(raw.scans[0]))) return true;
+    for (std::size_t i = 0; i < n; ++i)
+      if (hasPose(raw.scans[i]) && !samePose(pose_of(raw.scans[i]), pose_of(*posed))) return true;
     return false;
   };
   bool odom_lines_move = false;
   for (const CarmenOdom& o : raw.odometry)
     if (!samePose(o.pose, raw.odometry.front().pose)) odom_lines_move = true;
-  std::vector<const CarmenOdom*> odom_sorted;
   enum class Source
   {
     Scan,
     OdomLines,
     Laser
   } source = Source::Scan;
-  if (!moves([](const CarmenScan& s) { return s.robot_pose; }))
+  if (posed && !moves([](const CarmenScan& s) { return s.robot_pose; }))
   {
     if (odom_lines_move)
       source = Source::OdomLines;
     else if (moves([](const CarmenScan& s) { return s.laser_pose; }))
       source = Source::Laser;
   }
-  if (source == Source::OdomLines)
+  // RAWLASER scans: ODOM lines interpolated at the scan stamp, like FLASER's odometry.
+  const bool raw_scans = raw_laser > 0;
+  std::vector<const CarmenOdom*> odom_sorted;
+  if (source == Source::OdomLines || raw_scans)
   {
     for (const CarmenOdom& o : raw.odometry) odom_sorted.push_back(&o);
     std::stable_sort(odom_sorted.begin(), odom_sorted.end(),
                      [](const CarmenOdom* a, const CarmenOdom* b) { return a->timestamp < b->timestamp; });
   }
-  info.odometry_source = source == Source::Scan        ? "scan odometry fields"
-                         : source == Source::OdomLines ? "ODOM lines"
-                                                       : "scan laser poses";
+  const std::string raw_source = odom_sorted.empty() ? "none (no ODOM lines)" : "ODOM lines";
+  if (posed)
+    info.odometry_source = source == Source::Scan        ? "scan odometry fields"
+                           : source == Source::OdomLines ? "ODOM lines"
+                                                         : "scan laser poses";
+  if (raw_scans) info.odometry_source += (posed ? "; RAWLASER scans: " : "") + raw_source;
 
   rec.scans.resize(n);
   for (std::size_t i = 0; i < n; ++i)
@@ -130,6 +182,14 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
     const CarmenScan& s = raw.scans[i];
     RecordedScan& out = rec.scans[i];
     out.ranges = s.ranges;
+    if (i > 0)
+    {
+      const ScanGeometry g = geometryOf(s);
+      if (!sameGeometry(g, rec.geometry)) out.geometry = g;
+      if (std::none_of(distinct.begin(), distinct.end(),
+                       [&](const ScanGeometry& d) { return sameGeometry(d, g); }))
+        distinct.push_back(g);
+    }
     double t = s.timestamp;
     if (i > 0 && t < rec.scans[i - 1].stamp + options.min_stamp_step)
     {
@@ -138,26 +198,27 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
       info.max_stamp_shift = std::max(info.max_stamp_shift, t - s.timestamp);
     }
     out.stamp = t;
-    switch (source)
-    {
-      case Source::Scan:
-        out.odom = s.robot_pose;
-        break;
-      case Source::OdomLines:
-        out.odom = interpolateOdom(odom_sorted, s.timestamp);
-        break;
-      case Source::Laser:
-        out.odom = s.laser_pose * laser_to_base;
-        break;
-    }
+    if (!hasPose(s))
+      out.odom = odom_sorted.empty() ? Pose2() : interpolateOdom(odom_sorted, s.timestamp);
+    else if (source == Source::Scan)
+      out.odom = s.robot_pose;
+    else if (source == Source::OdomLines)
+      out.odom = interpolateOdom(odom_sorted, s.timestamp);
+    else
+      out.odom = s.laser_pose * laser_to_base;
   }
+  info.geometries = distinct.size();
 
   if (corrected)
   {
-    if (!corrected->scans.empty() && corrected->scans.front().ranges.size() != beams)
-      throw std::runtime_error(corrected->path + ": keyframes have " +
-                               std::to_string(corrected->scans.front().ranges.size()) + " readings, " +
-                               raw.path + " has " + std::to_string(beams));
+    if (!corrected->scans.empty())
+    {
+      const std::size_t beams = corrected->scans.front().ranges.size();
+      if (std::none_of(raw.scans.begin(), raw.scans.end(),
+                       [&](const CarmenScan& s) { return s.ranges.size() == beams; }))
+        throw std::runtime_error(corrected->path + ": keyframes have " + std::to_string(beams) +
+                                 " readings, no scan of " + raw.path + " has as many");
+    }
     const std::vector<std::size_t> pairs = pairKeyframes(raw, *corrected);
     for (std::size_t k = 0; k < pairs.size(); ++k)
     {

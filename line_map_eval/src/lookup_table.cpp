@@ -140,9 +140,8 @@ void appendWorldPoints(const linemap::Pose2& laser_pose, const std::vector<Vec2>
 
 std::vector<Vec2> registeredScanPoints(const Recording& recording)
 {
-  const ScanGeometry& g = recording.geometry;
   std::vector<Vec2> out;
-  out.reserve(recording.keyframes.size() * g.beam_count);
+  out.reserve(recording.keyframes.size() * recording.geometry.beam_count);
   std::vector<Vec2> local;
   for (const CorrectedKeyframe& kf : recording.keyframes)
   {
@@ -151,6 +150,7 @@ std::vector<Vec2> registeredScanPoints(const Recording& recording)
                                   std::to_string(kf.scan_index) + " beyond " +
                                   std::to_string(recording.scans.size()) + " scans");
     const RecordedScan& scan = recording.scans[kf.scan_index];
+    const ScanGeometry& g = recording.geometryOf(scan);
     local.clear();
     for (std::size_t i = 0; i < scan.ranges.size(); ++i)
     {

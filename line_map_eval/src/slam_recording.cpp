@@ -20,11 +20,11 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
   };
   const double cpu_start = cpu();
   line_map_merging::LaserSlam slam(params);
-  const ScanGeometry& g = recording.geometry;
   std::vector<std::size_t> accepted;  // recording index of each scan the SLAM accepted
   for (std::size_t i = 0; i < recording.scans.size(); ++i)
   {
     const RecordedScan& s = recording.scans[i];
+    const ScanGeometry& g = recording.geometryOf(s);  // a scan's own where the sensor changes it
     line_map_merging::SlamScan scan;
     scan.stamp = s.stamp;
     if (use_odometry) scan.odom = s.odom;

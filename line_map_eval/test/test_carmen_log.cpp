@@ -1,5 +1,8 @@
 // CARMEN reader, keyframe pairing, beam geometry and the Recording built from the logs.
 #include <gtest/gtest.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/LaserScan.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -10,11 +13,16 @@
 #include <boost/iostreams/filtering_stream.hpp>
 #include <cmath>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 
+#include "line_map_eval/bag_reader.hpp"
+#include "line_map_eval/bag_writer.hpp"
 #include "line_map_eval/carmen_log.hpp"
 #include "line_map_eval/carmen_recording.hpp"
+#include "line_map_eval/lookup_table.hpp"
 #include "line_map_eval/progress.hpp"
 
 using namespace line_map_eval;
@@ -191,7 +199,7 @@ TEST(CarmenLog, ParsesEveryField)
       "ODOM 1 2 0.5 0.3 0.1 0.05 100.25 host 0.5\n"
       "NEFF 27.6 0 pippo 0\nRLASER 1 2 0 0 0 0 0 0 0 host 0\n"
       "FLASER 3 1.5 2.25 81.83 0.1 0.2 0.3 1.1 1.2 1.3 100.5 host 0.75\n"
-      "ROBOTLASER1 0 -1.5 3.0 0.02 81.9 0.01 0 3 4.5 5.5 6.5 2 0.25 0.75 "
+      "ROBOTLASER1 0 -1.5 0.04 0.02 81.9 0.01 0 3 4.5 5.5 6.5 2 0.25 0.75 "
       "1.2 2.0 0.0 1.0 2.0 0.0 0.4 0.1 0.5 0.6 0.7 101.0 b21 1.25\n";
   const CarmenLog log = readCarmenLog(dir.file("fields.clf", text));
   EXPECT_EQ(log.skipped_unknown, 2u);  // NEFF, RLASER
@@ -209,6 +217,7 @@ TEST(CarmenLog, ParsesEveryField)
   const CarmenScan& r = log.scans[1];
   EXPECT_EQ(r.type, CarmenScanType::RobotLaser1);
   EXPECT_DOUBLE_EQ(r.start_angle, -1.5);
+  EXPECT_DOUBLE_EQ(r.field_of_view, 0.04);
   EXPECT_DOUBLE_EQ(r.angular_resolution, 0.02);
   EXPECT_DOUBLE_EQ(r.max_range, 81.9);
   EXPECT_EQ(r.ranges, (std::vector<float>{4.5f, 5.5f, 6.5f}));
@@ -229,6 +238,282 @@ TEST(CarmenLog, ParsesEveryField)
   EXPECT_NEAR(rec.geometry.range_max, 81.895, 1e-12);
   EXPECT_NEAR(rec.base_to_laser.x, 0.2, 1e-12);
   EXPECT_NEAR(rec.base_to_laser.y, 0.0, 1e-12);
+}
+
+/// A ROBOTLASER1 line: geometry, ranges, laser and robot pose, time t (no remissions).
+std::string robotLaser(double start, double fov, double res, double max_range,
+                       const std::vector<double>& ranges, const Pose2& laser, const Pose2& robot, double t)
+{
+  std::ostringstream s;
+  s.precision(17);
+  s << "ROBOTLASER1 0 " << start << " " << fov << " " << res << " " << max_range << " 0.01 0 "
+    << ranges.size();
+  for (const double r : ranges) s << " " << r;
+  s << " 0 " << laser.x << " " << laser.y << " " << laser.theta << " " << robot.x << " " << robot.y << " "
+    << robot.theta << " 0 0 0 0 0 " << t << " host " << t - 100.0;
+  return s.str();
+}
+
+/// Three ROBOTLASER1 lines, the middle one with another start angle, beam count and maximum range
+/// (as interlaced scans of a SICK LMS): geometry A = 3 beams from -90 deg, 90 deg apart, no return
+/// 10 m; B = 2 beams from -45 deg, 90 deg apart, no return 12 m. The laser sits 0.22 m ahead of the robot.
+std::string alternatingLog()
+{
+  const double s2 = std::sqrt(2.0);
+  return robotLaser(-kPi / 2, kPi, kPi / 2, 10.0, {1, 2, 3}, {0.22, 0, 0}, {0, 0, 0}, 100.0) + "\n" +
+         robotLaser(-kPi / 4, kPi, kPi / 2, 12.0, {s2, s2}, {1, 2.22, kPi / 2}, {1, 2, kPi / 2}, 101.0) +
+         "\n" + robotLaser(-kPi / 2, kPi, kPi / 2, 10.0, {4, 5, 6}, {1.78, 0, kPi}, {2, 0, kPi}, 102.0) +
+         "\n";
+}
+
+void expectGeometry(const ScanGeometry& g, double angle_min, double increment, std::size_t beams,
+                    double range_max)
+{
+  EXPECT_NEAR(g.angle_min, angle_min, 1e-12);
+  EXPECT_NEAR(g.angle_increment, increment, 1e-12);
+  EXPECT_EQ(g.beam_count, beams);
+  EXPECT_NEAR(g.range_max, range_max, 1e-12);
+  EXPECT_EQ(g.range_min, 0.0);
+}
+
+TEST(CarmenRecording, RobotLaser1GeometryIsReadScanByScan)
+{
+  TempDir dir;
+  const CarmenLog log = readCarmenLog(dir.file("alternating.clf", alternatingLog()));
+  ASSERT_EQ(log.scans.size(), 3u);
+  EXPECT_EQ(log.scans[1].ranges.size(), 2u);
+  EXPECT_NEAR(log.scans[1].start_angle, -kPi / 4, 1e-15);
+  EXPECT_DOUBLE_EQ(log.scans[1].max_range, 12.0);
+
+  CarmenRecordingReport report;
+  const Recording rec = fromCarmen(log, nullptr, {}, &report);
+  ASSERT_EQ(rec.scans.size(), 3u);
+  // The recording's geometry is the first scan's; only the scan that differs carries its own.
+  expectGeometry(rec.geometry, -kPi / 2, kPi / 2, 3, 9.995);
+  EXPECT_FALSE(rec.scans[0].geometry.has_value());
+  ASSERT_TRUE(rec.scans[1].geometry.has_value());
+  expectGeometry(rec.geometryOf(rec.scans[1]), -kPi / 4, kPi / 2, 2, 11.995);
+  EXPECT_FALSE(rec.scans[2].geometry.has_value());
+  EXPECT_EQ(report.geometries, 2u);
+  EXPECT_DOUBLE_EQ(report.no_return_range, 10.0);
+
+  // Odometry = the robot pose of each line; mounting = laser relative to robot pose, the same on every line.
+  EXPECT_EQ(report.odometry_source, "scan odometry fields");
+  EXPECT_NEAR(rec.scans[1].odom.x, 1.0, 1e-15);
+  EXPECT_NEAR(rec.scans[1].odom.y, 2.0, 1e-15);
+  EXPECT_NEAR(rec.scans[2].odom.theta, kPi, 1e-15);
+  EXPECT_NEAR(rec.base_to_laser.x, 0.22, 1e-12);
+  EXPECT_NEAR(rec.base_to_laser.y, 0.0, 1e-12);
+  EXPECT_NEAR(rec.base_to_laser.theta, 0.0, 1e-12);
+  EXPECT_LT(report.max_mounting_shift, 1e-12);
+  EXPECT_LT(report.max_mounting_turn, 1e-12);
+
+  // The scans' points in the world, every scan under its own geometry (computed by hand: laser pose =
+  // robot pose + 0.22 m ahead, beam angles start + i * 90 deg).
+  Recording posed = rec;
+  for (std::size_t i = 0; i < posed.scans.size(); ++i) posed.keyframes.push_back({i, posed.scans[i].odom});
+  const std::vector<Vec2> points = registeredScanPoints(posed);
+  const std::vector<std::pair<double, double>> expected = {{0.22, -1}, {2.22, 0}, {0.22, 3},  {2, 3.22},
+                                                           {0, 3.22},  {1.78, 4}, {-3.22, 0}, {1.78, -6}};
+  ASSERT_EQ(points.size(), expected.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+  {
+    EXPECT_NEAR(points[i].x(), expected[i].first, 1e-6) << i;  // ranges are floats
+    EXPECT_NEAR(points[i].y(), expected[i].second, 1e-6) << i;
+  }
+}
+
+TEST(CarmenRecording, FlaserBeamCountMayChangeToo)
+{
+  TempDir dir;
+  const CarmenLog log = readCarmenLog(
+      dir.file("f.clf", flaser(1.0) + "\nFLASER 4 1 2 3 4 0 0 0 0 0 0 2.0 host 2.0\n" + flaser(3.0) + "\n"));
+  CarmenRecordingOptions options;
+  options.no_return_range = 10.0;
+  const Recording rec = fromCarmen(log, nullptr, options);
+  expectGeometry(rec.geometry, -kPi / 2, kPi / 2, 3, 9.995);
+  expectGeometry(rec.geometryOf(rec.scans[1]), -3 * kPi / 8, kPi / 4, 4, 9.995);  // pi/n for even n
+  EXPECT_FALSE(rec.scans[2].geometry.has_value());
+}
+
+TEST(CarmenRecording, VaryingGeometryReachesEveryLaserScanOfTheBag)
+{
+  TempDir dir;
+  const Recording rec = fromCarmen(readCarmenLog(dir.file("alternating.clf", alternatingLog())), nullptr);
+  BagWriterOptions options;
+  options.progress = false;
+  const std::string path = dir.path() + "/alternating.bag";
+  writeBag(rec, path, options);
+
+  std::vector<sensor_msgs::LaserScan> scans;
+  {
+    rosbag::Bag bag(path, rosbag::bagmode::Read);
+    for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery("/scan")))
+      scans.push_back(*m.instantiate<sensor_msgs::LaserScan>());
+  }
+  ASSERT_EQ(scans.size(), 3u);
+  const float a = static_cast<float>(-kPi / 2), b = static_cast<float>(-kPi / 4);
+  const float step = static_cast<float>(kPi / 2);
+  for (const std::size_t i : {0u, 2u})
+  {
+    EXPECT_EQ(scans[i].ranges.size(), 3u);
+    EXPECT_EQ(scans[i].angle_min, a);
+    EXPECT_EQ(scans[i].angle_increment, step);
+    EXPECT_NEAR(scans[i].angle_max, kPi / 2, 1e-6);
+    EXPECT_FLOAT_EQ(scans[i].range_max, 9.995f);
+  }
+  EXPECT_EQ(scans[1].ranges.size(), 2u);
+  EXPECT_EQ(scans[1].angle_min, b);
+  EXPECT_EQ(scans[1].angle_increment, step);
+  EXPECT_NEAR(scans[1].angle_max, kPi / 4, 1e-6);
+  EXPECT_FLOAT_EQ(scans[1].range_max, 11.995f);
+
+  // Read back, the scan keeps its own geometry.
+  const Recording back = readBag(path).recording;
+  ASSERT_EQ(back.scans.size(), 3u);
+  EXPECT_EQ(back.geometry.beam_count, 3u);
+  EXPECT_FALSE(back.scans[2].geometry.has_value());
+  ASSERT_TRUE(back.scans[1].geometry.has_value());
+  EXPECT_EQ(back.scans[1].geometry->beam_count, 2u);
+  EXPECT_NEAR(back.scans[1].geometry->angle_min, -kPi / 4, 1e-6);
+}
+
+TEST(CarmenLog, BeamCountMustFitTheFieldOfView)
+{
+  TempDir dir;
+  const std::string first = robotLaser(-kPi / 2, kPi, kPi / 2, 10.0, {1, 2, 3}, {}, {}, 100.0) + "\n";
+  // pi at pi/2 holds 2 (interlaced) or 3 beams; line 3 has 4.
+  const std::string msg = errorOf(
+      dir, first + "# x\n" + robotLaser(-kPi / 2, kPi, kPi / 2, 10.0, {1, 2, 3, 4}, {}, {}, 101.0) + "\n");
+  EXPECT_NE(msg.find("bad.clf:3: ROBOTLASER1: num_readings (field 9) is 4"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("(fields 4, 5) holds 2 or 3 beams"), std::string::npos) << msg;
+  EXPECT_NE(errorOf(dir, robotLaser(-kPi / 2, kPi, kPi / 2, 10.0, {1}, {}, {}, 100.0)).find("bad.clf:1: "),
+            std::string::npos);
+  // 180 deg at 1 deg: 180 or 181 beams (the two geometries of fr-clinic), not 179 or 182.
+  for (const std::size_t n : {179u, 180u, 181u, 182u})
+  {
+    const std::vector<double> ranges(n, 1.0);
+    const std::string e =
+        errorOf(dir, robotLaser(-1.570796, 3.141593, 0.017453, 81.9, ranges, {}, {}, 1.0) + "\n");
+    EXPECT_EQ(e.empty(), n == 180 || n == 181) << n << ": " << e;
+  }
+
+  struct Case
+  {
+    std::string line;
+    std::string expect;
+  };
+  for (const Case& c :
+       {Case{"RAWLASER1 0 -1.5707963 3.1415927 1.5707963 10 0.01 0 3 1 2 3 0 5 host",
+             "expected 3 ranges, got 2"},
+        Case{"RAWLASER2 0 -1.5707963 3.1415927 1.5707963 10 0.01 0 3 1 x 3 0 5 host 5",
+             "RAWLASER2: ranges (field 11) is not a number: 'x'"},
+        Case{"RAWLASER3 0 -1.5707963 3.1415927 0 10 0.01 0 3 1 2 3 0 5 host 5",
+             "RAWLASER3: angular_resolution (field 5) must be positive"},
+        Case{"RAWLASER4 0 -1.5707963 3.1415927 1.5707963 10 0.01 0 3 1 2 3 2 7 5 host 5",
+             "RAWLASER4: expected 2 remissions, got 1"},
+        Case{"ROBOTLASER1 0 -1.5707963 nan 1.5707963 10 0.01 0 3 1 2 3 0 0 0 0 0 0 0 0 0 0 0 0 5 host 5",
+             "field_of_view (field 4) is not a number: 'nan'"}})
+  {
+    const std::string e = errorOf(dir, first + c.line + "\n");
+    EXPECT_NE(e.find("bad.clf:2: "), std::string::npos) << e;
+    EXPECT_NE(e.find(c.expect), std::string::npos) << "got: " << e;
+  }
+}
+
+TEST(CarmenRecording, RawLaserOdometryFromOdomLines)
+{
+  TempDir dir;
+  // No pose on RAWLASER lines: ODOM interpolated at the scan stamp (t = 11 is halfway from 10 to 12).
+  const std::string text =
+      "PARAM robot_frontlaser_offset 0.1 nohost 0\n"
+      "ODOM 0 0 0 0 0 0 10.0 h 0\nODOM 2 0 0.2 0 0 0 12.0 h 0\n"
+      "RAWLASER1 0 -1.5707963267948966 3.1415926535897931 1.5707963267948966 10 0.01 0 3 1 2 3 0 11.0 h 1\n"
+      "RAWLASER1 0 -0.78539816339744828 3.1415926535897931 1.5707963267948966 20 0.01 0 2 1 1 2 0.5 0.75 "
+      "11.5 h 1.5\n";
+  const CarmenLog log = readCarmenLog(dir.file("raw.clf", text));
+  ASSERT_EQ(log.scans.size(), 2u);
+  EXPECT_EQ(log.scans[0].type, CarmenScanType::RawLaser);
+  EXPECT_EQ(log.scans[1].raw_laser, 1);
+  EXPECT_EQ(log.scans[1].remissions, (std::vector<float>{0.5f, 0.75f}));
+  EXPECT_DOUBLE_EQ(log.scans[1].timestamp, 11.5);
+  EXPECT_DOUBLE_EQ(log.scans[1].logger_timestamp, 1.5);
+
+  CarmenRecordingReport report;
+  const Recording rec = fromCarmen(log, nullptr, {}, &report);
+  EXPECT_EQ(report.odometry_source, "ODOM lines");
+  EXPECT_NEAR(rec.scans[0].odom.x, 1.0, 1e-12);
+  EXPECT_NEAR(rec.scans[0].odom.theta, 0.1, 1e-12);
+  EXPECT_NEAR(rec.scans[1].odom.x, 1.5, 1e-12);
+  EXPECT_NEAR(rec.scans[1].odom.theta, 0.15, 1e-12);
+  EXPECT_NEAR(rec.base_to_laser.x, 0.1, 1e-15);  // RAWLASER1 is the front laser
+  expectGeometry(rec.geometry, -kPi / 2, kPi / 2, 3, 9.995);
+  expectGeometry(rec.geometryOf(rec.scans[1]), -kPi / 4, kPi / 2, 2, 19.995);
+
+  // RAWLASER2 (another laser): not the front laser's offset; with no ODOM lines no odometry at all.
+  const CarmenLog rear = readCarmenLog(dir.file(
+      "rear.clf",
+      "PARAM robot_frontlaser_offset 0.1 nohost 0\n"
+      "RAWLASER2 0 -1.5707963267948966 3.1415926535897931 1.5707963267948966 10 0.01 0 3 1 2 3 0 11 h 1\n"));
+  const Recording rear_rec = fromCarmen(rear, nullptr, {}, &report);
+  EXPECT_EQ(rear_rec.base_to_laser.x, 0.0);
+  EXPECT_EQ(rear_rec.scans[0].odom.x, 0.0);
+  EXPECT_NE(report.odometry_source.find("no ODOM lines"), std::string::npos) << report.odometry_source;
+
+  // Two lasers in one log: refused, naming the line.
+  const CarmenLog two =
+      readCarmenLog(dir.file("two.clf", text + "RAWLASER2 0 -1.5707963267948966 "
+                                               "3.1415926535897931 1.5707963267948966 10 0.01 0 3 "
+                                               "1 2 3 0 12 h 2\n"));
+  try
+  {
+    fromCarmen(two, nullptr);
+    ADD_FAILURE() << "two lasers accepted";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("two.clf:6: RAWLASER2 after RAWLASER1"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(CarmenRecording, FrClinicAlternatesTwoGeometries)
+{
+  const std::string path = kDatasets + "fr-clinic.clf.bz2";
+  if (access(path.c_str(), R_OK) != 0) GTEST_SKIP() << "dataset file missing: " << path;
+  CarmenReadOptions first40;
+  first40.max_scans = 40;
+  const CarmenLog log = readCarmenLog(path, first40);
+  ASSERT_EQ(log.scans.size(), 40u);
+  // README and `bzcat | head -40`: 181 beams from -90 deg, 180 beams from -89.75, -89.5 or -89.25 deg,
+  // 1 deg apart over a 180 deg field of view.
+  std::set<double> starts181, starts180;
+  for (const CarmenScan& s : log.scans)
+  {
+    ASSERT_EQ(s.type, CarmenScanType::RobotLaser1);
+    EXPECT_DOUBLE_EQ(s.field_of_view, 3.141593);
+    EXPECT_DOUBLE_EQ(s.angular_resolution, 0.017453);
+    ASSERT_TRUE(s.ranges.size() == 180 || s.ranges.size() == 181) << s.line;
+    (s.ranges.size() == 181 ? starts181 : starts180).insert(s.start_angle);
+  }
+  EXPECT_EQ(starts181, (std::set<double>{-1.570796}));
+  EXPECT_EQ(starts180, (std::set<double>{-1.566433, -1.562070, -1.557706}));
+
+  CarmenRecordingReport report;
+  const Recording rec = fromCarmen(log, nullptr, {}, &report);
+  expectGeometry(rec.geometry, -1.570796, 0.017453, 181, 81.895);
+  ASSERT_TRUE(rec.scans[1].geometry.has_value());  // line 2: 180 beams from -89.75 deg
+  expectGeometry(*rec.scans[1].geometry, -1.566433, 0.017453, 180, 81.895);
+  EXPECT_EQ(report.geometries, 4u);
+  for (const RecordedScan& s : rec.scans) EXPECT_EQ(s.ranges.size(), rec.geometryOf(s).beam_count);
+  // Laser 0.22 m ahead of the robot on every line (poses printed to 1e-6); odometry = robot pose.
+  EXPECT_NEAR(rec.base_to_laser.x, 0.22, 1e-6);
+  EXPECT_NEAR(rec.base_to_laser.y, 0.0, 1e-6);
+  EXPECT_NEAR(rec.base_to_laser.theta, 0.0, 1e-6);
+  EXPECT_LT(report.max_mounting_shift, 1e-5);
+  EXPECT_EQ(report.odometry_source, "scan odometry fields");
+  EXPECT_DOUBLE_EQ(rec.scans[1].odom.x, 0.205315);
+  EXPECT_DOUBLE_EQ(rec.scans[1].odom.theta, -0.003076);
 }
 
 TEST(CarmenLog, PlainGzipAndBzip2GiveIdenticalRecords)

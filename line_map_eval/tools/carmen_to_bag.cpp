@@ -1,5 +1,6 @@
 // rosrun line_map_eval carmen_to_bag IN.clf[.bz2|.gz] OUT.bag [options]
 // Converts a CARMEN log (and optionally its corrected keyframe log) into a rosbag.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -18,7 +19,7 @@ namespace
 {
 const char* const kUsage = R"(usage: carmen_to_bag IN.clf[.bz2|.gz] OUT.bag [options]
 
-Converts a CARMEN log (FLASER/ROBOTLASER1 scans with odometry; plain, gzip or bzip2)
+Converts a CARMEN log (FLASER/ROBOTLASER1/RAWLASER1..4 scans; plain, gzip or bzip2)
 into a rosbag: sensor_msgs/LaserScan on /scan (frame laser), tf odom->base_link per
 scan on /tf, base_link->laser on /tf_static and, with --corrected, nav_msgs/Path on
 /optimized_trajectory plus tf map->odom at every scan.
@@ -37,10 +38,16 @@ options:
   --max-range R     readings beyond R metres are invalid too (range_max at most R)
   --help            this text
 
-Beams: n readings span 180 degrees centred on the heading (increment pi/n for even n,
-pi/(n-1) for odd n). No return: sensors write their maximum, printed with a jitter of a few
-centimetres (81.87, 81.89, 81.91 m): the largest reading and the distinct readings below it in steps
-of at most 5 cm, within 1 % of it, are no-return codes; range_max is 5 mm below the lowest of them.
+Beams: ROBOTLASER1 and RAWLASER lines state their geometry (start angle, angular resolution, beam
+count, maximum range), which may change from line to line: every LaserScan carries its own
+angle_min, angle_increment and range_max (5 mm below the line's maximum range). FLASER: n readings
+span 180 degrees centred on the heading (increment pi/n for even n, pi/(n-1) for odd n). No return:
+sensors write their maximum, printed with a jitter of a few centimetres (81.87, 81.89, 81.91 m): the
+largest reading and the distinct readings below it in steps of at most 5 cm, within 1 % of it, are
+no-return codes; range_max is 5 mm below the lowest of them.
+Odometry: FLASER odom fields, ROBOTLASER1 robot pose; RAWLASER (no pose) and logs whose scan poses
+never change: ODOM lines interpolated at the scan stamps. base_link->laser: PARAM
+robot_frontlaser_offset, else the laser pose relative to the robot pose on the first line.
 Exit code 1 on bad input.)";
 
 std::size_t parseCount(const std::string& option, const std::string& value, std::size_t min)
@@ -184,12 +191,33 @@ int main(int argc, char** argv)
     std::printf("  scans        %zu (%zu beams, angle_min %.4f rad, increment %.6f rad, range_max %.3f m)\n",
                 summary.scans, rec.geometry.beam_count, rec.geometry.angle_min, rec.geometry.angle_increment,
                 rec.geometry.range_max);
+    if (report.geometries > 1)
+    {
+      std::size_t own = 0, min_beams = rec.geometry.beam_count, max_beams = rec.geometry.beam_count;
+      double min_angle = rec.geometry.angle_min, max_angle = rec.geometry.angle_min;
+      for (const RecordedScan& s : rec.scans)
+      {
+        const ScanGeometry& g = rec.geometryOf(s);
+        own += s.geometry ? 1 : 0;
+        min_beams = std::min(min_beams, g.beam_count);
+        max_beams = std::max(max_beams, g.beam_count);
+        min_angle = std::min(min_angle, g.angle_min);
+        max_angle = std::max(max_angle, g.angle_min);
+      }
+      std::printf(
+          "  geometry     %zu distinct, %zu scans differ from the first: %zu..%zu beams, "
+          "angle_min %.4f..%.4f rad\n",
+          report.geometries, own, min_beams, max_beams, min_angle, max_angle);
+    }
     std::printf("  duration     %.1f s (median scan period %.4f s)\n", summary.duration, summary.scan_time);
     std::printf("  stamps       %zu moved to keep time increasing (largest move %.3f s)\n",
                 report.stamps_adjusted, report.max_stamp_shift);
     std::printf("  odometry     %s\n", report.odometry_source.c_str());
     std::printf("  base->laser  (%.3f, %.3f, %.3f) from %s\n", rec.base_to_laser.x, rec.base_to_laser.y,
                 rec.base_to_laser.theta, report.mounting_source.c_str());
+    if (report.max_mounting_shift > 0.0 || report.max_mounting_turn > 0.0)
+      std::printf("               other lines differ by up to %.4f m, %.4f rad\n", report.max_mounting_shift,
+                  report.max_mounting_turn);
     if (!corrected_path.empty())
       std::printf("  keyframes    %zu, trajectory emitted %zu times (every %zu)\n", summary.keyframes,
                   summary.trajectory_emissions, bag_options.trajectory_every);

@@ -32,8 +32,8 @@ struct BagContents
 };
 
 /// Topics and frame names are those of BagWriterOptions (the writer's defaults unless changed).
-/// Scans must share their geometry; the odometry at a scan stamp is the odom->base_link sample
-/// with that exact stamp, or the interpolation of the two around it.
+/// A scan whose geometry differs from the first one's keeps its own; the odometry at a scan stamp
+/// is the odom->base_link sample with that exact stamp, or the interpolation of the two around it.
 /// Throws std::runtime_error naming the file on failure (missing topic, missing tf, ...).
 BagContents readBag(const std::string& path, const BagWriterOptions& options = {});
 

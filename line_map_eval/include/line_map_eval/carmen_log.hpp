@@ -1,13 +1,20 @@
 // ROS-free reader for CARMEN log files (plain, gzip or bzip2, detected by their
-// magic bytes). Understands FLASER, ROBOTLASER1, ODOM and PARAM lines; comment
-// lines (#), NEFF and every other message type are skipped.
+// magic bytes). Understands FLASER, ROBOTLASER1, RAWLASER1..4, ODOM and PARAM lines;
+// comment lines (#), NEFF and every other message type are skipped.
 //
 //   FLASER n r_1..r_n x y theta odom_x odom_y odom_theta timestamp hostname logger_timestamp
 //   ROBOTLASER1 laser_type start_angle fov angular_resolution max_range accuracy remission_mode
 //               n r_1..r_n m rem_1..rem_m laser_x laser_y laser_theta robot_x robot_y robot_theta
 //               tv rv forward_safety_dist side_safety_dist turn_axis timestamp hostname logger_timestamp
+//   RAWLASERx   laser_type start_angle fov angular_resolution max_range accuracy remission_mode
+//               n r_1..r_n m rem_1..rem_m timestamp hostname logger_timestamp      (x = 1..4, no pose)
 //   ODOM x y theta tv rv accel timestamp hostname logger_timestamp
 //   PARAM name value [timestamp hostname logger_timestamp]
+//
+// ROBOTLASER1 and RAWLASERx state their beam geometry on every line, and it may change from line
+// to line: each scan keeps its own (carmenScanGeometry). Their n beams, angular_resolution apart,
+// must span field_of_view to within half a beam, fov - res/2 <= n*res and (n-1)*res <= fov + res/2
+// (n = fov/res, or fov/res + 1 with a beam at both ends); other counts make the line malformed.
 #pragma once
 
 #include <cstddef>
@@ -22,20 +29,22 @@ namespace line_map_eval
 enum class CarmenScanType
 {
   FLaser,
-  RobotLaser1
+  RobotLaser1,
+  RawLaser  ///< RAWLASER1..4: no pose on the line
 };
 
 struct CarmenScan
 {
   CarmenScanType type = CarmenScanType::FLaser;
   std::vector<float> ranges;  ///< [m], as written (no-return readings carry the sensor maximum)
-  Pose2 laser_pose;           ///< FLASER x y theta; ROBOTLASER1 laser pose
-  Pose2 robot_pose;           ///< FLASER odom_x odom_y odom_theta; ROBOTLASER1 robot pose
+  Pose2 laser_pose;           ///< FLASER x y theta; ROBOTLASER1 laser pose; RAWLASER none (identity)
+  Pose2 robot_pose;           ///< FLASER odom_x odom_y odom_theta; ROBOTLASER1 robot pose; RAWLASER none
   double timestamp = 0.0;
   double logger_timestamp = 0.0;
   std::size_t line = 0;  ///< 1-based line number in the file
 
-  // ROBOTLASER1 only (left at their defaults for FLASER).
+  // ROBOTLASER1 and RAWLASER only (left at their defaults for FLASER).
+  int raw_laser = 0;  ///< x of RAWLASERx (1..4), 0 for the other types
   int laser_type = -1;
   double start_angle = 0.0;
   double field_of_view = 0.0;
@@ -44,6 +53,7 @@ struct CarmenScan
   double accuracy = 0.0;
   int remission_mode = 0;
   std::vector<float> remissions;
+  // ROBOTLASER1 only.
   double tv = 0.0, rv = 0.0;
   double forward_safety_dist = 0.0, side_safety_dist = 0.0, turn_axis = 0.0;
 };
@@ -102,6 +112,12 @@ std::vector<std::size_t> pairKeyframes(const CarmenLog& raw, const CarmenLog& co
 /// half a centimetre (half the logs' print resolution) below it, so that a reading
 /// r is valid iff range_min <= r <= range_max (sensor_msgs/LaserScan semantics).
 ScanGeometry carmenBeamGeometry(std::size_t beam_count, double no_return, double range_min = 0.0);
+
+/// The beam geometry a scan's line states. ROBOTLASER1/RAWLASER: angle_min = start_angle,
+/// angle_increment = angular_resolution (field_of_view / (n - 1) when that is not positive);
+/// FLASER: carmenBeamGeometry(n). range_max is 5 mm below `no_return`, or, when that is not
+/// positive, below the line's maximum_range (ROBOTLASER1/RAWLASER; FLASER needs `no_return`).
+ScanGeometry carmenScanGeometry(const CarmenScan& scan, double no_return, double range_min = 0.0);
 
 /// Readings within this fraction below the largest reading of a log may be no-return codes.
 constexpr double kNoReturnSpan = 0.01;

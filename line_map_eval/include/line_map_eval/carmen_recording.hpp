@@ -35,14 +35,26 @@ struct CarmenRecordingReport
   std::string odometry_source;      ///< "scan odometry fields", "ODOM lines" or "scan laser poses"
   std::string mounting_source;      ///< where base_link->laser came from
   double no_return_range = 0.0;     ///< lowest value taken as "no return"
+  std::size_t geometries = 0;       ///< distinct beam geometries among the scans
+  /// Largest difference between a scan's own laser-vs-robot pose and the mounting taken from the
+  /// first scan (translation [m], rotation [rad]); 0 unless the mounting came from the scan poses.
+  double max_mounting_shift = 0.0, max_mounting_turn = 0.0;
 };
 
 /// Every raw scan becomes a RecordedScan (stamp, ranges, odometry of base_link).
-///  - odometry: the FLASER odom fields / ROBOTLASER1 robot pose; when those are constant over
-///    the log but ODOM lines move, ODOM interpolated at the scan stamps; with neither, the
-///    laser pose fields composed with the inverse mounting.
-///  - base_link->laser: PARAM robot_frontlaser_offset (forward offset in metres) of the raw log,
-///    else of the corrected log, else laser pose relative to robot pose of the first scan.
+///  - geometry: each scan's own (carmenScanGeometry); Recording::geometry is the first scan's, and
+///    a scan whose geometry differs carries it in RecordedScan::geometry. No return: for FLASER
+///    carmenNoReturnFloor of the log, for ROBOTLASER1/RAWLASER the line's maximum_range, unless
+///    options.no_return_range is set.
+///  - odometry: the FLASER odom fields / ROBOTLASER1 robot pose (robot_x/y/theta; the laser pose
+///    is that pose composed with the mounting); when those are constant over the log but ODOM
+///    lines move, ODOM interpolated at the scan stamps; with neither, the laser pose fields
+///    composed with the inverse mounting. RAWLASER lines carry no pose: ODOM interpolated at the
+///    scan stamp (the identity without ODOM lines). A log holding two RAWLASER sensors is refused.
+///  - base_link->laser: for the front laser (FLASER, ROBOTLASER1, RAWLASER1) PARAM
+///    robot_frontlaser_offset (forward offset in metres) of the raw log, else of the corrected log;
+///    else laser pose relative to robot pose on the first line with both (robot^-1 * laser; the
+///    largest deviation of the other lines is reported); else the identity.
 ///  - keyframes (when `corrected` is given): paired to raw scans by their ranges
 ///    (pairKeyframes); pose = corrected laser pose * (base_link->laser)^-1.
 Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected,

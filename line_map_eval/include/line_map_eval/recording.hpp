@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,7 +15,7 @@ namespace line_map_eval
 {
 using linemap::Pose2;
 
-/// Fixed beam geometry of every scan of a recording.
+/// Beam geometry of a scan.
 struct ScanGeometry
 {
   double angle_min = 0.0;
@@ -42,6 +43,9 @@ struct RecordedScan
   double stamp = 0.0;         ///< seconds, strictly increasing over the recording
   std::vector<float> ranges;  ///< beam_count values [m]
   Pose2 odom;                 ///< odometry pose of base_link in odom at `stamp`
+  /// This scan's own geometry where it differs from Recording::geometry (sensors that change their
+  /// start angle or beam count from scan to scan); empty: the recording's.
+  std::optional<ScanGeometry> geometry;
 };
 
 /// A keyframe with its corrected (optimised / true) pose of base_link in map.
@@ -53,12 +57,18 @@ struct CorrectedKeyframe
 
 struct Recording
 {
-  ScanGeometry geometry;
-  Pose2 base_to_laser;  ///< static mounting of the laser on base_link
+  ScanGeometry geometry;  ///< of every scan without a geometry of its own
+  Pose2 base_to_laser;    ///< static mounting of the laser on base_link
   std::vector<RecordedScan> scans;
   /// Corrected keyframes in scan order (empty when there is no trajectory).
   std::vector<CorrectedKeyframe> keyframes;
   std::string source;  ///< where it came from, for captions and logs
+
+  /// The beam geometry of `scan`, one of this recording's scans.
+  const ScanGeometry& geometryOf(const RecordedScan& scan) const
+  {
+    return scan.geometry ? *scan.geometry : geometry;
+  }
 };
 
 }  // namespace line_map_eval

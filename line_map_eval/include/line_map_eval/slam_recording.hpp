@@ -22,7 +22,8 @@ struct SlamRecordingResult
   double cpu_seconds = 0.0;  ///< the same in CPU time of this thread
 };
 
-/// Feeds every scan (valid beams, in the base frame by the recording's mounting) with its odometry
+/// Feeds every scan (valid beams under its own geometry, in the base frame by the recording's mounting) with
+/// its odometry
 /// (`use_odometry` false: none, the laser-only case) to a LaserSlam.
 SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::LaserSlamParams& params,
                             bool use_odometry = true);

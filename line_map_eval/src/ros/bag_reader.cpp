@@ -77,23 +77,25 @@ BagContents readBag(const std::string& path, const BagWriterOptions& options)
       {
         const auto scan = m.instantiate<sensor_msgs::LaserScan>();
         if (!scan) throw std::runtime_error(path + ": " + topic + " does not hold sensor_msgs/LaserScan");
+        ScanGeometry g;
+        g.angle_min = scan->angle_min;
+        g.angle_increment = scan->angle_increment;
+        g.beam_count = scan->ranges.size();
+        g.range_min = scan->range_min;
+        g.range_max = scan->range_max;
+        RecordedScan s;
         if (!have_geometry)
         {
-          rec.geometry.angle_min = scan->angle_min;
-          rec.geometry.angle_increment = scan->angle_increment;
-          rec.geometry.beam_count = scan->ranges.size();
-          rec.geometry.range_min = scan->range_min;
-          rec.geometry.range_max = scan->range_max;
+          rec.geometry = g;
           out.scan_frame = stripSlash(scan->header.frame_id);
           have_geometry = true;
         }
-        else if (scan->ranges.size() != rec.geometry.beam_count)
+        else if (g.angle_min != rec.geometry.angle_min || g.angle_increment != rec.geometry.angle_increment ||
+                 g.beam_count != rec.geometry.beam_count || g.range_min != rec.geometry.range_min ||
+                 g.range_max != rec.geometry.range_max)
         {
-          throw std::runtime_error(path + ": scan " + std::to_string(rec.scans.size()) + " has " +
-                                   std::to_string(scan->ranges.size()) + " ranges, the first one " +
-                                   std::to_string(rec.geometry.beam_count));
+          s.geometry = g;  // this scan's own (sensors that change start angle or beam count)
         }
-        RecordedScan s;
         s.stamp = scan->header.stamp.toSec();
         s.ranges = scan->ranges;
         rec.scans.push_back(std::move(s));

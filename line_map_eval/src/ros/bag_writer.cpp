@@ -63,9 +63,9 @@ void validate(const Recording& rec, const std::string& path, const BagWriterOpti
       fail("scan " + std::to_string(i) + " has stamp " + std::to_string(s.stamp) + " (must be positive)");
     if (i > 0 && !(s.stamp > rec.scans[i - 1].stamp))
       fail("scan " + std::to_string(i) + " stamp does not increase");
-    if (s.ranges.size() != rec.geometry.beam_count)
+    if (s.ranges.size() != rec.geometryOf(s).beam_count)
       fail("scan " + std::to_string(i) + " has " + std::to_string(s.ranges.size()) +
-           " ranges, geometry says " + std::to_string(rec.geometry.beam_count));
+           " ranges, geometry says " + std::to_string(rec.geometryOf(s).beam_count));
   }
   for (std::size_t k = 0; k < rec.keyframes.size(); ++k)
   {
@@ -119,14 +119,8 @@ void writeBag(const Recording& rec, const std::string& path, const BagWriterOpti
 
     sensor_msgs::LaserScan scan;
     scan.header.frame_id = options.laser_frame;
-    scan.angle_min = static_cast<float>(rec.geometry.angle_min);
-    scan.angle_increment = static_cast<float>(rec.geometry.angle_increment);
-    scan.angle_max = static_cast<float>(rec.geometry.angle_min +
-                                        rec.geometry.angle_increment * (rec.geometry.beam_count - 1));
     scan.time_increment = 0.0f;
     scan.scan_time = static_cast<float>(info.scan_time);
-    scan.range_min = static_cast<float>(rec.geometry.range_min);
-    scan.range_max = static_cast<float>(rec.geometry.range_max);
 
     nav_msgs::Path path_msg;
     path_msg.header.frame_id = options.map_frame;
@@ -161,7 +155,15 @@ void writeBag(const Recording& rec, const std::string& path, const BagWriterOpti
         tf.transforms.push_back(toTransform(options.map_frame, options.odom_frame, stamp, map_to_odom));
       bag.write("/tf", stamp, tf);
 
+      // Each scan's own geometry: some sensors change start angle and beam count between scans.
+      const ScanGeometry& g = rec.geometryOf(s);
       scan.header.stamp = stamp;
+      scan.angle_min = static_cast<float>(g.angle_min);
+      scan.angle_increment = static_cast<float>(g.angle_increment);
+      scan.angle_max =
+          static_cast<float>(g.angle_min + g.angle_increment * static_cast<double>(g.beam_count - 1));
+      scan.range_min = static_cast<float>(g.range_min);
+      scan.range_max = static_cast<float>(g.range_max);
       scan.ranges = s.ranges;
       bag.write(options.scan_topic, stamp, scan);
 
