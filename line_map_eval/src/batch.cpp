@@ -267,7 +267,7 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
       const RecordedScan& scan = rec.scans[frames[k].scan];
       try
       {
-        const auto& extracted = extractor.extract(scanInput(rec.geometry, scan.ranges));
+        const auto& extracted = extractor.extract(scanInput(rec.geometryOf(scan), scan.ranges));
         const auto& points = extractor.preparedScan().points;
         for (const auto& s : extracted.segments)
         {
