@@ -5,6 +5,7 @@
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -293,6 +294,24 @@ void CaeRlsm::load(const std::string& path)
   if (fresh.leaves_.size() != leaf_count)
     throw MapFileError("map file '" + path + "': " + std::to_string(fresh.leaves_.size()) +
                        " leaves found, field 'leaf_count' says " + std::to_string(leaf_count));
+  // The file lists the leaves by segment; regrouping replays them keyframe by keyframe in arrival order
+  // (the crossing resolution after each keyframe depends on it), so they are put back in keyframe order.
+  std::vector<std::uint32_t> order(fresh.leaves_.size());
+  for (std::uint32_t l = 0; l < order.size(); ++l) order[l] = l;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b)
+                   { return fresh.leaves_[a].slot < fresh.leaves_[b].slot; });
+  std::vector<std::uint32_t> position(order.size());
+  std::vector<LeafRecord> sorted;
+  sorted.reserve(order.size());
+  for (std::uint32_t i = 0; i < order.size(); ++i)
+  {
+    position[order[i]] = i;
+    sorted.push_back(fresh.leaves_[order[i]]);
+  }
+  fresh.leaves_ = std::move(sorted);
+  for (auto& entry : fresh.nodes_)
+    for (std::uint32_t& l : entry.second.leaves) l = position[l];
   fresh.rebuildIndex();
 
   // Everything parsed and checked: take it over (threads and spatial_index stay as configured).
