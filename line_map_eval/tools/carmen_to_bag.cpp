@@ -216,7 +216,7 @@ int main(int argc, char** argv)
     std::printf("  base->laser  (%.3f, %.3f, %.3f) from %s\n", rec.base_to_laser.x, rec.base_to_laser.y,
                 rec.base_to_laser.theta, report.mounting_source.c_str());
     if (report.max_mounting_shift > 0.0 || report.max_mounting_turn > 0.0)
-      std::printf("               other lines differ by up to %.4f m, %.4f rad\n", report.max_mounting_shift,
+      std::printf("               other lines differ by up to %.2g m, %.2g rad\n", report.max_mounting_shift,
                   report.max_mounting_turn);
     if (!corrected_path.empty())
       std::printf("  keyframes    %zu, trajectory emitted %zu times (every %zu)\n", summary.keyframes,
