@@ -30,9 +30,10 @@ CaeParams CaeParams::fromParams(const linemap::ParamSet& params)
 void CaeParams::validate() const
 {
   fusion.validate();
-  if (!(crossing_overhang >= 0.0 && std::isfinite(crossing_overhang)))
+  // A segment cut at a crossing ends there up to rounding, which must not count as an overhang again.
+  if (!(crossing_overhang >= 1e-3 && std::isfinite(crossing_overhang)))
     throw linemap::ParameterError("parameter 'crossing_overhang': " + std::to_string(crossing_overhang) +
-                                  " is not a finite distance >= 0 m");
+                                  " is not a finite distance >= 0.001 m");
   if (!(crossing_chain_angle >= 0.0 && crossing_chain_angle < 0.5 * linemap::kPi))
     throw linemap::ParameterError("parameter 'crossing_chain_angle': " +
                                   std::to_string(crossing_chain_angle) + " is not in [0, pi/2) rad");

@@ -47,7 +47,7 @@ struct CaeParams
   /// separately, and the two pieces cut at the vertex into a chain. A pair crossing at a larger angle
   /// loses its least supported arm (a T). Off = the paper's behaviour.
   bool resolve_crossings = true;
-  double crossing_overhang = 0.01;  ///< [m] overhangs up to this are not crossings (an exact T or L)
+  double crossing_overhang = 0.01;  ///< [m] overhangs up to this are not crossings; >= 1 mm
   double crossing_chain_angle = 20.0 * linemap::kPi / 180.0;  ///< [rad] largest heading deviation of a chain
 
   /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge",
