@@ -63,9 +63,9 @@ struct PathModel
 /// as two lines 10 cm apart, as in a real building.
 inline constexpr double kDefaultWallThickness = 0.10;
 
-/// Largest sagitta of an arc's pieces when the world file has no `arc_sagitta` [m]: half the
-/// smallest range noise std of our sensor profiles, so no laser tells the chain from the true
-/// arc, while the pieces stay tens of centimetres long on radii of metres.
+/// Largest sagitta of an arc's pieces when the world file has no `arc_sagitta` [m]: the range noise
+/// std of our finest sensor profile at range 0, so no laser tells the chain from the true arc,
+/// while the pieces stay tens of centimetres long on radii of metres.
 inline constexpr double kDefaultArcSagitta = 0.005;
 
 struct World
