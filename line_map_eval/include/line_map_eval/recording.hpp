@@ -45,7 +45,7 @@ struct RecordedScan
   Pose2 odom;                 ///< odometry pose of base_link in odom at `stamp`
   /// This scan's own geometry where it differs from Recording::geometry (sensors that change their
   /// start angle or beam count from scan to scan); empty: the recording's.
-  std::optional<ScanGeometry> geometry;
+  std::optional<ScanGeometry> geometry = std::nullopt;
 };
 
 /// A keyframe with its corrected (optimised / true) pose of base_link in map.
