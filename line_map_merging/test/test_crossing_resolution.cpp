@@ -207,6 +207,32 @@ TEST(CrossingResolution, WallThroughAnotherLosesItsOvershoot)
   EXPECT_EQ(map[0].merged_count + map[1].merged_count, 8u);
 }
 
+TEST(CrossingResolution, FacesFittedAcrossEachOtherLoseTheWeakerArm)
+{
+  // The two faces of a thin wall, fitted 2.9 deg apart so that they cross: the north face (0, 0) ->
+  // (4, 0) running east, seen 4 times, and the south face (3, 0.05) -> (0, -0.1) running west, seen
+  // twice, crossing y = 0 at x = 2. Opposite facing sides: two walls, not a bend. Arm supports: north
+  // 4 x 2 m on each side; south 2 x 1.0012 m before the crossing, 2 x 2.0025 m after. The south face's
+  // first arm goes: (2, 0) -> (0, -0.1).
+  CaeRlsm cae;
+  for (int i = 0; i < 4; ++i)
+  {
+    Keyframe k;
+    k.index = i;
+    k.stamp = i;
+    k.segments = {Segment2(Vec2(0, 0), Vec2(4, 0))};
+    if (i < 2) k.segments.push_back(Segment2(Vec2(3, 0.05), Vec2(0, -0.1)));
+    cae.addKeyframe(k);
+  }
+  const auto map = cae.map();
+  ASSERT_EQ(map.size(), 2u);
+  EXPECT_NEAR((map[0].segment.start - Vec2(0, 0)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((map[0].segment.end - Vec2(4, 0)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((map[1].segment.start - Vec2(2, 0)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((map[1].segment.end - Vec2(0, -0.1)).norm(), 0.0, 1e-9);
+  EXPECT_EQ(map[1].merged_count, 2u);
+}
+
 TEST(CrossingResolution, BadParametersThrow)
 {
   CaeParams params;
