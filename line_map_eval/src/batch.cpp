@@ -321,6 +321,10 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
   const LookupTable table = LookupTable::build(scan_points, table_params);
   result.table_ms = msSince(table_start);
   result.scan_points = scan_points.size();
+  const auto structure_start = Clock::now();
+  const StructurePoints structure =
+      classifyStructure(scan_points, table_params.sigma, metric_params.coverage.structure);
+  result.structure_ms = msSince(structure_start);
   registered.scans.clear();
 
   for (const auto& name : names)
@@ -415,13 +419,15 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
         }
     }
     MapMetrics metrics = computeMapMetrics(table, scan_points, originals_world, run.final_map, metric_params,
-                                           run.provenance ? &provenance : nullptr);
+                                           run.provenance ? &provenance : nullptr, &structure);
     run.quality = metrics.quality;
     run.error = metrics.error;
     run.error_assignment = run.provenance ? "provenance" : "nearest segment meeting the fusion conditions";
     run.point_coverage = std::move(metrics.point_coverage);
+    run.structure_coverage = std::move(metrics.structure_coverage);
     run.length_coverage = metrics.length_coverage;
     run.redundancy = std::move(metrics.redundancy);
+    run.crossing_pairs = std::move(metrics.crossing_pairs);
     run.evaluation_ms = msSince(eval_start);
     if (dataset.truth)
       run.ground_truth = evaluateAgainstGroundTruth(*dataset.truth, run.final_map, *truth_params);
@@ -440,8 +446,17 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
       figure.scan_points = scan_points;
       figure.caption = caption;
       figure.show_coverage = true;
+      // Uncovered straight structure in its own colour; the rest of the uncovered points is clutter.
+      std::size_t next = 0;
       for (const std::size_t i : run.point_coverage.uncovered)
-        figure.uncovered_points.push_back(scan_points[i]);
+      {
+        const auto& on_structure = run.structure_coverage.uncovered;
+        while (next < on_structure.size() && on_structure[next] < i) ++next;
+        if (next < on_structure.size() && on_structure[next] == i)
+          figure.uncovered_structure_points.push_back(scan_points[i]);
+        else
+          figure.uncovered_points.push_back(scan_points[i]);
+      }
       for (const auto& [i, j] : run.redundancy.pair_indices)
         figure.redundant_pairs.emplace_back(run.final_map[i], run.final_map[j]);
       if (figures)

@@ -88,6 +88,7 @@ void throwIfFailed(cairo_status_t status, const std::string& file)
 
 constexpr std::uint32_t kScanGrey = 0xFFB4B4B4u;  // opaque light grey, native-endian ARGB
 constexpr std::uint32_t kUncoveredOrange = 0xFFFF8000u;
+constexpr std::uint32_t kUnmappedCyan = 0xFF00B4F0u;  // neither the map's dark blue nor the orange
 
 /// Dots of `colour` (dot x dot canvas units) at the points as an image covering panel k's map
 /// area at `scale` image pixels per canvas unit: a raster layer keeps SVG/PDF small with 10^5 points.
@@ -245,6 +246,8 @@ void drawLegend(cairo_t* cr, const MapFigure& f, double x, double y, const Figur
   {
     square(kUncoveredOrange, 4.0);
     label("uncovered scan point (" + std::to_string(f.uncovered_points.size()) + ")");
+    square(kUnmappedCyan, 4.0);
+    label("unmapped straight structure (" + std::to_string(f.uncovered_structure_points.size()) + ")");
     line(kRedundantMagenta, 4.0 * style.line_width);
     label("redundant pair (" + std::to_string(f.redundant_pairs.size()) + ")");
   }
@@ -261,7 +264,11 @@ void drawPanel(cairo_t* cr, const MapFigure& f, const FigureLayout& l, int panel
   if (f.lookup) drawLookup(cr, *f.lookup, l, panel);
   drawScanPoints(cr, f.scan_points, l, panel, raster_scale);
   // Uncovered points as large as the grey ones, so the picture shows their true share.
-  if (f.show_coverage) drawScanPoints(cr, f.uncovered_points, l, panel, raster_scale, kUncoveredOrange);
+  if (f.show_coverage)
+  {
+    drawScanPoints(cr, f.uncovered_points, l, panel, raster_scale, kUncoveredOrange);
+    drawScanPoints(cr, f.uncovered_structure_points, l, panel, raster_scale, kUnmappedCyan);
+  }
 
   // Redundant pairs under the map: a wide translucent band over both segments of each pair.
   if (f.show_coverage && !f.redundant_pairs.empty())

@@ -190,6 +190,8 @@ MapMetrics MapEvaluator::evaluate(const std::vector<linemap::Segment2>& map)
     table_points_.clear();
     for (const Frame& f : scans_) appendWorldPoints(f.pose, f.points, table_points_);
     table_ = LookupTable::build(table_points_, params_.table);
+    // Straight structure depends on the points alone: classified once per table, reused per map.
+    structure_ = classifyStructure(table_points_, params_.table.sigma, params_.coverage.structure);
     table_dirty_ = false;
   }
   std::vector<linemap::Segment2> originals;
@@ -199,7 +201,7 @@ MapMetrics MapEvaluator::evaluate(const std::vector<linemap::Segment2>& map)
   // The map message carries no provenance: each original goes to the nearest map segment that
   // meets the fusion conditions with it.
   return computeMapMetrics(table_, table_points_, originals, map,
-                           {params_.quality, params_.fusion, params_.coverage});
+                           {params_.quality, params_.fusion, params_.coverage}, nullptr, &structure_);
 }
 
 std::size_t MapEvaluator::originalCount() const
@@ -224,6 +226,7 @@ void MapEvaluator::reset()
   segment_gate_ = line_map_merging::KeyframeGate(params_.gate);
   table_ = LookupTable();
   table_points_.clear();
+  structure_ = StructurePoints();
   table_dirty_ = true;
 }
 

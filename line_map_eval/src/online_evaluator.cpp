@@ -114,6 +114,9 @@ std::optional<MapMetrics> OnlineEvaluator::evaluateIfDue(double now, bool force)
   counters_.last_eval_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   counters_.last_quality = m.quality.quality;
+  counters_.last_structure_coverage = m.structure_coverage.fraction() * 100.0;
+  counters_.last_unmapped_structure = m.structure_coverage.unmapped_length;
+  counters_.last_crossing_pairs = m.crossing_pairs.size();
   dirty_ = false;
   return m;
 }
@@ -144,6 +147,9 @@ std::vector<std::pair<std::string, std::string>> OnlineEvaluator::diagnostics() 
           {"unmatched trajectory poses", n(c.unmatched_poses)},
           {"time jumps", n(c.time_jumps)},
           {"last quality [%]", d(c.last_quality)},
+          {"last structure coverage [%]", d(c.last_structure_coverage)},
+          {"last unmapped structure [m]", d(c.last_unmapped_structure)},
+          {"last crossing pairs", n(c.last_crossing_pairs)},
           {"last evaluation [ms]", d(c.last_eval_ms)}};
 }
 

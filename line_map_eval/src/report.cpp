@@ -35,11 +35,28 @@ struct Column
 /// The full table of report.md.
 std::vector<Column> columns()
 {
-  return {{"merger", true},        {"scans"},        {"orig segs"},    {"orig min mm"},
-          {"orig max mm"},         {"orig mean mm"}, {"map segs"},     {"map min mm"},
-          {"map max mm"},          {"map mean mm"},  {"quality %"},    {"error mm"},
-          {"unassigned"},          {"point cov %"},  {"length cov %"}, {"redundant pairs"},
-          {"redundant overlap m"}, {"frame ms"},     {"total ms"}};
+  return {{"merger", true},
+          {"scans"},
+          {"orig segs"},
+          {"orig min mm"},
+          {"orig max mm"},
+          {"orig mean mm"},
+          {"map segs"},
+          {"map min mm"},
+          {"map max mm"},
+          {"map mean mm"},
+          {"quality %"},
+          {"error mm"},
+          {"unassigned"},
+          {"point cov %"},
+          {"length cov %"},
+          {"structure cov %"},
+          {"unmapped structure m"},
+          {"redundant pairs"},
+          {"redundant overlap m"},
+          {"crossing pairs"},
+          {"frame ms"},
+          {"total ms"}};
 }
 
 std::vector<std::string> row(const MergerRun& r)
@@ -59,18 +76,22 @@ std::vector<std::string> row(const MergerRun& r)
           std::to_string(r.error.unassigned),
           fixed(r.point_coverage.fraction() * 100.0, 2),
           fixed(r.length_coverage.fraction() * 100.0, 2),
+          fixed(r.structure_coverage.fraction() * 100.0, 2),
+          fixed(r.structure_coverage.unmapped_length, 2),
           std::to_string(r.redundancy.pairs),
           fixed(r.redundancy.overlap_length, 2),
+          std::to_string(r.crossing_pairs.size()),
           fixed(r.per_frame_ms, 3),
           fixed(r.total_ms, 1)};
 }
 
-/// The terminal table: what decides between maps, within 80 columns (two header lines).
+/// The terminal table: what decides between maps, within 80 columns (two header lines, columns one
+/// space apart, coverages to 0.1 %).
 std::vector<std::pair<Column, std::string>> compactColumns()
 {
-  return {
-      {{"merger", true}, ""},        {{"map"}, "segs"},    {{"quality"}, "%"},    {{"error"}, "mm"},
-      {{"unassigned"}, "originals"}, {{"point"}, "cov %"}, {{"length"}, "cov %"}, {{"redundant"}, "pairs"}};
+  return {{{"merger", true}, ""}, {{"map"}, "segs"},      {{"qual."}, "%"},    {{"error"}, "mm"},
+          {{"unass."}, "orig."},  {{"point"}, "cov %"},   {{"len."}, "cov %"}, {{"struct"}, "cov %"},
+          {{"unmap."}, "m"},      {{"redund."}, "pairs"}, {{"cross"}, "pairs"}};
 }
 
 std::vector<std::string> compactRow(const MergerRun& r)
@@ -80,9 +101,12 @@ std::vector<std::string> compactRow(const MergerRun& r)
           fixed(r.quality.quality, 2),
           fixed(r.error.mean_error * kMm, 2),
           std::to_string(r.error.unassigned),
-          fixed(r.point_coverage.fraction() * 100.0, 2),
-          fixed(r.length_coverage.fraction() * 100.0, 2),
-          std::to_string(r.redundancy.pairs)};
+          fixed(r.point_coverage.fraction() * 100.0, 1),
+          fixed(r.length_coverage.fraction() * 100.0, 1),
+          fixed(r.structure_coverage.fraction() * 100.0, 1),
+          fixed(r.structure_coverage.unmapped_length, 1),
+          std::to_string(r.redundancy.pairs),
+          std::to_string(r.crossing_pairs.size())};
 }
 
 /// Rounds for the JSON output so that the files stay readable; keeps null for non-finite values.
@@ -151,6 +175,18 @@ void emitRun(YAML::Emitter& out, const MergerRun& r)
   out << r.redundancy.pairs;
   key(out, "redundant_overlap_m");
   number(out, r.redundancy.overlap_length);
+  key(out, "structure_points");
+  out << r.structure_coverage.points;
+  key(out, "covered_structure_points");
+  out << r.structure_coverage.covered;
+  key(out, "structure_coverage_pct");
+  number(out, r.structure_coverage.fraction() * 100.0);
+  key(out, "structure_length_m");
+  number(out, r.structure_coverage.length);
+  key(out, "unmapped_structure_length_m");
+  number(out, r.structure_coverage.unmapped_length);
+  key(out, "crossing_pairs");
+  out << r.crossing_pairs.size();
   key(out, "per_frame_ms");
   number(out, r.per_frame_ms, 4);
   key(out, "total_ms");
@@ -231,7 +267,7 @@ std::string formatTable(const BatchResult& result)
     for (std::size_t i = 0; i < line.size(); ++i)
     {
       const std::string pad(width[i] - line[i].size(), ' ');
-      out << (i ? "  " : "") << (cols[i].left ? line[i] + pad : pad + line[i]);
+      out << (i ? " " : "") << (cols[i].left ? line[i] + pad : pad + line[i]);
     }
     out << '\n';
   }
@@ -281,13 +317,16 @@ std::string toJson(const BatchResult& result)
   number(out, result.extraction_ms);
   key(out, "table_ms");
   number(out, result.table_ms);
-  // The whole evaluation of one map: the shared table plus that map's quality, error and statistics.
+  key(out, "structure_ms");
+  number(out, result.structure_ms);
+  // The whole evaluation of one map: the shared table and structure classification plus that map's
+  // metrics.
   key(out, "map_evaluation_ms");
   out << YAML::BeginMap;
   for (const auto& r : result.mergers)
   {
     out << YAML::Key << r.name << YAML::Value;
-    number(out, result.table_ms + r.evaluation_ms);
+    number(out, result.table_ms + result.structure_ms + r.evaluation_ms);
   }
   out << YAML::EndMap;
   key(out, "parameters");
@@ -329,7 +368,14 @@ std::string toMarkdown(const BatchResult& result)
      << " mm); the error column measures them against their map segment, so what it adds beyond these "
         "comes from registration (the poses) and merging\n";
   md << "- lookup table: " << result.scan_points << " registered scan points under the final poses, built in "
-     << fixed(result.table_ms, 1) << " ms\n\n";
+     << fixed(result.table_ms, 1) << " ms\n";
+  if (!result.mergers.empty())
+  {
+    const StructureCoverage& s = result.mergers.front().structure_coverage;
+    md << "- straight structure: " << s.points << " of the registered points (" << fixed(s.length, 1)
+       << " m of walls), classified in " << fixed(result.structure_ms, 1) << " ms\n";
+  }
+  md << "\n";
 
   const auto cols = columns();
   md << "|";
@@ -348,10 +394,14 @@ std::string toMarkdown(const BatchResult& result)
         "scans; error the mean distance of the originals' midpoints to their map segment's line, over the "
         "originals assigned to one (unassigned: the others). Point coverage is the share of the registered "
         "scan points within one lookup-table sigma of a map segment; length coverage the share of the "
-        "originals' length lying within d_max and theta_max of a map segment. Redundant pairs are pairs of "
-        "map segments meeting the fusion conditions with each other (overlap: their summed overlap along "
-        "the line). Per-frame runtime is the median addKeyframe time of online mergers; total runtime covers "
-        "every addKeyframe, adjust and the final map.\n\n";
+        "originals' length lying within d_max and theta_max of a map segment. Structure coverage is the "
+        "share of the registered points on straight structure (thin, straight, continuous bands of points: "
+        "walls, not clutter) within that same radius of a map segment; unmapped structure the length of "
+        "the straight structure left uncovered. Redundant pairs are pairs of map segments meeting the "
+        "fusion conditions with each other (overlap: their summed overlap along the line); crossing pairs "
+        "are map segments crossing in an X, both running on past the crossing by more than the "
+        "point-coverage radius. Per-frame runtime is the median addKeyframe time of online mergers; total "
+        "runtime covers every addKeyframe, adjust and the final map.\n\n";
   md << "## Notes per merger\n\n";
   for (const auto& r : result.mergers)
   {

@@ -102,11 +102,13 @@ struct MergerRun
   LengthStatistics map;
   QualityResult quality;
   ErrorMetricResult error;
-  PointCoverage point_coverage;    ///< of the registered scan points (lookup table)
-  LengthCoverage length_coverage;  ///< of the originals extracted from the keyframes
-  RedundancyResult redundancy;     ///< pairs of map segments meeting the fusion conditions
-  std::string error_assignment;    ///< "provenance" or "nearest segment meeting the fusion conditions"
-  std::size_t adjustments = 0;     ///< adjust() calls (loop closure runs of online mergers)
+  PointCoverage point_coverage;          ///< of the registered scan points (lookup table)
+  StructureCoverage structure_coverage;  ///< of those on straight structure
+  LengthCoverage length_coverage;        ///< of the originals extracted from the keyframes
+  RedundancyResult redundancy;           ///< pairs of map segments meeting the fusion conditions
+  std::vector<line_map_merging::CrossingPair> crossing_pairs;  ///< map segments crossing in an X
+  std::string error_assignment;  ///< "provenance" or "nearest segment meeting the fusion conditions"
+  std::size_t adjustments = 0;   ///< adjust() calls (loop closure runs of online mergers)
   std::optional<double> quality_before_adjust;  ///< [%] map just before the final adjustment
   std::optional<GroundTruthResult> ground_truth;
   double per_frame_ms = std::numeric_limits<double>::quiet_NaN();  ///< median addKeyframe, online only
@@ -137,6 +139,7 @@ struct BatchResult
   std::size_t scan_points = 0;  ///< registered points in the lookup table
   double extraction_ms = 0.0;   ///< all keyframes
   double table_ms = 0.0;        ///< lookup table of the registered scans
+  double structure_ms = 0.0;    ///< classifying them as straight structure or not (once, for every map)
   std::vector<MergerRun> mergers;
 };
 

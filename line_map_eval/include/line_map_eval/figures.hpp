@@ -38,8 +38,9 @@ struct FigureStyle
 /// at each end, over the scan points in light grey, over the lookup table (if any) in greys
 /// (white for 0 to grey 40 % for 1, so the dark blue map stays visible on it). With
 /// show_coverage, the uncovered scan points are drawn orange over the grey ones and both segments
-/// of every redundant pair get a wide translucent magenta band under the map. The legend names
-/// the layers the panel has.
+/// of every redundant pair get a wide translucent magenta band under the map; uncovered points on
+/// straight structure (structure_coverage.hpp) are listed apart and drawn cyan: a wall the map left
+/// out, while the orange ones are then clutter. The legend names the layers the panel has.
 struct MapFigure
 {
   std::vector<linemap::Segment2> segments;
@@ -48,6 +49,8 @@ struct MapFigure
   std::string caption;                  ///< e.g. "intel - CAE-RLSM"
   bool show_coverage = false;           ///< draw (and list in the legend) the two layers below, even empty
   std::vector<linemap::Vec2> uncovered_points;  ///< scan points farther than the coverage radius from the map
+  /// Uncovered scan points on straight structure (then not also in uncovered_points).
+  std::vector<linemap::Vec2> uncovered_structure_points;
   std::vector<std::pair<linemap::Segment2, linemap::Segment2>> redundant_pairs;
 };
 

@@ -73,6 +73,8 @@ class MapEvaluator
   MapMetrics evaluate(const std::vector<linemap::Segment2>& map);
   /// The lookup table of the last evaluate() (empty before).
   const LookupTable& table() const { return table_; }
+  /// The straight-structure points of that table's scan points (structure coverage).
+  const StructurePoints& structure() const { return structure_; }
 
   std::size_t scanCount() const { return scans_.size(); }
   std::size_t originalCount() const;
@@ -112,6 +114,7 @@ class MapEvaluator
   line_map_merging::OdometryHistory history_;  // continuous laser pose of every scan and segment set seen
   LookupTable table_;
   std::vector<linemap::Vec2> table_points_;  // the registered scan points of table_ (point coverage)
+  StructurePoints structure_;                // which of them lie on straight structure
   bool table_dirty_ = true;
 };
 

@@ -38,6 +38,8 @@ struct EvaluatorCounters
   std::size_t dropped_scans = 0, rejected_scans = 0, rejected_poses = 0, unmatched_poses = 0, time_jumps = 0;
   std::size_t scans = 0, segment_sets = 0, trajectories = 0;  ///< received (posed) by the core
   double last_quality = 0.0, last_eval_ms = 0.0;
+  double last_structure_coverage = 0.0, last_unmapped_structure = 0.0;  ///< [%], [m]
+  std::size_t last_crossing_pairs = 0;
 };
 
 class OnlineEvaluator

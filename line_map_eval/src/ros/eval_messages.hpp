@@ -79,6 +79,9 @@ inline line_map_msgs::MapQuality toMessage(const MapMetrics& m, const std::strin
   q.length_coverage = m.length_coverage.fraction() * 100.0;
   q.redundant_pairs = static_cast<uint32_t>(m.redundancy.pairs);
   q.redundant_overlap = m.redundancy.overlap_length;
+  q.structure_coverage = m.structure_coverage.fraction() * 100.0;
+  q.unmapped_structure_length = m.structure_coverage.unmapped_length;
+  q.crossing_pairs = static_cast<uint32_t>(m.crossing_pairs.size());
   return q;
 }
 
