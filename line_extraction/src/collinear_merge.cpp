@@ -25,9 +25,14 @@ double lineMahalanobis(const Segment& a, const Segment& b)
   return std::min(d1.dot(inv * d1), d2.dot(inv * d2));
 }
 
-bool CollinearMerger::mergeable(const Segment& a, const Segment& b) const
+bool CollinearMerger::mergeable(const PreparedScan& scan, int a_last, int b_first, const Segment& a,
+                                const Segment& b) const
 {
-  if ((b.start - a.end).norm() > params_.max_gap) return false;
+  // Far from the sensor, two pieces of one wall whose facing points are neighbouring beams can be
+  // farther apart than max_gap.
+  const double fixed2 = params_.max_gap * params_.max_gap;
+  const double allowed2 = b_first == a_last + 1 ? scan.maxGap2(b_first, fixed2) : fixed2;
+  if ((b.start - a.end).squaredNorm() > allowed2) return false;
   return lineMahalanobis(a, b) < params_.gate;
 }
 
@@ -53,7 +58,9 @@ void CollinearMerger::refit(const PreparedScan& scan, ExtractionResult& out)
   if (!fit.valid) return;
   seg.angle = fit.angle;
   seg.radius = fit.radius;
-  seg.covariance = fit.covariance;
+  const double scale =
+      membersNoiseScale(scan, out.point_indices[seg.index_begin], out.point_indices[seg.index_end - 1]);
+  seg.covariance = fit.covariance * (scale * scale);
   const Vec2& n = fit.normal;
   const Vec2& first = scan.points[out.point_indices[seg.index_begin]];
   const Vec2& last = scan.points[out.point_indices[seg.index_end - 1]];
@@ -91,7 +98,9 @@ void CollinearMerger::merge(const PreparedScan& scan, const ExtractionResult& in
   tracked_ = false;
   for (const Segment& seg : in.segments)
   {
-    if (out.segments.size() > first_out && mergeable(out.segments.back(), seg))
+    if (out.segments.size() > first_out &&
+        mergeable(scan, out.point_indices[out.segments.back().index_end - 1],
+                  in.point_indices[seg.index_begin], out.segments.back(), seg))
     {
       // Sums and marks are built only for segments that do merge.
       track(scan, out);
@@ -109,7 +118,10 @@ void CollinearMerger::merge(const PreparedScan& scan, const ExtractionResult& in
   }
 
   // Around a full circle the last segment may continue the first one.
-  if (wrap && out.segments.size() >= first_out + 2 && mergeable(out.segments.back(), out.segments[first_out]))
+  if (wrap && out.segments.size() >= first_out + 2 &&
+      mergeable(scan, out.point_indices[out.segments.back().index_end - 1],
+                out.point_indices[out.segments[first_out].index_begin], out.segments.back(),
+                out.segments[first_out]))
   {
     // The last segment's points are at the tail of out.point_indices; appending
     // the first's points there gives the union in scan order.

@@ -122,7 +122,8 @@ class EmExtractor : public Extractor
       double best = outlier_weight_ * outlier_density_;
       for (std::size_t k = 0; k < lines_.size(); ++k)
       {
-        const double g = lines_[k].weight * density(lines_[k], scan.points[begin_ + i]);
+        const double g =
+            lines_[k].weight * density(lines_[k], scan.points[begin_ + i], scan.tolerance(begin_ + i, 1.0));
         if (g > best)
         {
           best = g;
@@ -142,11 +143,13 @@ class EmExtractor : public Extractor
   }
 
  private:
-  static double density(const Component& c, const Vec2& p)
+  /// The line's noise is c.sigma at the base range noise and grows with the point's noise scale.
+  static double density(const Component& c, const Vec2& p, double scale)
   {
-    const double z = (c.normal.dot(p) - c.offset) / c.sigma;
+    const double sigma = c.sigma * scale;
+    const double z = (c.normal.dot(p) - c.offset) / sigma;
     if (std::abs(z) > 8.0) return 0.0;  // below 1e-14 of the peak: skip the exp
-    return std::exp(-0.5 * z * z) / (std::sqrt(2.0 * linemap::kPi) * c.sigma);
+    return std::exp(-0.5 * z * z) / (std::sqrt(2.0 * linemap::kPi) * sigma);
   }
 
   /// A line through a poorly explained point and a random neighbour within `window` indices.
@@ -194,7 +197,8 @@ class EmExtractor : public Extractor
     double ssr = 0.0;
     for (int i = 0; i < n_; ++i)
     {
-      const double d = c.normal.dot(scan.points[begin_ + i]) - c.offset;
+      // In units of the base noise, as density() reads c.sigma.
+      const double d = (c.normal.dot(scan.points[begin_ + i]) - c.offset) / scan.tolerance(begin_ + i, 1.0);
       ssr += w[i] * d * d;
     }
     c.sigma = std::clamp(std::sqrt(ssr / sums.n), min_sigma_, max_sigma_);
@@ -210,7 +214,7 @@ class EmExtractor : public Extractor
       double support = 0.0;
       for (int i = 0; i < n_; ++i)
       {
-        const double g = c.weight * density(c, scan.points[begin_ + i]);
+        const double g = c.weight * density(c, scan.points[begin_ + i], scan.tolerance(begin_ + i, 1.0));
         weights_[i] = g > 0.0 ? g / ((1.0 - c.weight) * mixture_[i] + g) : 0.0;
         support += weights_[i];
       }
@@ -239,11 +243,12 @@ class EmExtractor : public Extractor
       for (int i = 0; i < n_; ++i)
       {
         const Vec2& p = scan.points[begin_ + i];
+        const double scale = scan.tolerance(begin_ + i, 1.0);
         const double o = outlier_weight_ * outlier_density_;
         double f = o;
         for (std::size_t k = 0; k < k_count; ++k)
         {
-          resp_[k * n_ + i] = lines_[k].weight * density(lines_[k], p);
+          resp_[k * n_ + i] = lines_[k].weight * density(lines_[k], p, scale);
           f += resp_[k * n_ + i];
         }
         for (std::size_t k = 0; k < k_count; ++k) resp_[k * n_ + i] /= f;
@@ -263,8 +268,9 @@ class EmExtractor : public Extractor
     for (int i = 0; i < n_; ++i)
     {
       const Vec2& p = scan.points[begin_ + i];
+      const double scale = scan.tolerance(begin_ + i, 1.0);
       double f = outlier_weight_ * outlier_density_;
-      for (const Component& c : lines_) f += c.weight * density(c, p);
+      for (const Component& c : lines_) f += c.weight * density(c, p, scale);
       mixture_[i] = f;
       ll += std::log(f);
     }

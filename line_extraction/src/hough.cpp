@@ -132,7 +132,7 @@ void HoughExtractor::extractRange(const PreparedScan& scan, PointRange range, Ex
     for (std::size_t k = 0; k < remaining_.size(); ++k)
     {
       const Vec2& p = scan.points[remaining_[k]];
-      if (std::abs(normal.dot(p) - offset_line) <= inlier_distance_)
+      if (std::abs(normal.dot(p) - offset_line) <= scan.tolerance(remaining_[k], inlier_distance_))
       {
         sums.add(p);
         taken_[k] = 1;
@@ -146,7 +146,8 @@ void HoughExtractor::extractRange(const PreparedScan& scan, PointRange range, Ex
       offset_line = fit.radius;
       for (std::size_t k = 0; k < remaining_.size(); ++k)
       {
-        if (std::abs(normal.dot(scan.points[remaining_[k]]) - offset_line) <= inlier_distance_)
+        if (std::abs(normal.dot(scan.points[remaining_[k]]) - offset_line) <=
+            scan.tolerance(remaining_[k], inlier_distance_))
         {
           inliers_.push_back(remaining_[k]);
           taken_[k] = 1;

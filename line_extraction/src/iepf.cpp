@@ -3,6 +3,7 @@
 // farthest point, which is where a corner or a jump lies.
 #include "line_extraction/iepf.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -20,7 +21,7 @@ void IepfSplitter::split(const PreparedScan& scan, PointRange range, double thre
   int start = range.begin;
   for (int i = range.begin + 1; i <= range.end; ++i)
   {
-    if (i == range.end || (scan.points[i] - scan.points[i - 1]).squaredNorm() > max_gap2)
+    if (i == range.end || scan.gapBefore(i, max_gap2))
     {
       splitGapFree(scan, {start, i}, threshold, pieces);
       start = i;
@@ -45,14 +46,18 @@ void IepfSplitter::splitGapFree(const PreparedScan& scan, PointRange range, doub
     }
     const Vec2 a = pts[r.begin], d = pts[r.end - 1] - a;
     const double len2 = d.squaredNorm();
+    // The split goes to the farthest point (a corner); the piece is accepted when every point
+    // lies within its own tolerance (threshold times its noise scale).
     int farthest = -1;
-    double best = 0.0;
+    double best = 0.0, worst_ratio = 0.0;
     for (int k = r.begin + 1; k < r.end - 1; ++k)
     {
       const Vec2 v = pts[k] - a;
       // Squared distance to the chord times |d|^2 (the point itself when the chord is degenerate).
       const double cross = d.x() * v.y() - d.y() * v.x();
       const double dist2 = len2 > 0.0 ? cross * cross : v.squaredNorm();
+      const double scale = scan.tolerance(k, 1.0);
+      worst_ratio = std::max(worst_ratio, dist2 / (scale * scale));
       if (dist2 > best)
       {
         best = dist2;
@@ -60,7 +65,7 @@ void IepfSplitter::splitGapFree(const PreparedScan& scan, PointRange range, doub
       }
     }
     const double limit = threshold * threshold * (len2 > 0.0 ? len2 : 1.0);
-    if (farthest < 0 || best <= limit)
+    if (farthest < 0 || worst_ratio <= limit)
     {
       pieces.push_back(r);
       continue;

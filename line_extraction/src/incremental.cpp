@@ -42,7 +42,7 @@ class Incremental : public Extractor
       // Seed: no gap and every point near its line.
       int gap = -1;
       for (int k = i + 1; k < i + seed_points_ && gap < 0; ++k)
-        if ((pts[k] - pts[k - 1]).squaredNorm() > max_gap2) gap = k;
+        if (scan.gapBefore(k, max_gap2)) gap = k;
       if (gap >= 0)
       {
         i = gap;
@@ -62,13 +62,13 @@ class Incremental : public Extractor
         // The block stops before the first gap.
         int block_end = std::min(end + step, range.end);
         for (int k = end; k < block_end; ++k)
-          if ((pts[k] - pts[k - 1]).squaredNorm() > max_gap2) block_end = k;
+          if (scan.gapBefore(k, max_gap2)) block_end = k;
         if (block_end == end) break;
         LineSums grown = sums;
         for (int k = end; k < block_end; ++k) grown.add(pts[k]);
         LineNormal candidate;
         if (fitNormal(grown, candidate) && allNear(scan, candidate, end, block_end) &&
-            candidate.distance(pts[i]) <= threshold_)
+            candidate.distance(pts[i]) <= scan.tolerance(i, threshold_))
         {
           sums = grown;
           line = candidate;
@@ -99,7 +99,7 @@ class Incremental : public Extractor
   bool allNear(const PreparedScan& scan, const LineNormal& line, int begin, int end) const
   {
     for (int k = begin; k < end; ++k)
-      if (line.distance(scan.points[k]) > threshold_) return false;
+      if (line.distance(scan.points[k]) > scan.tolerance(k, threshold_)) return false;
     return true;
   }
 

@@ -40,6 +40,7 @@ PipelineParams PipelineParams::fromParams(const linemap::ParamSet& ps)
   p.breakpoint.lambda = ps.getDouble("breakpoint_lambda", p.breakpoint.lambda);
   if (!(p.breakpoint.lambda > 0.0 && p.breakpoint.lambda < linemap::kPi / 2.0))
     bad("breakpoint_lambda", "must be in (0, pi/2) rad");
+  p.sensor = SensorModel::fromParams(ps);
   p.breakpoint.min_points = ps.getInt("cluster_min_points", p.breakpoint.min_points);
   if (p.breakpoint.min_points < 1) bad("cluster_min_points", "must be >= 1");
   p.remove_isolated = ps.getBool("remove_isolated", p.remove_isolated);
@@ -72,6 +73,7 @@ const ExtractionResult& LineExtractor::extract(const ScanInput& scan)
   clusters_.clear();
   preprocessor_.prepare(scan, prepared_);
   if (params_.remove_isolated) removeIsolatedPoints(prepared_, params_.breakpoint);
+  params_.sensor.annotate(prepared_);
   const PointRange all{0, static_cast<int>(prepared_.size())};
   if (all.size() < 2) return result_;
 

@@ -158,7 +158,8 @@ void appendSegment(const PreparedScan& scan, const LineFit& fit, const int* memb
   seg.end = project(scan.points[members[count - 1]], c, s, fit.radius);
   seg.angle = fit.angle;
   seg.radius = fit.radius;
-  seg.covariance = fit.covariance;
+  const double scale = membersNoiseScale(scan, members[0], members[count - 1]);
+  seg.covariance = fit.covariance * (scale * scale);
   seg.num_points = count;
   seg.index_begin = static_cast<int>(out.point_indices.size());
   out.point_indices.insert(out.point_indices.end(), members, members + count);
@@ -175,7 +176,8 @@ void appendSegment(const PreparedScan& scan, const LineFit& fit, PointRange memb
   seg.end = project(scan.points[members.end - 1], c, s, fit.radius);
   seg.angle = fit.angle;
   seg.radius = fit.radius;
-  seg.covariance = fit.covariance;
+  const double scale = membersNoiseScale(scan, members.begin, members.end - 1);
+  seg.covariance = fit.covariance * (scale * scale);
   seg.num_points = members.size();
   seg.index_begin = static_cast<int>(out.point_indices.size());
   out.point_indices.resize(out.point_indices.size() + members.size());

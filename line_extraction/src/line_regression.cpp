@@ -48,20 +48,21 @@ class LineRegression : public Extractor
     const double max_gap2 = max_gap_ * max_gap_;
     int last_gap = -1;  // largest k with a gap between points k-1 and k
     for (int k = range.begin + 1; k < range.begin + window_; ++k)
-      if ((scan.points[k] - scan.points[k - 1]).squaredNorm() > max_gap2) last_gap = k;
+      if (scan.gapBefore(k, max_gap2)) last_gap = k;
     for (int w = 0; w < count; ++w)
     {
       const int b = range.begin + w, e = b + window_;
-      if (w > 0 && (scan.points[e - 1] - scan.points[e - 2]).squaredNorm() > max_gap2) last_gap = e - 1;
+      if (w > 0 && scan.gapBefore(e - 1, max_gap2)) last_gap = e - 1;
       const LineFit fit = fitLine(prefix_.sums(b, e), range_sigma_);
       // A window whose residuals are beyond the noise (a spike, a corner) is no
       // line: without this test the windows sharing one spike agree with each
       // other and carry it into a segment.
-      valid_[w] = fit.valid && last_gap <= b && fit.sum_squared_residuals <= residual_limit_;
+      const double scale = membersNoiseScale(scan, b, e - 1), scale2 = scale * scale;
+      valid_[w] = fit.valid && last_gap <= b && fit.sum_squared_residuals <= residual_limit_ * scale2;
       Segment& s = windows_[w];
       s.angle = fit.angle;
       s.radius = fit.radius;
-      s.covariance = fit.covariance;
+      s.covariance = fit.covariance * scale2;
     }
     // Agglomerative clustering of consecutive windows.
     clusters_.clear();

@@ -29,8 +29,11 @@ int emitInlierRuns(const PreparedScan& scan, const int* members, int count, cons
   int start = 0;
   for (int k = 1; k <= count; ++k)
   {
+    // Neighbouring points may span the sensor model's gap; members with points between them
+    // (not inliers) only max_gap.
     const bool cut =
-        k == count || (scan.points[members[k]] - scan.points[members[k - 1]]).squaredNorm() > max_gap2;
+        k == count || (scan.points[members[k]] - scan.points[members[k - 1]]).squaredNorm() >
+                          (members[k] == members[k - 1] + 1 ? scan.maxGap2(members[k], max_gap2) : max_gap2);
     if (!cut) continue;
     if (k - start >= settings.min_points)
     {
@@ -94,7 +97,8 @@ void RansacExtractor::extractRange(const PreparedScan& scan, PointRange range, E
       const Vec2 normal(-d.y() / len, d.x() / len);
       const double offset = normal.dot(pa);
       int count = 0;
-      for (int idx : remaining_) count += std::abs(normal.dot(scan.points[idx]) - offset) <= inlier_distance_;
+      for (int idx : remaining_)
+        count += std::abs(normal.dot(scan.points[idx]) - offset) <= scan.tolerance(idx, inlier_distance_);
       if (count > best_count)
       {
         best_count = count;
@@ -107,7 +111,7 @@ void RansacExtractor::extractRange(const PreparedScan& scan, PointRange range, E
     // TLS refit on the consensus set, then take the inliers of the refitted line.
     LineSums sums;
     for (int idx : remaining_)
-      if (std::abs(best_normal.dot(scan.points[idx]) - best_offset) <= inlier_distance_)
+      if (std::abs(best_normal.dot(scan.points[idx]) - best_offset) <= scan.tolerance(idx, inlier_distance_))
         sums.add(scan.points[idx]);
     const LineFit fit = fitLine(sums, runs_.range_sigma);
     if (fit.valid)
@@ -119,7 +123,7 @@ void RansacExtractor::extractRange(const PreparedScan& scan, PointRange range, E
     std::size_t kept = 0;
     for (int idx : remaining_)
     {
-      if (std::abs(best_normal.dot(scan.points[idx]) - best_offset) <= inlier_distance_)
+      if (std::abs(best_normal.dot(scan.points[idx]) - best_offset) <= scan.tolerance(idx, inlier_distance_))
         inliers_.push_back(idx);
       else
         remaining_[kept++] = idx;

@@ -3,6 +3,7 @@
 // where its own beam meets that line; the seed then grows forwards and backwards
 // while new points stay near the (refitted) line. Backward growth may run into the
 // previous segment: the overlap is split where the distances to the two lines cross.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -55,8 +56,8 @@ class SeededRegionGrowing : public Extractor
       // refitting once the segment has grown by half gives the same decisions on
       // real walls at a fraction of the cost (a line from n points moves little
       // when n/2 more points within line_distance of it are added).
-      while (end < range.end && (pts[end] - pts[end - 1]).squaredNorm() <= max_gap2 &&
-             line.distance(pts[end]) <= line_distance_)
+      while (end < range.end && !scan.gapBefore(end, max_gap2) &&
+             line.distance(pts[end]) <= scan.tolerance(end, line_distance_))
       {
         sums.add(pts[end++]);
         if (2.0 * (sums.n - fitted) >= fitted)
@@ -72,8 +73,8 @@ class SeededRegionGrowing : public Extractor
       }
       // Backward growth.
       int begin = i;
-      while (begin > range.begin && (pts[begin] - pts[begin - 1]).squaredNorm() <= max_gap2 &&
-             line.distance(pts[begin - 1]) <= line_distance_)
+      while (begin > range.begin && !scan.gapBefore(begin, max_gap2) &&
+             line.distance(pts[begin - 1]) <= scan.tolerance(begin - 1, line_distance_))
       {
         sums.add(pts[--begin]);
         if (2.0 * (sums.n - fitted) >= fitted)
@@ -108,12 +109,16 @@ class SeededRegionGrowing : public Extractor
     const double max_gap2 = max_gap_ * max_gap_;
     // A gap inside the window: no seed can contain it.
     for (int k = i + 1; k < end; ++k)
-      if ((pts[k] - pts[k - 1]).squaredNorm() > max_gap2) return k;
+      if (scan.gapBefore(k, max_gap2)) return k;
     // Cheap necessary condition first: points within line_distance of one line lie
     // within twice that of the chord of the window's ends (3x leaves a margin), so
-    // most windows over corners and clutter are rejected without a fit.
+    // most windows over corners and clutter are rejected without a fit. The window's
+    // largest tolerance is that of its farthest point (the scale grows with range).
     const Vec2 a = pts[i], chord = pts[end - 1] - a;
-    const double limit2 = 9.0 * line_distance_ * line_distance_ * chord.squaredNorm();
+    double window_distance = line_distance_;
+    for (int k = i; k < end; ++k)
+      window_distance = std::max(window_distance, scan.tolerance(k, line_distance_));
+    const double limit2 = 9.0 * window_distance * window_distance * chord.squaredNorm();
     for (int k = i + 1; k < end - 1; ++k)
     {
       const Vec2 v = pts[k] - a;
@@ -126,11 +131,11 @@ class SeededRegionGrowing : public Extractor
       const Vec2& p = pts[k];
       const double along_normal = p.x() * line.nx + p.y() * line.ny;  // range * cos(beam - normal)
       const double d = std::abs(along_normal - line.radius);
-      if (d > line_distance_) return i + 1;
+      if (d > scan.tolerance(k, line_distance_)) return i + 1;
       // The beam through p meets the line at range radius / cos(beam - normal), so
       // p is d / cos(beam - normal) from that predicted point; compared without division.
       if (along_normal <= 1e-6 * scan.ranges[k]) return i + 1;
-      if (d * scan.ranges[k] > predict_distance_ * along_normal) return i + 1;
+      if (d * scan.ranges[k] > scan.tolerance(k, predict_distance_) * along_normal) return i + 1;
     }
     return -1;
   }

@@ -46,8 +46,7 @@ class Smsm : public Extractor
     const double join2 = join_distance_ * join_distance_;
     for (const PointRange& c : clusters_)
     {
-      if (!joined_.empty() && joined_.back().end == c.begin &&
-          (scan.points[c.begin] - scan.points[c.begin - 1]).squaredNorm() <= join2)
+      if (!joined_.empty() && joined_.back().end == c.begin && !scan.gapBefore(c.begin, join2))
         joined_.back().end = c.end;
       else
         joined_.push_back(c);

@@ -39,7 +39,7 @@ class SplitAndMerge : public Extractor
     int start = range.begin;
     for (int i = range.begin + 1; i <= range.end; ++i)
     {
-      if (i == range.end || (scan.points[i] - scan.points[i - 1]).squaredNorm() > max_gap2)
+      if (i == range.end || scan.gapBefore(i, max_gap2))
       {
         split(scan, {start, i});
         start = i;
@@ -100,8 +100,10 @@ class SplitAndMerge : public Extractor
     while (p.size() > 2 && fitNormal(prefix_.sums(p.begin, p.end), line))
     {
       const double first = line.distance(scan.points[p.begin]), last = line.distance(scan.points[p.end - 1]);
-      if (first <= threshold_ && last <= threshold_) break;
-      if (first > last)
+      const double first_limit = scan.tolerance(p.begin, threshold_),
+                   last_limit = scan.tolerance(p.end - 1, threshold_);
+      if (first <= first_limit && last <= last_limit) break;
+      if (first / first_limit > last / last_limit)
         ++p.begin;
       else
         --p.end;
@@ -118,7 +120,7 @@ class SplitAndMerge : public Extractor
     members_.clear();
     for (int k = p.begin; k < p.end; ++k)
     {
-      if (line.distance(scan.points[k]) <= threshold_)
+      if (line.distance(scan.points[k]) <= scan.tolerance(k, threshold_))
         members_.push_back(k);
       else
         sums.remove(scan.points[k]);
@@ -151,12 +153,13 @@ class SplitAndMerge : public Extractor
     const Vec2 a = pts[r.begin], chord = pts[r.end - 1] - a;
     int best = -1;
     double best_chord = -1.0;
-    double prev = line.signedDistance(pts[r.begin]);
+    // Distances in units of each point's tolerance.
+    double prev = line.signedDistance(pts[r.begin]) / scan.tolerance(r.begin, threshold_);
     for (int k = r.begin + 1; k < r.end; ++k)
     {
-      const double d = line.signedDistance(pts[k]);
+      const double d = line.signedDistance(pts[k]) / scan.tolerance(k, threshold_);
       // Pair (k-1, k) beyond the threshold on the same side.
-      if (std::abs(d) > threshold_ && std::abs(prev) > threshold_ && (d > 0.0) == (prev > 0.0))
+      if (std::abs(d) > 1.0 && std::abs(prev) > 1.0 && (d > 0.0) == (prev > 0.0))
       {
         for (int j = k - 1; j <= k; ++j)
         {

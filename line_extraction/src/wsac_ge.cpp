@@ -122,7 +122,8 @@ class WsacGeExtractor : public Extractor
     for (int i = 0; i < n_; ++i)
     {
       const Vec2& p = scan.points[begin_ + i];
-      double best = tukey_c_;
+      const double limit = scan.tolerance(begin_ + i, tukey_c_);
+      double best = limit;
       for (std::size_t k = 0; k < k_count; ++k)
       {
         const double d = std::abs(lines[k].normal.dot(p) - lines[k].offset);
@@ -132,7 +133,7 @@ class WsacGeExtractor : public Extractor
           assignment[i] = static_cast<int>(k);
         }
       }
-      const double u = best / tukey_c_;
+      const double u = best / limit;
       const double h = (1.0 - u * u) * (1.0 - u * u);
       support_[i] = h * h;
     }
@@ -165,8 +166,8 @@ class WsacGeExtractor : public Extractor
     {
       const int k = assignment[i];
       if (k < 0) continue;
-      if (run_count_[k] > 0 &&
-          (scan.points[begin_ + i] - scan.points[begin_ + run_last_[k]]).squaredNorm() > max_gap2)
+      if (run_count_[k] > 0 && (scan.points[begin_ + i] - scan.points[begin_ + run_last_[k]]).squaredNorm() >
+                                   (run_last_[k] == i - 1 ? scan.maxGap2(begin_ + i, max_gap2) : max_gap2))
         close(k);
       if (run_count_[k] == 0) run_start_[k] = i;
       run_last_[k] = i;
@@ -200,7 +201,7 @@ class WsacGeExtractor : public Extractor
       for (int m = 0; m < n_; ++m)
       {
         const Vec2& p = scan.points[begin_ + m];
-        if (std::abs(line.normal.dot(p) - line.offset) < tukey_c_) sums.add(p);
+        if (std::abs(line.normal.dot(p) - line.offset) < scan.tolerance(begin_ + m, tukey_c_)) sums.add(p);
       }
       const LineFit fit = fitLine(sums, runs_.range_sigma);
       if (!fit.valid) break;

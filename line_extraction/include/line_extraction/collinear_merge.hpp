@@ -14,7 +14,8 @@ struct CollinearMergeParams
 {
   double gate = 2.77;         ///< chi-square gate on the (radius, angle) Mahalanobis distance (2 dof, 75 %)
   double range_sigma = 0.01;  ///< point noise for the refit covariance [m]
-  /// Largest distance between the facing endpoints of two merged segments [m].
+  /// Largest distance between the facing endpoints of two merged segments [m]; where those are
+  /// neighbouring beams, at least the scan's gap (PreparedScan::maxGap2).
   double max_gap = std::numeric_limits<double>::infinity();
 };
 
@@ -44,7 +45,8 @@ class CollinearMerger
   const CollinearMergeParams& params() const { return params_; }
 
  private:
-  bool mergeable(const Segment& a, const Segment& b) const;
+  /// a_last, b_first: a's last and b's first member point.
+  bool mergeable(const PreparedScan& scan, int a_last, int b_first, const Segment& a, const Segment& b) const;
   void absorb(const PreparedScan& scan, const ExtractionResult& in, const Segment& seg,
               ExtractionResult& out);
   void refit(const PreparedScan& scan, ExtractionResult& out);

@@ -10,6 +10,7 @@
 #include "line_extraction/extractor.hpp"
 #include "line_extraction/params.hpp"
 #include "line_extraction/preprocess.hpp"
+#include "line_extraction/sensor_model.hpp"
 
 namespace line_extraction
 {
@@ -21,6 +22,9 @@ struct PipelineParams
   double range_sigma = 0.01;  ///< point noise for covariances and breakpoints [m]
   double max_usable_range = 30.0;
   BreakpointParams breakpoint;
+  /// Range noise and point spacing behind the algorithms' distance thresholds ("thresholds":
+  /// adaptive, or the papers' fixed values).
+  SensorModel sensor;
   bool remove_isolated = false;  ///< drop lone readings between two neighbours of one surface
   bool merge = true;
   /// Merge gate 2.77, largest bridged gap 0.5 m (a doorway stays open).

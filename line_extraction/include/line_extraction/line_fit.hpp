@@ -83,8 +83,17 @@ struct LineFit
 /// follows from isotropic point noise with standard deviation `range_sigma` [m].
 LineFit fitLine(const LineSums& sums, double range_sigma);
 
+/// The noise scale of a segment whose first and last members are points `first` and `last`: the
+/// mean of theirs (the range noise is linear in range). The fit's covariance, computed for
+/// sigma_0, is multiplied by its square.
+inline double membersNoiseScale(const PreparedScan& scan, int first, int last)
+{
+  return 0.5 * (scan.tolerance(first, 1.0) + scan.tolerance(last, 1.0));
+}
+
 /// Builds a Segment from a fit and its member points: endpoints are the first
 /// and last member projected onto the line; appends `members` to out.point_indices.
+/// The covariance is scaled by membersNoiseScale squared.
 void appendSegment(const PreparedScan& scan, const LineFit& fit, const int* members, int count,
                    ExtractionResult& out);
 

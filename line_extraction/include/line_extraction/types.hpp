@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
@@ -37,6 +38,29 @@ struct PreparedScan
   double angle_increment = 0.0;  ///< of the source scan (for beam prediction)
   /// True when the beams cover the full circle, so the last point neighbours the first.
   bool full_circle = false;
+  /// Per point: sigma(r) / sigma_0 of the sensor model (SensorModel::annotate); a distance
+  /// tolerance set for the base noise is multiplied by it. Empty: 1 everywhere.
+  std::vector<double> noise_scale;
+  /// Per point i > 0: the squared distance the pair (i-1, i) may span on one surface when their
+  /// beams are neighbours; 0 where the model adds nothing. Empty: 0 everywhere.
+  std::vector<double> gap2;
+
+  /// The tolerance `base` at point i.
+  double tolerance(int i, double base) const
+  {
+    return noise_scale.empty() ? base : base * noise_scale[static_cast<std::size_t>(i)];
+  }
+  /// The squared gap the pair (i-1, i) may span: the larger of `fixed2` and the model's.
+  double maxGap2(int i, double fixed2) const
+  {
+    return gap2.empty() ? fixed2 : std::max(fixed2, gap2[static_cast<std::size_t>(i)]);
+  }
+  /// Whether points i-1 and i are farther apart than the gap allows.
+  bool gapBefore(int i, double fixed2) const
+  {
+    return (points[static_cast<std::size_t>(i)] - points[static_cast<std::size_t>(i) - 1]).squaredNorm() >
+           maxGap2(i, fixed2);
+  }
 
   std::size_t size() const { return points.size(); }
   void clear()
@@ -45,6 +69,8 @@ struct PreparedScan
     ranges.clear();
     angles.clear();
     beam_index.clear();
+    noise_scale.clear();
+    gap2.clear();
   }
 };
 
@@ -63,8 +89,8 @@ struct Segment
   /// sensor lies left of start -> end (orientFreeSideLeft), whatever the algorithm's order.
   Vec2 start = Vec2::Zero();
   Vec2 end = Vec2::Zero();
-  double angle = 0.0;         ///< Hessian form: x cos(angle) + y sin(angle) = radius
-  double radius = 0.0;        ///< >= 0
+  double angle = 0.0;   ///< Hessian form: x cos(angle) + y sin(angle) = radius
+  double radius = 0.0;  ///< >= 0
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  ///< of (radius, angle)
   int num_points = 0;
   /// Member point indices (into PreparedScan) are
