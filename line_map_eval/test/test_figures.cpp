@@ -223,6 +223,24 @@ TEST(Figures, UncoveredPointsRedundantPairsAndLegend)
   cairo_surface_destroy(img);
 }
 
+// Uncovered points on straight structure are cyan (0, 180, 240), apart from the orange clutter.
+TEST(Figures, UnmappedStructureInItsOwnColour)
+{
+  const std::string dir = tempDir();
+  MapFigure f = testFigure();
+  f.show_coverage = true;
+  f.uncovered_structure_points = {Vec2(2.0, 1.0)};
+  const auto files = drawMap(f, dir + "/structure.png", line_map_eval::kFigurePng, testStyle());
+  ASSERT_EQ(files.size(), 1u);
+  cairo_surface_t* img = cairo_image_surface_create_from_png(files[0].c_str());
+  ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
+  const Rgb cyan = pixel(img, 132, 82);  // (2, 1)
+  EXPECT_EQ(cyan.r, 0);
+  EXPECT_EQ(cyan.g, 180);
+  EXPECT_EQ(cyan.b, 240);
+  cairo_surface_destroy(img);
+}
+
 TEST(Figures, StrayScanPointsDoNotStretchTheFrame)
 {
   // 2000 points on the walls of a 10 m room and three returns 1 km away: the frame is the room's

@@ -229,6 +229,26 @@ TEST(MapEvaluator, CoverageDropsWhenAWallIsLeftOut)
   EXPECT_NEAR(m.length_coverage.fraction(), 0.75, 1e-12);
   EXPECT_EQ(m.error.unassigned, 1u);  // the west wall's original has no map segment
 
+  // Straight structure, classified once with the table: the four walls, bar at most the 19 points
+  // within 0.1 m of each corner (structure_coverage.hpp). All covered by the four walls; without
+  // the west wall, its points but the 11 near the ends are uncovered: 3.9 m unmapped.
+  const auto& structure = eval.structure();
+  EXPECT_EQ(structure.points, points.size());
+  EXPECT_GE(structure.indices.size(), points.size() - 4 * 19);
+  EXPECT_EQ(all.structure_coverage.points, structure.indices.size());
+  EXPECT_EQ(all.structure_coverage.covered, all.structure_coverage.points);
+  EXPECT_EQ(all.structure_coverage.unmapped_length, 0.0);
+  EXPECT_NEAR(all.structure_coverage.length, 16.0, 0.45);  // to a 0.1 m column per wall
+  EXPECT_NEAR(static_cast<double>(m.structure_coverage.uncovered.size()), per_wall - 11.0, 20.0);
+  EXPECT_NEAR(m.structure_coverage.unmapped_length, 3.9, 0.15);
+  // Corners are no crossings; a segment through the north wall, 0.5 m past it either way, is one.
+  EXPECT_TRUE(all.crossing_pairs.empty());
+  std::vector<Segment2> crossed = kWalls;
+  crossed.emplace_back(Vec2(0, 1.5), Vec2(0, 2.5));
+  const auto x = eval.evaluate(crossed);
+  ASSERT_EQ(x.crossing_pairs.size(), 1u);
+  EXPECT_NEAR((x.crossing_pairs[0].point - Vec2(0, 2)).norm(), 0.0, 1e-9);
+
   // The north wall drawn twice, the copy 3 cm inside: one redundant pair overlapping 4 m.
   std::vector<Segment2> twice = kWalls;
   twice.emplace_back(Vec2(2, 1.97), Vec2(-2, 1.97));
