@@ -27,7 +27,9 @@ double cross(const Vec2& a, const Vec2& b)
   return a.x() * b.y() - a.y() * b.x();
 }
 
-using Rectangle = std::array<Vec2, 4>;  // corners in clockwise order: the solid is on each edge's right
+// A wall's solid: a rectangle, or a trapezoid where an arc's chords meet in a mitre; convex, corners in
+// clockwise order (the solid is on each edge's right).
+using Rectangle = std::array<Vec2, 4>;
 
 /// Parameter interval (s0, s1) of p + s d, s in [0, 1], lying inside `r` (empty: s0 >= s1). Only a
 /// face reaching deeper than kInside is cut (one on the boundary is not), and it is cut where it
