@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -148,7 +149,7 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
       throw std::invalid_argument("structure coverage: scan point " + std::to_string(i) + " is not finite");
     order[i] = {cellKey(floorIndex(p.x(), h), floorIndex(p.y(), h)), i};
   }
-  std::sort(order.begin(), order.end());
+  tbb::parallel_sort(order.begin(), order.end());
   std::vector<Voxel> voxels;
   for (std::size_t b = 0; b < order.size();)
   {
@@ -329,7 +330,7 @@ StructureRuns structureRuns(const std::vector<Vec2>& feet, const std::vector<dou
     keyed[i] = {c, floorIndex(u.dot(feet[i]), cell),
                 floorIndex(u.x() * feet[i].y() - u.y() * feet[i].x(), across), static_cast<std::uint32_t>(i)};
   }
-  std::sort(keyed.begin(), keyed.end());
+  tbb::parallel_sort(keyed.begin(), keyed.end());
 
   // Runs: adjacent occupied cells across, in one column along the heading class.
   StructureRuns out;
