@@ -155,6 +155,30 @@ TEST(StructureCoverage, ThickBandWithinToleranceOnly)
   EXPECT_TRUE(classifyStructure(band(0.16), kSigma, {}).indices.empty());
 }
 
+// A wall registered twice, the copies 3 cm apart: one band of RMS 1.5 cm, structure, and its length
+// counts once. 8 cm apart (more than g) the copies are two lines, as the two faces of a partition: two
+// bands, both structure, 6 m. (Smeared into a filled band instead, a wall is too thick from 8.7 cm on:
+// ThickBandWithinToleranceOnly.)
+TEST(StructureCoverage, WallRegisteredTwice)
+{
+  const auto twice = [](double offset)
+  {
+    std::vector<Vec2> cloud;
+    Jitter j;
+    addLine(cloud, Vec2(0, 0), Vec2(3.0, 0.0), 0.01, 0.01, &j);
+    addLine(cloud, Vec2(0, offset), Vec2(3.0, offset), 0.01, 0.01, &j);
+    return cloud;
+  };
+  const auto close = twice(0.03);
+  const StructurePoints s = classifyStructure(close, kSigma, {});
+  EXPECT_EQ(s.indices.size(), close.size());
+  EXPECT_NEAR(s.length, 3.0, 0.15);
+  const auto apart = twice(0.08);
+  const StructurePoints two = classifyStructure(apart, kSigma, {});
+  EXPECT_EQ(two.indices.size(), apart.size());
+  EXPECT_NEAR(two.length, 6.0, 0.3);
+}
+
 // Clutter: filled blobs (a 0.3 m and a 0.6 m disc: a band through them is filled, RMS 2.9 cm, or
 // shorter than 0.4 m) and a sparse scatter (a band of 10 cm through a 0.5 m disc of scattered points
 // holds about 4g / (pi R) = 13 % of them, below min_share 30 %).
