@@ -373,7 +373,7 @@ std::string toMarkdown(const BatchResult& result)
   {
     const StructureCoverage& s = result.mergers.front().structure_coverage;
     md << "- straight structure: " << s.points << " of the registered points (" << fixed(s.length, 1)
-       << " m of walls), classified in " << fixed(result.structure_ms, 1) << " ms\n";
+       << " m), classified in " << fixed(result.structure_ms, 1) << " ms\n";
   }
   md << "\n";
 
