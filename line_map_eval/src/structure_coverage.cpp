@@ -172,7 +172,7 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
   }
 
   // Neighbourhood grid of the voxel means, cells of half a radius (compressed rows): the 5 x 5 cells
-  // around a voxel's hold its disc, at 2.9 times its area (3 x 3 cells of one radius: 11.5).
+  // around a voxel's hold its disc in twice its area (3 x 3 cells of one radius: 2.9 times).
   const double r = params.radius, cell = 0.5 * r;
   double min_x = std::numeric_limits<double>::infinity(), min_y = min_x, max_x = -min_x, max_y = -min_x;
   for (const Voxel& v : voxels)
