@@ -24,7 +24,7 @@ class SeededRegionGrowing : public Extractor
         line_distance_(positiveParam(ps, "srg/line_distance", 0.03)),
         predict_distance_(positiveParam(ps, "srg/predict_distance", 0.1)),
         min_points_(intParamAtLeast(ps, "srg/min_points", 10, 2)),
-        min_length_(nonNegativeParam(ps, "srg/min_length", 0.4)),
+        min_length_(nonNegativeParam(ps, "srg/min_length", 0.2)),
         max_gap_(positiveParam(ps, "srg/max_gap", 0.3)),
         range_sigma_(rangeSigmaParam(ps))
   {

@@ -23,6 +23,7 @@ CaeParams CaeParams::fromParams(const linemap::ParamSet& params)
   p.resolve_crossings = params.getBool("resolve_crossings", p.resolve_crossings);
   p.crossing_overhang = params.getDouble("crossing_overhang", p.crossing_overhang);
   p.crossing_chain_angle = params.getDouble("crossing_chain_angle", p.crossing_chain_angle);
+  p.single_view_min_length = params.getDouble("single_view_min_length", p.single_view_min_length);
   p.validate();
   return p;
 }
@@ -37,6 +38,9 @@ void CaeParams::validate() const
   if (!(crossing_chain_angle >= 0.0 && crossing_chain_angle < 0.5 * linemap::kPi))
     throw linemap::ParameterError("parameter 'crossing_chain_angle': " +
                                   std::to_string(crossing_chain_angle) + " is not in [0, pi/2) rad");
+  if (!(single_view_min_length >= 0.0 && std::isfinite(single_view_min_length)))
+    throw linemap::ParameterError("parameter 'single_view_min_length': " +
+                                  std::to_string(single_view_min_length) + " is not a finite length >= 0 m");
 }
 
 CaeRlsm::CaeRlsm(const CaeParams& params) : params_(params)
@@ -99,9 +103,25 @@ std::vector<MapSegment> CaeRlsm::map() const
   std::vector<MapSegment> out;
   out.reserve(nodes_.size());
   for (const auto& [id, node] : nodes_)
-    out.push_back({id, node.segment, static_cast<std::uint32_t>(node.leaves.size())});
+    if (shown(node)) out.push_back({id, node.segment, static_cast<std::uint32_t>(node.leaves.size())});
   std::sort(out.begin(), out.end(), [](const MapSegment& a, const MapSegment& b) { return a.id < b.id; });
   return out;
+}
+
+bool CaeRlsm::shown(const Node& node) const
+{
+  if (params_.single_view_min_length <= 0.0 || node.segment.length() >= params_.single_view_min_length)
+    return true;
+  for (std::uint32_t leaf : node.leaves)
+    if (leaves_[leaf].slot != leaves_[node.leaves.front()].slot) return true;
+  return false;
+}
+
+std::size_t CaeRlsm::segmentCount() const
+{
+  std::size_t n = 0;
+  for (const auto& entry : nodes_) n += shown(entry.second);
+  return n;
 }
 
 std::vector<KeyframeInfo> CaeRlsm::keyframes() const

@@ -49,10 +49,16 @@ struct CaeParams
   bool resolve_crossings = true;
   double crossing_overhang = 0.01;  ///< [m] overhangs up to this are not crossings; >= 1 mm
   double crossing_chain_angle = 20.0 * linemap::kPi / 180.0;  ///< [rad] largest heading deviation of a chain
+  /// A map segment all of whose originals come from one keyframe is withheld from map() while it is
+  /// shorter than this [m]: a short piece seen once is no evidence of a wall yet (a person, a chair
+  /// leg, noise), while a wall glimpsed in pieces through doors is seen again from other keyframes,
+  /// and the first original of another keyframe fused into it admits it. Its originals stay in the
+  /// provenance either way. 0 = every map segment is shown (the paper's behaviour).
+  double single_view_min_length = 0.6;
 
   /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge",
   /// "absorb_contained", "regroup_on_adjust", "resolve_crossings", "crossing_overhang",
-  /// "crossing_chain_angle".
+  /// "crossing_chain_angle", "single_view_min_length".
   static CaeParams fromParams(const linemap::ParamSet& params);
   /// Throws linemap::ParameterError naming the key for an out-of-range value.
   void validate() const;
@@ -73,7 +79,8 @@ class CaeRlsm : public Merger
   bool hasProvenance() const override { return true; }
   std::size_t keyframeCount() const override { return keyframes_.size(); }
   std::size_t leafCount() const override { return leaves_.size(); }
-  std::size_t segmentCount() const override { return nodes_.size(); }
+  /// Map segments map() shows (see single_view_min_length).
+  std::size_t segmentCount() const override;
   void reset() override;
   std::unique_ptr<Merger> clone() const override { return std::make_unique<CaeRlsm>(*this); }
   void save(const std::string& path) const override;
@@ -152,6 +159,9 @@ class CaeRlsm : public Merger
   std::vector<Transform> transforms_;    // by slot
   std::unordered_map<std::uint64_t, std::uint32_t> slot_of_;
   std::vector<LeafRecord> leaves_;
+  /// Whether map() shows the node (single_view_min_length).
+  bool shown(const Node& node) const;
+
   std::unordered_map<std::uint64_t, Node> nodes_;
   RTree index_;
   bool index_stale_ = false;  // set by adjust(): rebuilt in one go by the next search
