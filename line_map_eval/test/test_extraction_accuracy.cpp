@@ -89,8 +89,9 @@ TEST(ExtractionAccuracy, EveryExtractorMeetsItsBounds)
   // cut the walls into many breakpoint clusters, so with clustering the walls come out in pieces of which
   // only one matches (one-to-one): FalsePos is much higher there.
   const std::map<std::string, std::pair<Bounds, Bounds>> bounds = {
-      // srg with the adaptive thresholds and min_length 0.4 m (before: 0.440/0.250, 0.431/0.254).
-      {"srg", {{0.64, 0.36}, {0.63, 0.37}}},              // 0.693/0.311, 0.684/0.315
+      // srg with the adaptive thresholds and min_length 0.2 m (before: 0.440/0.250, 0.431/0.254); the
+      // short segments are more often false (CAE-RLSM shows one only once two keyframes saw it).
+      {"srg", {{0.70, 0.45}, {0.69, 0.45}}},              // 0.747/0.402, 0.742/0.405
       {"split_merge", {{0.88, 0.67}, {0.88, 0.64}}},      // 0.931/0.612, 0.935/0.588
       {"iepf", {{0.79, 0.77}, {0.78, 0.77}}},             // 0.841/0.714, 0.836/0.713
       {"smsm", {{0.79, 0.76}, {0.79, 0.77}}},             // 0.845/0.706, 0.845/0.711
