@@ -145,15 +145,21 @@ void CaeRlsm::save(const std::string& path) const
   }
   out << YAML::EndSeq;
 
+  // Every node, the ones map() withholds (single_view_min_length) included: the file is the whole state.
+  std::vector<std::uint64_t> ids;
+  ids.reserve(nodes_.size());
+  for (const auto& entry : nodes_) ids.push_back(entry.first);
+  std::sort(ids.begin(), ids.end());
   out << YAML::Key << "segments" << YAML::Value << YAML::BeginSeq;
-  for (const MapSegment& m : map())
+  for (std::uint64_t id : ids)
   {
+    const Segment2& segment = nodes_.at(id).segment;
     out << YAML::BeginMap;
-    out << YAML::Key << "id" << YAML::Value << m.id;
+    out << YAML::Key << "id" << YAML::Value << id;
     out << YAML::Key << "segment" << YAML::Value;
-    emitNumbers(out, {m.segment.start.x(), m.segment.start.y(), m.segment.end.x(), m.segment.end.y()});
+    emitNumbers(out, {segment.start.x(), segment.start.y(), segment.end.x(), segment.end.y()});
     out << YAML::Key << "leaves" << YAML::Value << YAML::BeginSeq;
-    for (std::uint32_t l : nodes_.at(m.id).leaves)
+    for (std::uint32_t l : nodes_.at(id).leaves)
     {
       const LeafRecord& leaf = leaves_[l];
       out << YAML::Flow << YAML::BeginSeq << keyframes_[leaf.slot].index << leaf.local.start.x()

@@ -3,6 +3,8 @@
 // provenance are never affected, and the rule holds after MP-GMA re-fuses the map.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "line_map_merging/cae_rlsm.hpp"
@@ -92,6 +94,22 @@ TEST(SingleViewSupport, HoldsAfterMapAdjustment)
   ASSERT_EQ(map.size(), 1u);
   EXPECT_NEAR(map[0].segment.start.y(), kLongWall.start.y() + 0.2, 1e-6);
   EXPECT_EQ(cae.leafCount(), 3u);
+}
+
+TEST(SingleViewSupport, MapFileKeepsTheWithheldSegments)
+{
+  CaeRlsm cae;
+  cae.addKeyframe(keyframeAt(0, Pose2(0.0, 0.0, 0.0), {kLongWall, kShortPiece}));
+  const std::string path = testing::TempDir() + "single_view_map.yaml";
+  cae.save(path);
+  CaeRlsm loaded;
+  loaded.load(path);
+  std::remove(path.c_str());
+  EXPECT_EQ(loaded.map().size(), 1u);
+  EXPECT_EQ(loaded.leafCount(), 2u);
+  // The withheld piece came back with the file: a second view admits it.
+  loaded.addKeyframe(keyframeAt(1, Pose2(0.5, 0.0, 0.3), {kShortPiece}));
+  EXPECT_EQ(loaded.map().size(), 2u);
 }
 
 }  // namespace
