@@ -195,6 +195,7 @@ TEST(MapMerge, SegmentsThatMeetOnlyWithTheOtherAsMapSegmentAreMerged)
   {
     CaeParams params;
     params.map_merge = map_merge;
+    params.single_view_min_length = 0.0;  // M is 0.6 m, seen once: shown, as the paper shows it
     CaeRlsm merger(params);
     merger.addKeyframe(keyframeOf(0, Pose2(0.2, -1, 0.4), {m}));
     merger.addKeyframe(keyframeOf(1, Pose2(1, 1, -0.3), {s}));
@@ -228,6 +229,7 @@ TEST(MapMerge, ASegmentInsideAnothersBandIsAbsorbedBeyondThetaMax)
   {
     CaeParams params;
     params.absorb_contained = absorb;
+    params.single_view_min_length = 0.0;  // every segment is seen once here: count them all
     CaeRlsm merger(params);
     merger.addKeyframe(keyframeOf(0, Pose2(1, 1, 0.2), {wall}));
     merger.addKeyframe(keyframeOf(1, Pose2(2, 1.5, -0.4), {glimpse}));
