@@ -156,6 +156,8 @@ void CaeRlsm::save(const std::string& path) const
     const Segment2& segment = nodes_.at(id).segment;
     out << YAML::BeginMap;
     out << YAML::Key << "id" << YAML::Value << id;
+    // For readers of the file: map() does not show it yet. Derived from the leaves, so load ignores it.
+    if (!shown(nodes_.at(id))) out << YAML::Key << "withheld" << YAML::Value << true;
     out << YAML::Key << "segment" << YAML::Value;
     emitNumbers(out, {segment.start.x(), segment.start.y(), segment.end.x(), segment.end.y()});
     out << YAML::Key << "leaves" << YAML::Value << YAML::BeginSeq;

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -102,6 +104,16 @@ TEST(SingleViewSupport, MapFileKeepsTheWithheldSegments)
   cae.addKeyframe(keyframeAt(0, Pose2(0.0, 0.0, 0.0), {kLongWall, kShortPiece}));
   const std::string path = testing::TempDir() + "single_view_map.yaml";
   cae.save(path);
+  {
+    std::ifstream in(path);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    // The withheld segment is in the file, marked for its readers; the shown one is not marked.
+    std::size_t marks = 0;
+    for (std::size_t at = text.find("withheld: true"); at != std::string::npos;
+         at = text.find("withheld: true", at + 1))
+      ++marks;
+    EXPECT_EQ(marks, 1u);
+  }
   CaeRlsm loaded;
   loaded.load(path);
   std::remove(path.c_str());
