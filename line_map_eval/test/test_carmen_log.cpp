@@ -479,8 +479,8 @@ TEST(CarmenRecording, RawLaserOdometryFromOdomLines)
 
 TEST(CarmenRecording, FrClinicAlternatesTwoGeometries)
 {
-  const std::string path = kDatasets + "fr-clinic.clf.bz2";
-  if (access(path.c_str(), R_OK) != 0) GTEST_SKIP() << "dataset file missing: " << path;
+  std::string path;
+  if (!dataset("fr-clinic.clf.bz2", path)) return;
   CarmenReadOptions first40;
   first40.max_scans = 40;
   const CarmenLog log = readCarmenLog(path, first40);
