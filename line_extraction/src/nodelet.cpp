@@ -6,6 +6,9 @@
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
+#include <tf2/utils.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <chrono>
@@ -19,6 +22,7 @@
 #include "line_extraction/ros/param_loader.hpp"
 #include "line_extraction/ros/transport.hpp"
 #include "line_extraction/ros/wall_diagnostics.hpp"
+#include "line_extraction/submap_extraction.hpp"
 
 namespace line_extraction
 {
@@ -53,6 +57,16 @@ class LineExtractionRos
     const linemap::ParamSet params = linemap_ros::loadParamSet(private_nh);
     // Throws linemap::ParameterError naming the parameter; the nodelet reports it.
     extractor_ = std::make_unique<LineExtractor>(params);
+    submap_ =
+        std::make_unique<SubmapExtractor>(SubmapParams::fromParams(params), extractor_->params().sensor);
+    if (submap_->params().enabled)
+    {
+      // The window is registered in the odometry frame: locally consistent, never jumps.
+      private_nh.param<std::string>("submap/odom_frame", odom_frame_, "odom");
+      private_nh.param("submap/tf_timeout", tf_timeout_, 0.1);
+      tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+      tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_);
+    }
     // As deep as the scan queue: a slow subscriber (a checker in python under load) loses messages past it.
     segments_pub_ = nh.advertise<line_map_msgs::LineSegmentArray>("line_segments", 100);
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_segments_markers", 1);
@@ -98,9 +112,39 @@ class LineExtractionRos
       return;
     }
     last_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (submap_->params().enabled) addSubmapSegments(*msg);
     segments_ += result->segments.size();
     if (want_segments) publishSegments(msg->header, *result);
     if (want_markers) publishMarkers(msg->header, *result);
+  }
+
+  /// Appends the submap's segments to the extractor's result (their points are in no scan, so
+  /// they carry no member indices).
+  void addSubmapSegments(const sensor_msgs::LaserScan& msg)
+  {
+    if (msg.header.stamp < last_stamp_) submap_->reset();  // the clock jumped back (a bag looped)
+    last_stamp_ = msg.header.stamp;
+    geometry_msgs::TransformStamped odom_laser;
+    try
+    {
+      odom_laser = tf_buffer_->lookupTransform(odom_frame_, msg.header.frame_id, msg.header.stamp,
+                                               ros::Duration(tf_timeout_));
+    }
+    catch (const tf2::TransformException& e)
+    {
+      ++submap_skipped_;
+      ROS_WARN_THROTTLE(5.0, "line_extraction: no submap for this scan (%zu so far): %s", submap_skipped_,
+                        e.what());
+      return;
+    }
+    const auto& t = odom_laser.transform;
+    const Pose2 laser(t.translation.x, t.translation.y, tf2::getYaw(t.rotation));
+    ExtractionResult& result = extractor_->mutableResult();
+    for (const Segment& seg : submap_->update(extractor_->preparedScan(), result, laser))
+    {
+      result.segments.push_back(seg);
+      ++submap_segments_;
+    }
   }
 
   /// Counts what the core does not judge: angle_max disagreeing with angle_min + (n - 1) *
@@ -146,6 +190,11 @@ class LineExtractionRos
     stat.add("inconsistent angle_max", inconsistent_angle_max_);
     stat.add("geometry changes", geometry_changes_);
     stat.add("segments", segments_);
+    if (submap_->params().enabled)
+    {
+      stat.add("submap segments", submap_segments_);
+      stat.add("scans without submap (no tf)", submap_skipped_);
+    }
     stat.add("last extraction time [ms]", last_ms_);
   }
 
@@ -202,6 +251,13 @@ class LineExtractionRos
 
   std::mutex mutex_;  // the scan callback and the diagnostics timer
   std::unique_ptr<LineExtractor> extractor_;
+  std::unique_ptr<SubmapExtractor> submap_;
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::string odom_frame_;
+  double tf_timeout_ = 0.1;
+  ros::Time last_stamp_;
+  std::size_t submap_segments_ = 0, submap_skipped_ = 0;
   ros::Publisher segments_pub_, markers_pub_;
   ros::Subscriber scan_sub_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;

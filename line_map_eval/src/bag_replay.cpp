@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "line_extraction/line_extractor.hpp"
+#include "line_extraction/submap_extraction.hpp"
 #include "line_map_eval/online_evaluator.hpp"
 
 namespace line_map_eval
@@ -32,6 +33,8 @@ ReplayResult replayBag(const BagContents& bag, const ReplayOptions& options)
   const auto start = std::chrono::steady_clock::now();
   const Recording& rec = bag.recording;
   line_extraction::LineExtractor extractor(options.params);
+  line_extraction::SubmapExtractor submap(line_extraction::SubmapParams::fromParams(options.params),
+                                          extractor.params().sensor);
   line_map_merging::OnlineMapper mapper(line_map_merging::makeMerger(options.method, options.params),
                                         line_map_merging::OnlineMapperParams::fromParams(options.params));
   OnlineEvaluator evaluator(OnlineEvaluatorParams::fromParams(options.params));
@@ -50,6 +53,9 @@ ReplayResult replayBag(const BagContents& bag, const ReplayOptions& options)
     s.mount = mount;
     const ScanGeometry& g = rec.geometryOf(scan);
     for (const auto& seg : extractor.extract(scanInput(g, scan.ranges)).segments)
+      s.segments.emplace_back(seg.start, seg.end);
+    // As the extraction nodelet: registered in the odometry frame.
+    for (const auto& seg : submap.update(extractor.preparedScan(), extractor.lastResult(), odom))
       s.segments.emplace_back(seg.start, seg.end);
     // The evaluator nodelet receives the scan and the extractor's segments as the merger does.
     const ScanRanges ranges{g.angle_min, g.angle_increment, g.range_min, g.range_max, scan.ranges};

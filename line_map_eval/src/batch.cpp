@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "line_extraction/line_extractor.hpp"
+#include "line_extraction/submap_extraction.hpp"
 #include "line_map_eval/carmen_log.hpp"
 #include "line_map_eval/carmen_recording.hpp"
 #include "line_map_eval/figures.hpp"
@@ -229,6 +230,8 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
   // Everything that can reject a parameter is built before any work is done.
   line_extraction::LineExtractor extractor(params);
   result.extractor = extractor.params().algorithm;
+  line_extraction::SubmapExtractor submap(line_extraction::SubmapParams::fromParams(params),
+                                          extractor.params().sensor);
   const auto gate_params = line_map_merging::KeyframeGateParams::fromParams(params);
   const auto table_params = LookupTableParams::fromParams(params);
   const auto quality_params = QualityParams::fromParams(params);
@@ -291,6 +294,9 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
       {
         throw std::runtime_error(rec.source + ": scan " + std::to_string(frames[k].scan) + ": " + e.what());
       }
+      // Registered by odometry, as online.
+      for (const auto& s : submap.update(extractor.preparedScan(), extractor.lastResult(), scan.odom * mount))
+        frames[k].segments.emplace_back(s.start, s.end);
       const Pose2 laser = frames[k].final_pose * mount;
       for (const auto& s : frames[k].segments) originals_world.push_back(s.transformed(laser));
       bar.update(k + 1);

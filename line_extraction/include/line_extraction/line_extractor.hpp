@@ -57,6 +57,10 @@ class LineExtractor
   const ExtractionResult& extract(const ScanInput& scan);
 
   const PreparedScan& preparedScan() const { return prepared_; }
+  /// What the last extract() returned.
+  const ExtractionResult& lastResult() const { return result_; }
+  /// The same, for a caller appending segments found elsewhere (the submap's) before publishing.
+  ExtractionResult& mutableResult() { return result_; }
   const PipelineParams& params() const { return params_; }
   const Extractor& algorithm() const { return *algorithm_; }
 

@@ -1,0 +1,135 @@
+// Line extraction over a local submap: the points a scan's extractor left unexplained are kept
+// for the last few metres of travel, registered by the laser's pose in a fixed frame (odometry),
+// and searched for lines there. A wall seen in pieces (through doors, behind furniture, or with
+// too few points per scan at long range and coarse beams) gathers enough points over several
+// scans; clutter seen from many sides does not line up. ROS-free.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "line_extraction/line_fit.hpp"
+#include "line_extraction/params.hpp"
+#include "line_extraction/sensor_model.hpp"
+#include "line_extraction/types.hpp"
+
+namespace line_extraction
+{
+using linemap::Pose2;
+
+/// Keys of the "submap" block of config/line_extraction.yaml.
+struct SubmapParams
+{
+  bool enabled = false;
+  /// Scans enter the window after the laser moved or turned this much since the last one that
+  /// did (the merger's keyframe gate by default: one scan of a standing robot is no new view).
+  double scan_distance = 0.2;     ///< [m]
+  double scan_angle = 0.1745329;  ///< [rad]
+  /// Path length the window covers [m]: short enough that odometry registers it within noise.
+  double window_distance = 4.0;
+  int window_scans = 40;  ///< at most this many scans in the window
+  /// A point lies on a line within band_sigmas * sigma(r) of it.
+  double band_sigmas = 3.0;
+  /// Radius around a seed point in which a line hypothesis is sought [m].
+  double seed_radius = 0.5;
+  /// Largest gap between neighbouring points of a line, at least [m] (the points' own beam
+  /// spacing may allow more, as in the per-scan extractors).
+  double max_gap = 0.3;
+  int min_points = 10;      ///< points of a submap line
+  int min_scans = 3;        ///< distinct scans among them: a line one scan alone shows is that scan's
+  double min_length = 0.2;  ///< [m]
+  /// The fit's RMS residual may be at most this many times the points' mean sigma(r).
+  double max_rms_sigmas = 1.5;
+  /// Points beside the band (within 3 bands of the line, over its extent) may be at most this
+  /// share of the line's points: a blob of clutter has a line through it, but also points around it.
+  double max_side_share = 0.3;
+  /// Beams of the window's scans that pass through the line (their return lies more than a band
+  /// beyond it) may be at most this share of the beams that end on it: a wall is not seen through.
+  double max_through_share = 0.1;
+
+  /// Reads the "submap/..." keys; throws linemap::ParameterError naming a bad one.
+  static SubmapParams fromParams(const linemap::ParamSet& params);
+};
+
+class SubmapExtractor
+{
+ public:
+  SubmapExtractor(const SubmapParams& params, const SensorModel& sensor);
+
+  /// Offers one scan: its prepared points, what the per-scan extractor made of them and the
+  /// laser's pose in a fixed frame. Returns the submap segments to publish with this scan, in its
+  /// laser frame, oriented with their observers on the left. Segments found when a scan entered
+  /// the window are returned again with every following scan until the next one enters, so that
+  /// a consumer keeping only some scans (a keyframe gate) still receives them. The result stays
+  /// valid until the next call.
+  const std::vector<Segment>& update(const PreparedScan& scan, const ExtractionResult& extracted,
+                                     const Pose2& laser_pose);
+
+  /// Forgets the window (a time jump, a new session).
+  void reset();
+
+  const SubmapParams& params() const { return params_; }
+  std::size_t windowPoints() const { return points_.size(); }
+  /// Submap lines found so far.
+  std::size_t linesFound() const { return lines_found_; }
+
+ private:
+  struct WindowPoint
+  {
+    Vec2 p;                  ///< in the fixed frame
+    float sigma = 0.0f;      ///< range noise [m]
+    float gap = 0.0f;        ///< largest gap to a neighbour on one surface [m]
+    std::uint32_t scan = 0;  ///< sequence number of its scan
+    bool used = false;       ///< already part of a submap line
+  };
+  struct WindowScan
+  {
+    std::uint32_t id = 0;
+    Pose2 laser;
+    double path = 0.0;                   ///< path length travelled up to this scan [m]
+    std::vector<double> angles, ranges;  ///< of every valid return, in beam order
+  };
+  /// A window point on a line hypothesis and its position along it.
+  struct Candidate
+  {
+    std::uint32_t index;
+    double along;
+  };
+  struct FoundLine
+  {
+    Vec2 start, end;  ///< in the fixed frame, observers on the left
+    std::vector<Vec2> members;
+    double sigma = 0.0;
+  };
+
+  bool admits(const Pose2& laser) const;
+  void addResiduals(const PreparedScan& scan, const ExtractionResult& extracted, const Pose2& laser);
+  void dropOldScans();
+  void buildGrid();
+  void findLines(std::size_t first_new);
+  bool grow(std::size_t seed, FoundLine& line);
+  /// Whether the residuals of `run` bend along the line (a chord of a curved wall).
+  bool curved(const std::vector<Candidate>& run, const LineNormal& line, double t0, double t1,
+              double sigma) const;
+  /// Whether the window's beams see through the segment a-b more often than max_through_share.
+  bool seenThrough(const Vec2& a, const Vec2& b, double band) const;
+  const WindowScan* scanById(std::uint32_t id) const;
+  void emit(const Pose2& laser);
+
+  SubmapParams params_;
+  SensorModel sensor_;
+  std::vector<WindowScan> scans_;
+  std::vector<WindowPoint> points_;  ///< in scan order
+  std::uint32_t next_scan_id_ = 0;
+  bool has_last_ = false;
+  Pose2 last_admitted_;
+  double path_ = 0.0;
+  std::vector<FoundLine> pending_;  ///< found when the last scan entered, in the fixed frame
+  std::vector<Segment> output_;
+  std::size_t lines_found_ = 0;
+  // Hash grid over the window points, cell = seed_radius.
+  std::vector<std::int64_t> cell_keys_;
+  std::vector<std::uint32_t> cell_order_;
+};
+
+}  // namespace line_extraction
