@@ -199,7 +199,9 @@ OccupancyGrid buildOccupancyGrid(const std::vector<Segment2>& walls, const std::
                                 std::to_string(bounds.max_y - bounds.min_y) + " m at " + std::to_string(res) +
                                 " m would need " + std::to_string(cells) +
                                 " cells, more than max_cells = " + std::to_string(params.max_cells));
-  grid.origin = Vec2(min_x * res, min_y * res);
+  // Rounded to the nanometre, so the YAML reads -2.3 rather than -2.3000000000000003.
+  const auto nanometres = [](double v) { return std::round(v * 1e9) / 1e9; };
+  grid.origin = Vec2(nanometres(min_x * res), nanometres(min_y * res));
   grid.width = static_cast<int>(columns);
   grid.height = static_cast<int>(rows);
   grid.cells.assign(static_cast<std::size_t>(grid.width) * grid.height, OccupancyGrid::kUnknown);
