@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -46,7 +47,10 @@ int main(int argc, char** argv)
       if (arg == "--format")
         options.formats = line_map_eval::parseExportFormat(argv[++i]);
       else if (arg == "--resolution")
+      {
         options.resolution = parseNumber("--resolution", argv[++i]);
+        if (!(options.resolution > 0.0)) throw std::invalid_argument("--resolution must be positive");
+      }
       else if (arg.rfind("--", 0) == 0)
         throw std::invalid_argument("unknown option " + arg);
       else

@@ -48,7 +48,8 @@ MapServerFiles writeMapServerFiles(const OccupancyGrid& grid, const std::string&
 {
   if (grid.width <= 0 || grid.height <= 0 ||
       grid.cells.size() != static_cast<std::size_t>(grid.width) * grid.height)
-    throw std::invalid_argument("map_server files '" + base + "': the grid is empty");
+    throw std::invalid_argument("map_server files '" + base +
+                                "': the grid is empty (no segment and no original)");
   const MapServerFiles files{base + ".pgm", base + ".yaml"};
 
   std::ofstream pgm(files.pgm, std::ios::binary | std::ios::trunc);
