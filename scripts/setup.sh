@@ -11,7 +11,7 @@ PACKAGES=(
   libgtest-dev librostest-dev python3-rostest rosbash python3-rosnode python3-roslaunch python3-rostopic python3-rosservice
   python3-sensor-msgs python3-visualization-msgs python3-nav-msgs python3-geometry-msgs python3-diagnostic-msgs
   libeigen3-dev libboost-dev libboost-iostreams-dev libtbb-dev libyaml-cpp-dev libcairo2-dev libceres-dev
-  libbenchmark-dev libbz2-dev zlib1g-dev tf2-tools
+  libbenchmark-dev libbz2-dev zlib1g-dev tf2-tools libdxflib-dev nlohmann-json3-dev
   rviz xvfb xauth imagemagick libgl1-mesa-dri
   clang libclang-rt-14-dev
   stress-ng
