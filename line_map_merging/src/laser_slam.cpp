@@ -101,6 +101,12 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.loop_scale_by_disagreement = p.getDouble("loop/scale_by_disagreement", s.loop_scale_by_disagreement);
   s.loop_consistent_xy = p.getDouble("loop/consistent_xy", s.loop_consistent_xy);
   s.loop_consistent_theta = p.getDouble("loop/consistent_theta", s.loop_consistent_theta);
+  s.isotropic_ratio = p.getDouble("isotropic_ratio", s.isotropic_ratio);
+  if (!(s.isotropic_ratio >= 0.0 && s.isotropic_ratio <= 1.0))
+    throw linemap::ParameterError("parameter 'isotropic_ratio' must be in [0, 1]");
+  s.min_weight = p.getDouble("min_weight", s.min_weight);
+  if (!(s.min_weight > 0.0 && s.min_weight <= 1.0))
+    throw linemap::ParameterError("parameter 'min_weight' must be in (0, 1]");
   return s;
 }
 
@@ -195,8 +201,11 @@ SlamOutcome LaserSlam::addScan(const SlamScan& in)
       {
         const auto found = correlativeSearch(local_map_, scan.points, centre, window, 1);
         if (found.empty()) return;
+        // Held towards the prediction, not the search's pick: where the scan fixes nothing (along a
+        // corridor) the search's choice is arbitrary, and it favours poses that keep every point
+        // on the local map, i.e. lags behind; the prediction is the information there.
         const MatchResult refined =
-            refineMatch(local_map_, scan.points, found.front().pose, found.front().pose, params_.refinement);
+            refineMatch(local_map_, scan.points, found.front().pose, centre, params_.refinement);
         if (!best || refined.score > best->score) best = refined;
       };
       if (odometry_usable) attempt(predicted, params_.window);
@@ -209,6 +218,19 @@ SlamOutcome LaserSlam::addScan(const SlamScan& in)
       if (best && best->score >= params_.min_score)
       {
         pose = best->pose;
+        if (odometry_usable)
+        {
+          // The match's translation where it determines one, the odometry's elsewhere.
+          const TranslationShape shape = matchShape(*best);
+          if (shape.degenerate)
+          {
+            const linemap::Vec2 t = predicted.translation() +
+                                    shape.weights * (best->pose.translation() - predicted.translation());
+            pose.x = t.x();
+            pose.y = t.y();
+            ++counters_.degenerate_matches;
+          }
+        }
         outcome = SlamOutcome::kMatched;
       }
       else
@@ -414,29 +436,33 @@ void LaserSlam::closeLoops()
       continue;
     }
     const MatchResult* match = &found->first;
+    const TranslationShape shape = matchShape(*match);
     PoseGraphEdge e;
     e.from = j;
     e.to = k;
     e.measurement = match->pose;
     e.sigma_xy = params_.loop_sigma_xy;
     e.sigma_theta = params_.loop_sigma_theta;
+    e.translation_weights = shape.weights;
     e.loop = true;
     const std::size_t edge = graph_.addEdge(e);
     const Pose2 disagreement = graph_.edgeError(edge);
-    if (std::hypot(disagreement.x, disagreement.y) <= params_.loop_consistent_xy &&
-        std::fabs(disagreement.theta) <= params_.loop_consistent_theta)
+    // Translations in the closure's own metric: along a direction its match did not fix, the
+    // estimate's drift is no disagreement.
+    const double size = graph_.weightedTranslationError(edge);
+    if (size <= params_.loop_consistent_xy && std::fabs(disagreement.theta) <= params_.loop_consistent_theta)
     {
       // The estimate already agrees with it: optimising would barely move anything. It takes part in
       // the next optimisation.
       ++counters_.loops_accepted;
       ++counters_.loops_consistent;
+      counters_.loops_degenerate += shape.degenerate ? 1 : 0;
       path_at_closure_ = kf.path;
       continue;
     }
     // It disagrees with the estimate. A large disagreement is the drift a closure is for, or a false
     // match: it must be corroborated by a second closure, from another keyframe, implying the same
     // correction of the current pose (a false match rarely repeats itself consistently).
-    const double size = std::hypot(disagreement.x, disagreement.y);
     const Pose2 implied = graph_.node(j) * match->pose;  // where this closure puts keyframe k
     std::vector<std::size_t> added{edge};
     if (size > params_.loop_corroborate_xy || std::fabs(disagreement.theta) > params_.loop_corroborate_theta)
@@ -478,7 +504,7 @@ void LaserSlam::closeLoops()
     for (std::size_t a : added)
     {
       const Pose2 error = graph_.edgeError(a);
-      fits &= std::hypot(error.x, error.y) <= params_.loop_max_error_xy &&
+      fits &= graph_.weightedTranslationError(a) <= params_.loop_max_error_xy &&
               std::fabs(error.theta) <= params_.loop_max_error_theta;
     }
     if (!fits)
@@ -491,9 +517,16 @@ void LaserSlam::closeLoops()
       continue;
     }
     counters_.loops_accepted += added.size();
+    counters_.loops_degenerate += shape.degenerate ? 1 : 0;
     graph_optimized_ = true;
     path_at_closure_ = kf.path;
   }
+}
+
+TranslationShape LaserSlam::matchShape(const MatchResult& match) const
+{
+  if (params_.isotropic_ratio <= 0.0) return {};
+  return translationShape(match.curvature, params_.isotropic_ratio, params_.min_weight);
 }
 
 std::vector<std::pair<double, Pose2>> LaserSlam::trajectory() const
@@ -552,6 +585,8 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
           {"loop closures consistent (not optimised)", n(c.loops_consistent)},
           {"loop closures waiting for corroboration", n(c.loops_pending)},
           {"loop closures rejected (ambiguous)", n(c.loops_ambiguous)},
+          {"loop closures accepted with a direction their match left open", n(c.loops_degenerate)},
+          {"matches leaving a direction to the odometry", n(c.degenerate_matches)},
           {"loop closures rejected (score)", n(c.loops_rejected_score)},
           {"loop closures rejected (graph)", n(c.loops_rejected_graph)},
           {"optimizations", n(c.optimizations)},

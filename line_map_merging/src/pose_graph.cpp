@@ -2,7 +2,10 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 namespace line_map_merging
@@ -17,24 +20,30 @@ T wrapAngle(const T& a)
 }
 
 // Residual of one edge, whitened: (R_i^T (t_j - t_i) - z_t) / sigma_xy, wrap(th_j - th_i - z_th) / sigma_th.
+// The translation is whitened by W^(1/2) / sigma_xy, W the edge's translation_weights.
 struct EdgeCost
 {
-  explicit EdgeCost(const PoseGraphEdge& e)
-      : z_(e.measurement), ixy_(1.0 / e.sigma_xy), ith_(1.0 / e.sigma_theta)
+  explicit EdgeCost(const PoseGraphEdge& e) : z_(e.measurement), ith_(1.0 / e.sigma_theta)
   {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(e.translation_weights);
+    const Eigen::Vector2d roots = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+    sqrt_w_ = eigen.eigenvectors() * roots.asDiagonal() * eigen.eigenvectors().transpose() / e.sigma_xy;
   }
   template <typename T>
   bool operator()(const T* a, const T* b, T* r) const
   {
     const T c = cos(a[2]), s = sin(a[2]);
     const T dx = b[0] - a[0], dy = b[1] - a[1];
-    r[0] = ixy_ * (c * dx + s * dy - z_.x);
-    r[1] = ixy_ * (-s * dx + c * dy - z_.y);
+    const T ex = c * dx + s * dy - z_.x;
+    const T ey = -s * dx + c * dy - z_.y;
+    r[0] = sqrt_w_(0, 0) * ex + sqrt_w_(0, 1) * ey;
+    r[1] = sqrt_w_(1, 0) * ex + sqrt_w_(1, 1) * ey;
     r[2] = ith_ * wrapAngle(b[2] - a[2] - z_.theta);
     return true;
   }
   linemap::Pose2 z_;
-  double ixy_, ith_;
+  Eigen::Matrix2d sqrt_w_;
+  double ith_;
 };
 }  // namespace
 
@@ -61,6 +70,15 @@ linemap::Pose2 PoseGraph::edgeError(std::size_t index) const
 {
   const auto& e = edges_.at(index);
   return e.measurement.inverse() * (node(e.from).inverse() * node(e.to));
+}
+
+double PoseGraph::weightedTranslationError(std::size_t index) const
+{
+  const auto& e = edges_.at(index);
+  // The translation residual as EdgeCost forms it (in the `from` frame), not edgeError's.
+  const linemap::Pose2 relative = node(e.from).inverse() * node(e.to);
+  const Eigen::Vector2d d(relative.x - e.measurement.x, relative.y - e.measurement.y);
+  return std::sqrt(std::max(0.0, d.dot(e.translation_weights * d)));
 }
 
 OptimizationStats PoseGraph::optimize()

@@ -44,6 +44,52 @@ struct FieldCost
   double scale_;
 };
 
+/// Mean interpolated field value of the points at `pose`.
+double interpolatedScore(const Interpolator& field, const LikelihoodGrid& grid,
+                         const std::vector<linemap::Vec2>& points, const linemap::Pose2& pose)
+{
+  double sum = 0.0;
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  for (const auto& p : points)
+  {
+    double v;
+    field.Evaluate((s * p.x() + c * p.y() + pose.y - grid.origin().y()) / grid.resolution(),
+                   (c * p.x() - s * p.y() + pose.x - grid.origin().x()) / grid.resolution(), &v);
+    sum += v;
+  }
+  return sum / static_cast<double>(points.size());
+}
+
+/// How sharply the score falls off around `pose`: minus its Hessian over (x, y, theta) by central
+/// differences (one cell, 0.01 rad), negative curvatures clipped to zero. The least-squares J^T J
+/// would not do: at the peak of a field the points' gradients vanish, whatever the scan determines.
+Eigen::Matrix3d scoreCurvature(const Interpolator& field, const LikelihoodGrid& grid,
+                               const std::vector<linemap::Vec2>& points, const linemap::Pose2& pose)
+{
+  const double h[3] = {grid.resolution(), grid.resolution(), 0.01};
+  auto at = [&](int i, double di, int j, double dj)
+  {
+    double d[3] = {0.0, 0.0, 0.0};
+    d[i] += di;
+    d[j] += dj;
+    return interpolatedScore(field, grid, points,
+                             linemap::Pose2(pose.x + d[0], pose.y + d[1], pose.theta + d[2]));
+  };
+  const double centre = interpolatedScore(field, grid, points, pose);
+  Eigen::Matrix3d hessian;
+  for (int i = 0; i < 3; ++i)
+  {
+    hessian(i, i) = (at(i, h[i], i, 0.0) - 2.0 * centre + at(i, -h[i], i, 0.0)) / (h[i] * h[i]);
+    for (int j = i + 1; j < 3; ++j)
+      hessian(i, j) = hessian(j, i) =
+          (at(i, h[i], j, h[j]) - at(i, h[i], j, -h[j]) - at(i, -h[i], j, h[j]) + at(i, -h[i], j, -h[j])) /
+          (4.0 * h[i] * h[j]);
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(-hessian);
+  return eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() *
+         eigen.eigenvectors().transpose();
+}
+
 struct PriorCost
 {
   PriorCost(const linemap::Pose2& prior, double wt, double wr) : prior_(prior), wt_(wt), wr_(wr) {}
@@ -162,6 +208,7 @@ MatchResult refineMatch(const LikelihoodGrid& grid, const std::vector<linemap::V
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   result.pose = {pose[0], pose[1], linemap::normalizeAngle(pose[2])};
+  result.curvature = scoreCurvature(field, grid, points, result.pose);
   double sum = 0.0;
   const double c = std::cos(result.pose.theta), s = std::sin(result.pose.theta);
   for (const auto& p : points)
@@ -173,6 +220,24 @@ MatchResult refineMatch(const LikelihoodGrid& grid, const std::vector<linemap::V
   }
   result.score = sum / static_cast<double>(points.size());
   return result;
+}
+
+TranslationShape translationShape(const Eigen::Matrix3d& curvature, double isotropic_ratio, double floor)
+{
+  TranslationShape shape;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(curvature.topLeftCorner<2, 2>());
+  const Eigen::Vector2d values = eigen.eigenvalues();                 // ascending
+  if (!(values(1) > 0.0) || !std::isfinite(values(1))) return shape;  // nothing known: no shaping
+  shape.ratio = std::max(0.0, values(0)) / values(1);
+  Eigen::Vector2d weights;
+  for (int i = 0; i < 2; ++i)
+  {
+    const double relative = std::max(0.0, values(i)) / values(1);
+    weights(i) = relative >= isotropic_ratio ? 1.0 : std::max(floor, relative / isotropic_ratio);
+  }
+  shape.degenerate = weights(0) < 1.0;
+  shape.weights = eigen.eigenvectors() * weights.asDiagonal() * eigen.eigenvectors().transpose();
+  return shape;
 }
 
 }  // namespace line_map_merging

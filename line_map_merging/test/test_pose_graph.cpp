@@ -132,3 +132,39 @@ TEST(PoseGraph, BadEdgesAreRefused)
   EXPECT_TRUE(g.edges().empty());
   EXPECT_EQ(g.optimize().iterations, 0);  // nothing to optimise
 }
+
+// A closure whose translation information is weak along x (a corridor match) corrects y but leaves
+// x where the chain puts it; the same closure isotropic drags x too.
+TEST(PoseGraph, ClosureMovesOnlyWhatItsMatchDetermines)
+{
+  auto solve = [](const Eigen::Matrix2d& weights)
+  {
+    PoseGraph g;
+    g.addNode(Pose2(0, 0, 0));
+    g.addNode(Pose2(10, 0, 0));
+    g.addNode(Pose2(20, 0, 0));
+    g.addEdge(edge(0, 1, Pose2(10, 0, 0), false, 0.05, 1e-5));
+    g.addEdge(edge(1, 2, Pose2(10, 0, 0), false, 0.05, 1e-5));
+    // The closure says node 2 is 0.5 m further along x and 0.2 m off in y.
+    auto close = edge(0, 2, Pose2(20.5, 0.2, 0), true, 0.05, 1e-5);  // stiff headings: y moves by translation
+    close.translation_weights = weights;
+    close.loss_scale = 100.0;
+    const std::size_t index = g.addEdge(close);
+    // Before optimising, its disagreement in its own metric: the y part alone when x is weak.
+    const double weighted = g.weightedTranslationError(index);
+    g.optimize();
+    return std::make_pair(g.node(2), weighted);
+  };
+  Eigen::Matrix2d weak_x = Eigen::Matrix2d::Identity();
+  weak_x(0, 0) = 1e-3;
+  const auto [shaped, shaped_error] = solve(weak_x);
+  const auto [isotropic, isotropic_error] = solve(Eigen::Matrix2d::Identity());
+  EXPECT_NEAR(shaped_error, std::hypot(0.5 * std::sqrt(1e-3), 0.2), 1e-9);
+  EXPECT_NEAR(isotropic_error, std::hypot(0.5, 0.2), 1e-9);
+  // Isotropic: the closure (one edge against two chain edges of equal sigma) takes 2/3 of both.
+  EXPECT_NEAR(isotropic.x, 20.0 + 0.5 * 2.0 / 3.0, 0.01);
+  EXPECT_NEAR(isotropic.y, 0.2 * 2.0 / 3.0, 0.02);
+  // Shaped: y as before, x barely (the chain's information along x is 500 times the closure's).
+  EXPECT_NEAR(shaped.y, 0.2 * 2.0 / 3.0, 0.02);
+  EXPECT_LT(std::fabs(shaped.x - 20.0), 0.01);
+}

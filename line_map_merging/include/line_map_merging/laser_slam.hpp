@@ -45,6 +45,14 @@ struct LaserSlamParams
   double max_odometry_step = 0.5;        ///< [m] odometry moving more between two scans is a jump
   double max_odometry_turn = 0.5;        ///< [rad]
   double time_jump_tolerance = 1.0;      ///< [s]
+  /// What a match determines, as a weight per direction of the translation (its score's curvature;
+  /// TranslationShape): a direction fixed at least this fraction as sharply as the best one counts
+  /// fully, a weaker one in proportion. The front end takes the match's translation in the
+  /// determined directions and keeps the prediction in the others (a corridor's axis); a closure's
+  /// information takes the same shape, and its acceptance tests measure its disagreement in that
+  /// metric. 0: every match determines everything (isotropic).
+  double isotropic_ratio = 0.1;
+  double min_weight = 1e-3;  ///< floor of a direction's weight (keeps a closure's information invertible)
   // Back end.
   double edge_sigma_xy = 0.02, edge_sigma_theta = 0.005;        ///< matched chain edges
   double odometry_sigma_xy = 0.2, odometry_sigma_theta = 0.05;  ///< chain edges with unmatched scans
@@ -109,11 +117,11 @@ enum class SlamOutcome
 struct SlamCounters
 {
   std::size_t scans = 0, matched = 0, filtered = 0, predicted = 0, rejected = 0;
-  std::size_t few_points = 0, poor_matches = 0, odometry_jumps = 0, wide_searches = 0, without_odometry = 0,
-              time_jumps = 0;
+  std::size_t few_points = 0, poor_matches = 0, degenerate_matches = 0, odometry_jumps = 0, wide_searches = 0,
+              without_odometry = 0, time_jumps = 0;
   std::size_t keyframes = 0, loop_attempts = 0, loops_accepted = 0, loops_rejected_score = 0,
               loops_rejected_graph = 0, loops_consistent = 0, loops_pending = 0, loops_ambiguous = 0,
-              optimizations = 0;
+              loops_degenerate = 0, optimizations = 0;
   double last_optimization_ms = 0.0, total_optimization_ms = 0.0, last_match_ms = 0.0, total_loop_ms = 0.0;
 };
 
@@ -159,6 +167,8 @@ class LaserSlam
   void rebuildLocalMap();
   void closeLoops();
   /// The refined match and its ambiguity (best coarse score away from the peak / the peak's).
+  /// The translation shape of a match (identity when isotropic_ratio is 0).
+  TranslationShape matchShape(const MatchResult& match) const;
   std::optional<std::pair<MatchResult, double>> matchLoop(std::size_t candidate, std::size_t current,
                                                           const linemap::Pose2& guess, double radius,
                                                           double angle);

@@ -4,6 +4,7 @@
 // quadratic one, and is then found by its residual and removed (pruneLoops).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cstddef>
 #include <vector>
@@ -17,9 +18,13 @@ struct PoseGraphEdge
   std::size_t from = 0, to = 0;
   linemap::Pose2 measurement;  ///< pose_from^-1 * pose_to
   double sigma_xy = 0.05;      ///< [m] standard deviation of the translation
-  double sigma_theta = 0.01;   ///< [rad]
-  bool loop = false;           ///< under the robust loss
-  double loss_scale = 0.0;     ///< its Cauchy scale in standard deviations; 0 = the graph's
+  /// Shape of the translation's information in the `from` frame (symmetric, eigenvalues in (0, 1]):
+  /// the information is translation_weights / sigma_xy^2, so a direction of weight w has standard
+  /// deviation sigma_xy / sqrt(w). Identity: isotropic (a match that fixes both directions).
+  Eigen::Matrix2d translation_weights = Eigen::Matrix2d::Identity();
+  double sigma_theta = 0.01;  ///< [rad]
+  bool loop = false;          ///< under the robust loss
+  double loss_scale = 0.0;    ///< its Cauchy scale in standard deviations; 0 = the graph's
 };
 
 struct PoseGraphParams
@@ -55,6 +60,9 @@ class PoseGraph
 
   /// Error of edge `index` at the current estimate: measurement^-1 * (pose_from^-1 * pose_to).
   linemap::Pose2 edgeError(std::size_t index) const;
+  /// The translation of edgeError in the edge's own metric: sqrt(e^T W e) with W its
+  /// translation_weights, so a disagreement along a direction its match did not fix counts less.
+  double weightedTranslationError(std::size_t index) const;
 
   std::size_t nodeCount() const { return nodes_.size(); }
   const std::vector<PoseGraphEdge>& edges() const { return edges_; }

@@ -5,6 +5,9 @@
 // (sub-cell precision the search's grid steps cannot give).
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -42,7 +45,25 @@ struct MatchResult
 {
   linemap::Pose2 pose;
   double score = 0.0;  ///< mean field value of the points at `pose`, in [0, 1]
+  /// Minus the Hessian of the score at `pose` over (x, y, theta), without the prior: how sharply the
+  /// scan fixes each direction. Filled by refineMatch; a corridor's is near zero along its axis.
+  Eigen::Matrix3d curvature = Eigen::Matrix3d::Zero();
 };
+
+/// What a match determines of a relative pose, as a shape over the translation: the curvature's
+/// (x, y) block scaled so that its best-determined direction has weight 1, and every direction
+/// determined at least `isotropic_ratio` as well as that one counted as fully determined (weight 1).
+/// Below that ratio a direction's weight falls in proportion (down to `floor`): the match barely
+/// says where along it the pose lies.
+struct TranslationShape
+{
+  Eigen::Matrix2d weights = Eigen::Matrix2d::Identity();  ///< symmetric, eigenvalues in [floor, 1]
+  double ratio = 1.0;       ///< weakest / strongest curvature of the translation block
+  bool degenerate = false;  ///< some direction weighs less than 1
+  /// The length of `v` in the shape's metric: |v| along determined directions, less along others.
+  double norm(const linemap::Vec2& v) const { return std::sqrt(std::max(0.0, v.dot(weights * v))); }
+};
+TranslationShape translationShape(const Eigen::Matrix3d& curvature, double isotropic_ratio, double floor);
 
 /// Mean nearest-cell field value of `points` (in the frame whose pose is sought) at `pose`.
 double matchScore(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
