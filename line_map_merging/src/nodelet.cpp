@@ -271,9 +271,11 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     try
     {
       const OccupancyGrid grid = buildOccupancyGrid(input, grid_params_);
-      // The newest keyframe's stamp (ros::Time throws for one out of range); an empty map has none,
-      // the newest input's stands in.
-      const ros::Time stamp = std::isfinite(input.newest_stamp) ? ros::Time(input.newest_stamp) : newest;
+      // The newest keyframe's stamp (ros::Time throws for one out of range); the newest input's exact
+      // one when it is that keyframe's (the double lost the nanoseconds), or stands in for an empty map.
+      const bool same = std::abs(input.newest_stamp - newest.toSec()) < 1e-6;
+      const ros::Time stamp =
+          std::isfinite(input.newest_stamp) && !same ? ros::Time(input.newest_stamp) : newest;
       grid_pub_.publish(toMessage(grid, map_frame_, stamp));
       const double ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

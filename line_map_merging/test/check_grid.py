@@ -67,7 +67,7 @@ class CheckGrid(unittest.TestCase):
         info = grid.info
         self.assertEqual(grid.header.frame_id, "map")
         # The newest keyframe's stamp: the last scan's (every scan is a keyframe), as on line_map.
-        self.assertAlmostEqual(grid.header.stamp.to_sec(), m.header.stamp.to_sec(), delta=1e-6)
+        self.assertEqual(grid.header.stamp, m.header.stamp)
         self.assertAlmostEqual(info.resolution, RESOLUTION, delta=1e-6)
         self.assertEqual(len(grid.data), info.width * info.height)
         # The map's extent plus the margin (the keyframe poses lie inside it here), in whole cells.

@@ -65,7 +65,8 @@ TEST(MapGrid, CaeInputMatchesTheCaeGridCellForCell)
   EXPECT_EQ(mine.origin, reference.origin);
   EXPECT_EQ(mine.cells, reference.cells);
   // Free between the walls and in front of the glimpse; the glimpse is no wall.
-  EXPECT_EQ(mine.valueAt(Vec2(2.0, 0.0)), OccupancyGrid::kFree);
+  EXPECT_EQ(mine.valueAt(Vec2(2.0, 1.0)), OccupancyGrid::kFree);
+  EXPECT_EQ(mine.valueAt(Vec2(2.0, -1.0)), OccupancyGrid::kFree);
   EXPECT_EQ(mine.valueAt(Vec2(4.77, 0.72)), OccupancyGrid::kFree);  // only the glimpse's triangle covers it
   EXPECT_NE(mine.valueAt(Vec2(6.15, 1.0)), OccupancyGrid::kOccupied);
   EXPECT_EQ(mine.valueAt(Vec2(2.0, 2.0)), OccupancyGrid::kOccupied);
@@ -88,7 +89,7 @@ TEST(MapGrid, WithoutProvenanceWallsInUnknownSpace)
   EXPECT_GE(g.count(OccupancyGrid::kOccupied), 240u);
   EXPECT_LE(g.count(OccupancyGrid::kOccupied), 242u);
   EXPECT_EQ(g.valueAt(Vec2(2.0, 2.0)), OccupancyGrid::kOccupied);
-  EXPECT_EQ(g.valueAt(Vec2(2.0, 0.0)), OccupancyGrid::kUnknown);
+  EXPECT_EQ(g.valueAt(Vec2(2.0, 1.0)), OccupancyGrid::kUnknown);
 }
 
 TEST(MapGrid, EmptyMapHasNoStampAndAnEmptyGrid)
