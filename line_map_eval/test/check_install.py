@@ -1,13 +1,15 @@
 #!/usr/bin/python3
 """The install space of a catkin_make build directory, used as a deployed robot would: installs the
-build into an empty prefix (its cmake_install.cmake with CMAKE_INSTALL_PREFIX set: nothing is
-rebuilt), sources the prefix's setup.bash in an environment holding nothing of the repository or
+build into an empty directory (its cmake_install.cmake with DESTDIR, as packaging does: nothing is
+rebuilt; catkin bakes the configured prefix into its install rules, and the installed setup.bash
+finds its own place), sources the installed setup.bash in an environment holding nothing of the repository or
 the devel space, and checks that every package resolves to the prefix, that `rospack plugins` lists
 every nodelet plugin description there, that the launch files resolve with their config files
 (`roslaunch --files`, `--dump-params`), that the tools run (`rosrun line_map_eval <tool> --help`),
 and that every nodelet class loads into a manager (own master) from the prefix's libraries, the
 shipped parameters loaded first. Writes one JUnit testcase per check.
-  check_install.py --build BUILD_DIR/build -o result.xml [--keep DIR]"""
+  check_install.py --build BUILD_DIR/build -o result.xml [--keep DIR]
+The install (copies, a few seconds) and the checks take about half a minute."""
 import argparse
 import os
 import re
@@ -17,6 +19,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import traceback
 import xml.etree.ElementTree as ET
 import xmlrpc.client
 
@@ -63,10 +66,11 @@ class Checks:
 
 
 def run(cmd, env, timeout=LIMIT):
-    """(exit code, stdout + stderr) of a command in `env`."""
+    """(exit code, stdout + stderr) of a command in `env`, in its HOME: away from the repository, whose
+    config/ the tools would find from the working directory."""
     try:
         p = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=timeout,
-                           universal_newlines=True)
+                           universal_newlines=True, cwd=env.get("HOME"))
         return p.returncode, p.stdout
     except subprocess.TimeoutExpired as e:
         return -1, "timed out after %.0f s: %s\n%s" % (timeout, " ".join(cmd), e.stdout or "")
@@ -111,7 +115,14 @@ def check_paths(checks, env, prefix, forbidden):
                "the sourced install space reaches the build or source tree" if bad else None, "\n".join(bad))
 
 
-def check_packages_and_plugins(checks, env, prefix):
+def plugin_classes(xml):
+    """(class name, library file name) of a nodelet plugin description."""
+    return [(c.get("name"), os.path.basename(library.get("path")) + ".so")
+            for library in ET.parse(xml).getroot().iter("library") for c in library.iter("class")]
+
+
+def check_packages_and_plugins(checks, env, prefix, repository):
+    """The classes the repository's plugin descriptions declare (every one must load)."""
     for pkg in PACKAGES:
         rc, out = run(["rospack", "find", pkg], env)
         where = out.strip()
@@ -122,18 +133,18 @@ def check_packages_and_plugins(checks, env, prefix):
     listed = dict(line.split(None, 1) for line in out.splitlines() if len(line.split(None, 1)) == 2)
     classes = []
     for pkg in PLUGIN_PACKAGES:
+        declared = plugin_classes(os.path.join(repository, pkg, "nodelet_plugins.xml"))
+        classes += declared
         xml = os.path.join(prefix, "share", pkg, "nodelet_plugins.xml")
-        if listed.get(pkg, "").strip() != xml:
-            checks.add("plugins_%s" % pkg, "rospack plugins --attrib=plugin nodelet lists %r for %s, expected %s"
-                       % (listed.get(pkg), pkg, xml), out)
+        if listed.get(pkg, "").strip() != xml or not os.path.isfile(xml):
+            checks.add("plugins_%s" % pkg, "rospack plugins --attrib=plugin nodelet lists %r for %s, expected %s "
+                       "(%s)" % (listed.get(pkg), pkg, xml, "present" if os.path.isfile(xml) else "not installed"),
+                       out)
             continue
-        missing = []
-        for library in ET.parse(xml).getroot().iter("library"):
-            path = os.path.join(prefix, library.get("path") + ".so")
-            if not os.path.isfile(path):
-                missing.append(path)
-            classes += [(c.get("name"), os.path.basename(path)) for c in library.iter("class")]
-        checks.add("plugins_%s" % pkg, "libraries not installed: " + ", ".join(missing) if missing else None)
+        missing = sorted({p for p in (os.path.join(prefix, "lib", library) for _, library in declared)
+                          if not os.path.isfile(p)})
+        error = "installed description differs from the source's" if plugin_classes(xml) != declared else None
+        checks.add("plugins_%s" % pkg, "libraries not installed: " + ", ".join(missing) if missing else error)
     return classes
 
 
@@ -179,7 +190,7 @@ def check_nodelets(checks, env, prefix, classes, home):
     port = free_port()
     env = dict(env, ROS_MASTER_URI="http://localhost:%d" % port)
     log = open(os.path.join(home, "processes.log"), "w")
-    master = subprocess.Popen(["rosmaster", "--core", "-p", str(port)], env=env, stdout=log, stderr=log)
+    master = subprocess.Popen(["rosmaster", "--core", "-p", str(port)], env=env, stdout=log, stderr=log, cwd=home)
     manager = None
     try:
         error = wait_for("the master", lambda: run(["rosparam", "list"], env, 10)[0] == 0, master)
@@ -193,7 +204,7 @@ def check_nodelets(checks, env, prefix, classes, home):
                 if rc != 0:
                     return checks.add("nodelets_config", "rosparam load of %s failed" % NODELET_CONFIG[cls], out)
         manager = subprocess.Popen(["rosrun", "nodelet", "nodelet", "manager", "__name:=install_manager"],
-                                   env=env, stdout=log, stderr=log)
+                                   env=env, stdout=log, stderr=log, cwd=home)
         error = wait_for("the manager's load_nodelet service",
                          lambda: run(["rosservice", "find", "nodelet/NodeletLoad"], env, 10)[1].strip() ==
                          "/install_manager/load_nodelet", manager)
@@ -227,6 +238,14 @@ def check_nodelets(checks, env, prefix, classes, home):
         log.close()
 
 
+def configured_prefix(build):
+    with open(os.path.join(build, "CMakeCache.txt")) as f:
+        for line in f:
+            if line.startswith("CMAKE_INSTALL_PREFIX:"):
+                return os.path.normpath(line.split("=", 1)[1].strip())
+    raise RuntimeError("no CMAKE_INSTALL_PREFIX in %s/CMakeCache.txt" % build)
+
+
 def lookup_node(env, node):
     master = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"])
     return master.lookupNode("/check", node)[2]
@@ -238,25 +257,29 @@ def main():
     parser.add_argument("-o", "--output-file", required=True)
     parser.add_argument("--keep", help="install here and keep it (default: a temporary directory, removed)")
     args = parser.parse_args()
+    args.build = os.path.realpath(args.build)
     start = time.time()
     checks = Checks()
     root = os.path.realpath(args.keep) if args.keep else tempfile.mkdtemp(prefix="linemap_install_")
-    prefix, home = os.path.join(root, "install"), os.path.join(root, "home")
-    shutil.rmtree(prefix, ignore_errors=True)
+    destdir, home = os.path.join(root, "destdir"), os.path.join(root, "home")
+    shutil.rmtree(destdir, ignore_errors=True)
     os.makedirs(home, exist_ok=True)
     try:
-        rc, out = run(["cmake", "-DCMAKE_INSTALL_PREFIX=" + prefix, "-P",
-                       os.path.join(args.build, "cmake_install.cmake")], dict(os.environ), 600)
-        if checks.add("install", "installing %s failed (%d)" % (args.build, rc) if rc != 0 else None, out):
+        prefix = destdir + configured_prefix(args.build)
+        rc, out = run(["cmake", "-P", os.path.join(args.build, "cmake_install.cmake")],
+                      dict(os.environ, DESTDIR=destdir), 600)
+        if not checks.add("install", "installing %s failed (%d)" % (args.build, rc) if rc != 0 else None, out):
+            pass
+        else:
             env = install_environment(prefix, home)
             repository = os.path.realpath(os.path.join(os.path.dirname(__file__), "..", ".."))
             check_paths(checks, env, prefix, [repository, os.path.realpath(os.path.join(args.build, ".."))])
-            classes = check_packages_and_plugins(checks, env, prefix)
+            classes = check_packages_and_plugins(checks, env, prefix, repository)
             check_launch_files(checks, env, prefix)
             check_tools(checks, env, prefix, home)
-            if len(classes) < 4:
-                checks.add("nodelets", "expected at least 4 nodelet classes, found %s" % classes)
             check_nodelets(checks, env, prefix, classes, home)
+    except Exception as e:  # a check that broke is a failure, reported as one
+        checks.add("checker", "%s: %s" % (type(e).__name__, e), traceback.format_exc())
     finally:
         checks.write(args.output_file, time.time() - start)
         if not args.keep:
