@@ -80,6 +80,9 @@ def install_environment(prefix, home):
     """The environment of `source PREFIX/setup.bash` started from nothing but the system's PATH."""
     base = {"PATH": "/usr/bin:/bin:/usr/sbin:/sbin", "HOME": home, "ROS_HOME": home,
             "ROS_LOG_DIR": os.path.join(home, "log"), "LANG": "C.UTF-8"}
+    # A sanitizer build (SANITIZE=1) loads its nodelets into the uninstrumented manager: scripts/test.sh's
+    # options let it.
+    base.update({k: v for k, v in os.environ.items() if k in ("ASAN_OPTIONS", "UBSAN_OPTIONS")})
     out = subprocess.run(["bash", "-c", 'source "$0/setup.bash" && env -0', prefix], env=base,
                          stdout=subprocess.PIPE, check=True).stdout.decode()
     return dict(entry.split("=", 1) for entry in out.split("\0") if "=" in entry)
