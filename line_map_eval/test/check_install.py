@@ -167,10 +167,12 @@ def check_launch_files(checks, env, prefix):
         elif any(not f.startswith(prefix) for f in files):
             error = "roslaunch --files line_map_eval %s resolves outside the prefix" % name
         else:
-            # The rosparam files load (config/ beside launch/) and slam.yaml with slam:=true.
-            rc, params = run(["roslaunch", "--dump-params", "line_map_eval", name, "slam:=true"] + args, env)
-            if rc != 0 or "/line_map_merging/fusion/max_angle" not in params or "/slam/" not in params:
-                error = "roslaunch --dump-params line_map_eval %s slam:=true lacks the shipped parameters" % name
+            # The rosparam files load (config/ beside launch/); linemap.launch's include slam.yaml's.
+            extra = ["slam:=true"] if name == "linemap.launch" else []
+            rc, params = run(["roslaunch", "--dump-params", "line_map_eval", name] + extra + args, env)
+            if rc != 0 or (extra and ("/line_map_merging/fusion/max_angle" not in params or "/slam/" not in params)):
+                error = "roslaunch --dump-params line_map_eval %s %s fails or lacks the shipped parameters" % (
+                    name, " ".join(extra))
                 out = params
         checks.add("launch_%s" % name.replace(".", "_"), error, out)
     rviz = os.path.join(prefix, "share", "line_map_eval", "rviz", "linemap.rviz")
