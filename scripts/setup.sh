@@ -6,7 +6,7 @@ PACKAGES=(
   catkin python3-catkin-pkg python3-rospkg
   libroscpp-dev libsensor-msgs-dev libvisualization-msgs-dev libnav-msgs-dev ros-nav-msgs
   ros-geometry-msgs ros-std-msgs libstd-msgs-dev
-  libnodeletlib-dev libnodeletlib-tools libtf2-ros-dev libtf2-msgs-dev libtf2-geometry-msgs-dev
+  libnodeletlib-dev libnodeletlib-tools python3-nodelet libtf2-ros-dev libtf2-msgs-dev libtf2-geometry-msgs-dev
   librosbag-dev python3-rosbag libdiagnostic-updater-dev
   libgtest-dev librostest-dev python3-rostest rosbash python3-rosnode python3-roslaunch python3-rostopic python3-rosservice
   python3-sensor-msgs python3-visualization-msgs python3-nav-msgs python3-geometry-msgs python3-diagnostic-msgs
@@ -15,6 +15,7 @@ PACKAGES=(
   rviz xvfb xauth imagemagick libgl1-mesa-dri
   clang libclang-rt-14-dev
   stress-ng
+  catkin-tools
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -1,13 +1,16 @@
-// ROS wrapper of the online mapper: line_segments (+ tf) and optimized_trajectory in, line_map out.
-// Reads the parameters, converts messages, looks up tf, calls the core (online_mapper.hpp), publishes.
+// ROS wrapper of the online mapper: line_segments (+ tf) and optimized_trajectory in, line_map and
+// its occupancy grid out. Reads the parameters, converts messages, looks up tf, calls the core
+// (online_mapper.hpp, map_grid.hpp), publishes.
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <line_map_msgs/LoadMap.h>
 #include <line_map_msgs/ResetMap.h>
 #include <line_map_msgs/SaveMap.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -19,10 +22,35 @@
 #include "line_extraction/ros/transport.hpp"
 #include "line_extraction/ros/wall_diagnostics.hpp"
 #include "line_map_merging/concurrent_mapper.hpp"
+#include "line_map_merging/map_grid.hpp"
 #include "ros/map_messages.hpp"
 
 namespace line_map_merging
 {
+namespace
+{
+nav_msgs::OccupancyGrid toMessage(const OccupancyGrid& grid, const std::string& frame, const ros::Time& stamp)
+{
+  nav_msgs::OccupancyGrid msg;
+  msg.header.frame_id = frame;
+  msg.header.stamp = stamp;
+  msg.info.map_load_time = stamp;
+  msg.info.resolution = static_cast<float>(grid.resolution);
+  msg.info.width = static_cast<std::uint32_t>(grid.width);
+  msg.info.height = static_cast<std::uint32_t>(grid.height);
+  msg.info.origin.position.x = grid.origin.x();
+  msg.info.origin.position.y = grid.origin.y();
+  msg.info.origin.orientation.w = 1.0;
+  msg.data = grid.cells;  // both row-major from the origin corner, -1 / 0 / 100
+  return msg;
+}
+
+double steadySeconds()
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+}  // namespace
+
 class LineMapMergingNodelet : public nodelet::Nodelet
 {
  public:
@@ -30,6 +58,9 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   {
     autosave_timer_.stop();
     poll_timer_.stop();
+    grid_timer_.stop();
+    // Waits for a grid in progress.
+    std::lock_guard<std::mutex> building(grid_mutex_);
     tf_listener_.reset();  // its thread calls into the wait
     waiting_.reset();
     if (mapper_) autosave(INFINITY);  // the changes since the last autosave
@@ -47,9 +78,12 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     publish_labels_ = pnh.param("publish_labels", false);
     marker_width_ = pnh.param("marker_width", 0.03);
     autosave_path_ = pnh.param<std::string>("autosave_path", "");
+    grid_params_.resolution = pnh.param("grid_resolution", 0.05);
     const linemap::ParamSet params = linemap_ros::loadParamSet(pnh);
     try
     {
+      grid_params_.validate();
+      grid_schedule_ = GridSchedule(pnh.param("grid_period", 2.0));
       mapper_ = ConcurrentMapper::fromParams(pnh.param<std::string>("method", "cae"), params);
     }
     catch (const std::exception& e)
@@ -62,6 +96,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_, nh, true, hints);
     map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
+    grid_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("grid", 1, true);
     const int queue = std::max(1, pnh.param("queue_size", 1000));
     waiting_ = std::make_unique<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>>(
         *tf_, map_frame_, queue, ros::Duration(tf_timeout_), nh,
@@ -84,6 +119,11 @@ class LineMapMergingNodelet : public nodelet::Nodelet
         nh, pnh, "line map merging", this, &LineMapMergingNodelet::diagnose, [this] { observeTime(0.0); });
     // A finished adjustment replaces the map at the next scan, or here when none comes.
     poll_timer_ = nh.createWallTimer(ros::WallDuration(0.02), &LineMapMergingNodelet::poll, this);
+    // The grid is built from a copy of the map on the multi-threaded queue, so scans (on this nodelet's
+    // serial queue) merge meanwhile. The tick also notices the first subscriber, who then gets the map
+    // as it is.
+    grid_timer_ =
+        getMTNodeHandle().createWallTimer(ros::WallDuration(0.1), &LineMapMergingNodelet::gridTick, this);
     NODELET_INFO("line_map_merging: method '%s' in frame '%s'", merger().name(), map_frame_.c_str());
   }
 
@@ -199,6 +239,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
 
   bool publish(const ros::Time& stamp)  // lock held
   {
+    grid_schedule_.mapChanged();
     const line_map_msgs::LineMap msg = toLineMap(merger(), map_frame_, stamp);
     map_pub_.publish(msg);
     if (marker_pub_.getNumSubscribers() > 0)
@@ -212,6 +253,43 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     if (mapper_->poll()) publish(newest_);
   }
 
+  void gridTick(const ros::WallTimerEvent&)
+  {
+    std::unique_lock<std::mutex> building(grid_mutex_, std::try_to_lock);
+    if (!building.owns_lock()) return;  // the last tick's grid is still being built
+    GridInput input;
+    ros::Time newest;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      const double now = steadySeconds();
+      if (!grid_schedule_.due(now, grid_pub_.getNumSubscribers() > 0)) return;
+      grid_schedule_.started(now);
+      input = gridInputOf(merger());
+      newest = newest_;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    try
+    {
+      const OccupancyGrid grid = buildOccupancyGrid(input, grid_params_);
+      // The newest keyframe's stamp (ros::Time throws for one out of range); the newest input's exact
+      // one when it is that keyframe's (the double lost the nanoseconds), or stands in for an empty map.
+      const bool same = std::abs(input.newest_stamp - newest.toSec()) < 1e-6;
+      const ros::Time stamp =
+          std::isfinite(input.newest_stamp) && !same ? ros::Time(input.newest_stamp) : newest;
+      grid_pub_.publish(toMessage(grid, map_frame_, stamp));
+      const double ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++grids_published_;
+      last_grid_ms_ = ms;
+      last_grid_size_ = std::to_string(grid.width) + " x " + std::to_string(grid.height);
+    }
+    catch (const std::exception& e)  // a map too large for the resolution: again after the next change
+    {
+      NODELET_WARN_THROTTLE(30.0, "line_map_merging: no occupancy grid: %s", e.what());
+    }
+  }
+
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -219,25 +297,34 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     stat.summary(dropped ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
                  dropped ? "scans dropped (no transform)" : "merging");
     for (const auto& [key, value] : mapper_->diagnostics()) stat.add(key, value);
+    stat.add("grids published", grids_published_);
+    stat.add("grid size [cells]", last_grid_size_);
+    stat.add("grid build [ms]", last_grid_ms_);
   }
 
   const Merger& merger() const { return mapper_->mapper().merger(); }
   const MapperCounters& counters() const { return mapper_->mapper().counters(); }
 
-  std::mutex mutex_;  // guards mapper_ and newest_
+  std::mutex mutex_;  // guards mapper_, newest_, grid_schedule_ and the grid figures
   std::unique_ptr<ConcurrentMapper> mapper_;
   ros::Time newest_;  // the newest input stamp: a map adjusted in the background is stamped with it
   std::string map_frame_, base_frame_, odom_frame_, autosave_path_;
   double tf_timeout_ = 0.5, marker_width_ = 0.03;
   bool publish_labels_ = false;
+  OccupancyGridParams grid_params_;
+  GridSchedule grid_schedule_{2.0};
+  std::mutex grid_mutex_;  // held while a grid is built: one at a time
+  std::size_t grids_published_ = 0;
+  double last_grid_ms_ = 0.0;
+  std::string last_grid_size_ = "none";
   std::unique_ptr<tf2_ros::Buffer> tf_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>> waiting_;
   ros::Subscriber trajectory_sub_;
-  ros::Publisher map_pub_, marker_pub_;
+  ros::Publisher map_pub_, marker_pub_, grid_pub_;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
-  ros::WallTimer autosave_timer_, poll_timer_;
+  ros::WallTimer autosave_timer_, poll_timer_, grid_timer_;
 };
 
 }  // namespace line_map_merging
