@@ -1,5 +1,6 @@
 #include "line_map_merging/line_map_localizer.hpp"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -59,7 +60,8 @@ LocalizerParams LocalizerParams::fromParams(const linemap::ParamSet& p)
   s.max_range = positive(p, "scan/max_range", s.max_range);
   s.min_points = count(p, "scan/min_points", s.min_points, 3);
   s.match.max_distance = positive(p, "match/max_distance", s.match.max_distance);
-  s.match.huber = positive(p, "match/huber", s.match.huber);
+  s.match.refine_distance = positive(p, "match/refine_distance", s.match.refine_distance);
+  s.match.loss_scale = positive(p, "match/loss_scale", s.match.loss_scale);
   s.match.point_sigma = positive(p, "match/point_sigma", s.match.point_sigma);
   s.match.inlier_distance = positive(p, "match/inlier_distance", s.match.inlier_distance);
   s.match.max_iterations = static_cast<int>(count(p, "match/max_iterations", s.match.max_iterations, 1));

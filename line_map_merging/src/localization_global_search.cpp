@@ -71,7 +71,7 @@ std::vector<MatchResult> LocalizationGlobalSearch::search(const std::vector<Vec2
       }
   }
   // The best entries, then greedy suppression of poses near a better one.
-  const std::size_t pool = std::min(scores.size(), params_.candidates * 200);
+  const std::size_t pool = std::min(scores.size(), params_.candidates * 1000);
   std::vector<std::size_t> order(scores.size());
   std::iota(order.begin(), order.end(), 0);
   std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(pool), order.end(),

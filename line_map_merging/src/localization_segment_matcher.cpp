@@ -143,7 +143,8 @@ Accumulated accumulate(const LocalizationSegmentIndex& index, const std::vector<
       u = Vec2(-dir.y(), dir.x());
     }
     const Eigen::Vector3d j(u.x(), u.y(), u.x() * -rotated.y() + u.y() * rotated.x());
-    const double w = (d <= params.huber ? 1.0 : params.huber / d) * inv_var;
+    const double ratio = d / params.loss_scale;
+    const double w = inv_var / (1.0 + ratio * ratio);
     acc.information += w * j * j.transpose();
     acc.gradient += w * j * d;
   }
@@ -172,17 +173,16 @@ SegmentMatch evaluateOnSegments(const LocalizationSegmentIndex& index, const std
   return m;
 }
 
-SegmentMatch matchToSegments(const LocalizationSegmentIndex& index, const std::vector<Vec2>& points,
-                             const Pose2& initial, const std::optional<PosePrior>& prior,
-                             const SegmentMatchParams& params, const Vec2& sensor_offset)
+namespace
 {
-  SegmentMatch m;
-  m.pose = initial;
-  Pose2 pose = initial;
-  Accumulated acc;
+// Gauss-Newton iterations from `pose` with the points paired within `gate`; returns the last pose.
+Pose2 solve(const LocalizationSegmentIndex& index, const std::vector<Vec2>& points, Pose2 pose,
+            const std::optional<PosePrior>& prior, const SegmentMatchParams& params,
+            const Vec2& sensor_offset, int& iterations)
+{
   for (int it = 0; it < params.max_iterations; ++it)
   {
-    acc = accumulate(index, points, pose, params, sensor_offset);
+    const Accumulated acc = accumulate(index, points, pose, params, sensor_offset);
     Eigen::Matrix3d h = acc.information;
     Eigen::Vector3d g = acc.gradient;
     if (prior)
@@ -192,7 +192,7 @@ SegmentMatch matchToSegments(const LocalizationSegmentIndex& index, const std::v
       h += prior->information;
       g += prior->information * e;
     }
-    m.iterations = it + 1;
+    ++iterations;
     if (acc.paired == 0 && !prior) break;
     // A tiny damping keeps the step finite where neither the scan nor a prior constrains a direction.
     const Eigen::Vector3d step = -(h + 1e-9 * Eigen::Matrix3d::Identity()).ldlt().solve(g);
@@ -200,9 +200,24 @@ SegmentMatch matchToSegments(const LocalizationSegmentIndex& index, const std::v
     pose = {pose.x + step.x(), pose.y + step.y(), linemap::normalizeAngle(pose.theta + step.z())};
     if (std::hypot(step.x(), step.y()) < 1e-6 && std::fabs(step.z()) < 1e-7) break;
   }
-  acc = accumulate(index, points, pose, params, sensor_offset);
+  return pose;
+}
+}  // namespace
+
+SegmentMatch matchToSegments(const LocalizationSegmentIndex& index, const std::vector<Vec2>& points,
+                             const Pose2& initial, const std::optional<PosePrior>& prior,
+                             const SegmentMatchParams& params, const Vec2& sensor_offset)
+{
+  SegmentMatch m;
+  Pose2 pose = solve(index, points, initial, prior, params, sensor_offset, m.iterations);
+  SegmentMatchParams near = params;
+  near.max_distance = std::min(params.max_distance, params.refine_distance);
+  pose = solve(index, points, pose, prior, near, sensor_offset, m.iterations);
+  // Score and inliers over the wide gate, the covariance from the points the pose rests on.
   m.pose = pose;
-  finish(m, acc, points.size(), params);
+  finish(m, accumulate(index, points, pose, params, sensor_offset), points.size(), params);
+  const Accumulated acc = accumulate(index, points, pose, near, sensor_offset);
+  m.scan_information = acc.information;
   Eigen::Matrix3d h = acc.information;
   if (prior) h += prior->information;
   Eigen::FullPivLU<Eigen::Matrix3d> lu(h);

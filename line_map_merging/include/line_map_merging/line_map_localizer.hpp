@@ -60,7 +60,7 @@ struct LocalizerParams
   double accept_turn = 1.5;
   std::size_t accept_scans = 10;  ///< and at least this many scans
 
-  /// Keys as in config/localization.yaml (e.g. "match/huber", "global/candidates"); throws
+  /// Keys as in config/localization.yaml (e.g. "match/loss_scale", "global/candidates"); throws
   /// linemap::ParameterError naming the key.
   static LocalizerParams fromParams(const linemap::ParamSet& params);
 };

@@ -1,9 +1,9 @@
 // Scan-to-line-map matching for localization (ROS-free): every scan point is paired with the nearest
 // map segment (point-to-segment distance, through a grid of segment lists) and the pose is solved by
-// iteratively reweighted Gauss-Newton under a Huber loss, so points of what the map lacks (furniture,
-// people, a moved wall) count little, held towards a motion prior where the segments leave a
-// direction free (a corridor along its axis). The segments themselves are matched, not a grid made
-// from them: the result is as precise as the map's lines, at any range.
+// iteratively reweighted Gauss-Newton under a Cauchy loss, whose influence falls again with the
+// distance, so points of what the map lacks (furniture, people, a moved wall) count little, held towards a
+// motion prior where the segments leave a direction free (a corridor along its axis). The segments themselves
+// are matched, not a grid made from them: the result is as precise as the map's lines, at any range.
 #pragma once
 
 #include <Eigen/Core>
@@ -53,8 +53,11 @@ class LocalizationSegmentIndex
 
 struct SegmentMatchParams
 {
-  double max_distance = 0.3;     ///< [m] points farther from every segment take no part
-  double huber = 0.05;           ///< [m] residuals beyond count linearly (robust loss)
+  double max_distance = 0.3;  ///< [m] points farther from every segment take no part
+  /// [m] the same in a second solve from the first one's pose: once the pose is near, what lies this
+  /// far from the map (a shelf before a wall) is left out altogether rather than merely down-weighted.
+  double refine_distance = 0.1;
+  double loss_scale = 0.05;      ///< [m] Cauchy scale: a residual of this size weighs half
   double point_sigma = 0.03;     ///< [m] range noise + map error of one point, scales the information
   double inlier_distance = 0.1;  ///< [m] a point this near a segment is an inlier
   int max_iterations = 15;
