@@ -14,7 +14,6 @@
 #include <fstream>
 #include <iostream>
 #include <numeric>
-#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -131,7 +130,8 @@ int main(int argc, char** argv)
       while (std::hypot(wrong.x - ref[first].x, wrong.y - ref[first].y) < 1.0);
       line_map_merging::LineMapLocalizer localizer(segments, params);
       localizer.setPose(wrong);
-      std::optional<std::size_t> good_since;
+      constexpr std::size_t kNever = static_cast<std::size_t>(-1);
+      std::size_t good_since = kNever;  // scans after the start from which the pose stayed right
       std::size_t searches_seen = 0;
       for (std::size_t i = first; i < first + scans; ++i)
       {
@@ -142,15 +142,15 @@ int main(int argc, char** argv)
           search_ms.push_back(localizer.counters().last_global_search_ms);
         }
         const bool ok = r.localized && near(r.pose, ref[i]);
-        if (ok && !good_since) good_since = i - first;
-        if (!ok) good_since.reset();
+        if (ok && good_since == kNever) good_since = i - first;
+        if (!ok) good_since = kNever;
       }
-      const bool success = good_since.has_value();
+      const bool success = good_since != kNever;
       successes += success;
-      if (success) recovery_scans.push_back(static_cast<double>(*good_since));
+      if (success) recovery_scans.push_back(static_cast<double>(good_since));
       std::printf("trial %2zu: scan %5zu, wrong pose (%.2f, %.2f, %.0f deg): %s", t, first, wrong.x, wrong.y,
                   wrong.theta * 180.0 / linemap::kPi, success ? "recovered" : "NOT recovered");
-      if (success) std::printf(" after %zu scans", *good_since);
+      if (success) std::printf(" after %zu scans", good_since);
       std::printf(" (lost %zu, recovered %zu, global searches %zu)\n", localizer.counters().lost,
                   localizer.counters().recovered, localizer.counters().global_searches);
     }
