@@ -247,6 +247,9 @@ LocalizerResult LineMapLocalizer::globalStep(const LocalizerScan& scan, const st
   ++counters_.searching;
   LocalizerResult result;
   result.outcome = LocalizerOutcome::kSearching;
+  // Until a hypothesis is accepted the pose shown is dead reckoning from the last one known: a lost
+  // robot's odometry stays closer than the hypotheses jumping about the map.
+  if (step) pose_ = pose_ * *step;
   result.pose = pose_;
   result.covariance = Eigen::Matrix3d::Identity() * 1e6;
   if (scan.points.size() < params_.min_points || index_.empty())
@@ -324,7 +327,6 @@ LocalizerResult LineMapLocalizer::globalStep(const LocalizerScan& scan, const st
       break;
     }
   const Hypothesis& shown = best ? *best : hypotheses_.front();
-  result.pose = shown.pose;
   result.score = shown.last.score;
   result.inlier_share = shown.last.inlier_share;
   if (!best || best->mean_share < params_.accept_share) return result;

@@ -46,7 +46,7 @@ struct LocalizerParams
   double retry_inlier_share = 0.6;
   SearchWindow retry_window{0.3, 0.2, 0.05, 0.01, 0.0, 0.0};
   // Lost detection.
-  double lost_inlier_share = 0.35;
+  double lost_inlier_share = 0.25;
   std::size_t lost_scans = 15;
   // Global localization.
   GlobalSearchParams global;
@@ -77,7 +77,7 @@ enum class LocalizerOutcome
 {
   kTracked,    ///< matched in the map
   kPredicted,  ///< not matched (too few points, poor match, no map): posed by the prediction
-  kSearching,  ///< global localization under way: the pose is the best hypothesis so far
+  kSearching,  ///< global localization under way: the pose is dead reckoning from the last known
   kRecovered,  ///< global localization accepted a hypothesis with this scan
   kRejected,   ///< stamp not after the last one: ignored
 };
