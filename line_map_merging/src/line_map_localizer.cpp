@@ -82,6 +82,7 @@ LocalizerParams LocalizerParams::fromParams(const linemap::ParamSet& p)
   s.retry_window.angular = p.getNonNegative("tracking/retry_angular", s.retry_window.angular);
   s.lost_inlier_share = share(p, "tracking/lost_inlier_share", s.lost_inlier_share);
   s.lost_scans = count(p, "tracking/lost_scans", s.lost_scans, 1);
+  s.doubt_share = share(p, "tracking/doubt_share", s.doubt_share);
   s.global.coarse_resolution = positive(p, "global/coarse_resolution", s.global.coarse_resolution);
   s.global.coarse_sigma = positive(p, "global/coarse_sigma", s.global.coarse_sigma);
   s.global.coarse_angular_step = positive(p, "global/coarse_angular_step", s.global.coarse_angular_step);
@@ -114,6 +115,7 @@ void LineMapLocalizer::setPose(const Pose2& pose)
   pose_ = {pose.x, pose.y, linemap::normalizeAngle(pose.theta)};
   tracking_ = true;
   poor_in_row_ = 0;
+  track_share_ = 1.0;
   hypotheses_.clear();
 }
 
@@ -236,6 +238,8 @@ LocalizerResult LineMapLocalizer::addScan(const LocalizerScan& in)
       startGlobalLocalization();
       result.localized = false;
     }
+    else if (scan.points.size() >= params_.min_points && !index_.empty())
+      challengeTrack(scan, step, result);
   }
   counters_.last_ms = nowMs() - start;
   last_ = result;
@@ -259,6 +263,53 @@ LocalizerResult LineMapLocalizer::globalStep(const LocalizerScan& scan, const st
       if (step) h.pose = h.pose * *step;
     return result;
   }
+  updateHypotheses(scan, step);
+  if (hypotheses_.empty()) return result;
+  result.score = hypotheses_.front().last.score;
+  result.inlier_share = hypotheses_.front().last.inlier_share;
+  const Hypothesis* best = acceptable(params_.accept_share);
+  if (!best) return result;
+  const SegmentMatch accepted = best->last;
+  setPose(best->pose);
+  ++counters_.recovered;
+  result.outcome = LocalizerOutcome::kRecovered;
+  result.localized = true;
+  result.pose = pose_;
+  result.covariance = accepted.covariance;
+  return result;
+}
+
+void LineMapLocalizer::challengeTrack(const LocalizerScan& scan, const std::optional<Pose2>& step,
+                                      LocalizerResult& result)
+{
+  const double alpha = params_.hypothesis_smoothing;
+  track_share_ = (1.0 - alpha) * track_share_ + alpha * result.inlier_share;
+  if (track_share_ >= params_.doubt_share)
+  {
+    hypotheses_.clear();
+    return;
+  }
+  if (hypotheses_.empty()) ++counters_.doubted;
+  updateHypotheses(scan, step);
+  // Hypotheses at the track itself are no rivals of it.
+  hypotheses_.erase(std::remove_if(hypotheses_.begin(), hypotheses_.end(),
+                                   [&](const Hypothesis& h) {
+                                     return samePlace(h.pose, pose_, params_.global.separation,
+                                                      params_.global.separation_angle);
+                                   }),
+                    hypotheses_.end());
+  const Hypothesis* best = acceptable(track_share_ + params_.accept_margin);
+  if (!best || best->mean_share < params_.accept_share) return;
+  ++counters_.replaced;
+  const SegmentMatch accepted = best->last;
+  setPose(best->pose);
+  result.pose = pose_;
+  result.covariance = accepted.covariance;
+  result.outcome = LocalizerOutcome::kRecovered;
+}
+
+void LineMapLocalizer::updateHypotheses(const LocalizerScan& scan, const std::optional<Pose2>& step)
+{
   // Every hypothesis follows the odometry and is matched.
   const double alpha = params_.hypothesis_smoothing;
   for (auto& h : hypotheses_)
@@ -315,9 +366,12 @@ LocalizerResult LineMapLocalizer::globalStep(const LocalizerScan& scan, const st
   std::stable_sort(hypotheses_.begin(), hypotheses_.end(),
                    [](const Hypothesis& a, const Hypothesis& b) { return a.mean_share > b.mean_share; });
   if (hypotheses_.size() > params_.hypotheses) hypotheses_.resize(params_.hypotheses);
-  if (hypotheses_.empty()) return result;
+}
 
-  // The best hypothesis tested over enough motion, and its lead over every distinct rival.
+const LineMapLocalizer::Hypothesis* LineMapLocalizer::acceptable(double floor) const
+{
+  // The best hypothesis tested over enough motion (they are sorted by mean share), and its lead over
+  // every distinct rival.
   const Hypothesis* best = nullptr;
   for (const auto& h : hypotheses_)
     if (h.scans >= params_.accept_scans &&
@@ -326,24 +380,13 @@ LocalizerResult LineMapLocalizer::globalStep(const LocalizerScan& scan, const st
       best = &h;
       break;
     }
-  const Hypothesis& shown = best ? *best : hypotheses_.front();
-  result.score = shown.last.score;
-  result.inlier_share = shown.last.inlier_share;
-  if (!best || best->mean_share < params_.accept_share) return result;
+  if (!best || best->mean_share < floor) return nullptr;
   double rival = 0.0;
   for (const auto& h : hypotheses_)
     if (&h != best && h.scans >= 3 &&
         !samePlace(h.pose, best->pose, params_.global.separation, params_.global.separation_angle))
       rival = std::max(rival, h.mean_share);
-  if (best->mean_share - rival < params_.accept_margin) return result;
-  const SegmentMatch accepted = best->last;
-  setPose(best->pose);
-  ++counters_.recovered;
-  result.outcome = LocalizerOutcome::kRecovered;
-  result.localized = true;
-  result.pose = pose_;
-  result.covariance = accepted.covariance;
-  return result;
+  return best->mean_share - rival >= params_.accept_margin ? best : nullptr;
 }
 
 std::vector<std::pair<std::string, std::string>> LineMapLocalizer::diagnostics() const
@@ -373,6 +416,8 @@ std::vector<std::pair<std::string, std::string>> LineMapLocalizer::diagnostics()
           {"time jumps back", n(c.time_jumps)},
           {"lost", n(c.lost)},
           {"recovered", n(c.recovered)},
+          {"tracks doubted (rivals tracked)", n(c.doubted)},
+          {"tracks replaced by a rival", n(c.replaced)},
           {"global searches", n(c.global_searches)},
           {"last scan [ms]", ms(c.last_ms)},
           {"last global search [ms]", ms(c.last_global_search_ms)}};

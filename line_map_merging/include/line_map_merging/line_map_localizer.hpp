@@ -48,6 +48,11 @@ struct LocalizerParams
   // Lost detection.
   double lost_inlier_share = 0.25;
   std::size_t lost_scans = 15;
+  /// A track whose mean inlier share (smoothed like a hypothesis') falls below this is doubted: the
+  /// hypotheses of global searches are tracked beside it, and one that explains the scans better by
+  /// accept_margin, over the motion acceptance needs, replaces it (a wrong initial pose that still
+  /// matches a part of the map, a kidnapping to a similar place).
+  double doubt_share = 0.5;
   // Global localization.
   GlobalSearchParams global;
   double hypothesis_min_share = 0.45;  ///< a hypothesis whose mean inlier share falls below is dropped
@@ -85,7 +90,8 @@ enum class LocalizerOutcome
 struct LocalizerCounters
 {
   std::size_t scans = 0, tracked = 0, predicted = 0, searching = 0, rejected = 0, retries = 0, few_points = 0,
-              odometry_jumps = 0, time_jumps = 0, lost = 0, recovered = 0, global_searches = 0;
+              odometry_jumps = 0, time_jumps = 0, lost = 0, recovered = 0, global_searches = 0, doubted = 0,
+              replaced = 0;
   double last_ms = 0.0, last_global_search_ms = 0.0;
 };
 
@@ -130,6 +136,16 @@ class LineMapLocalizer
   SegmentMatch track(const LocalizerScan& scan, const linemap::Pose2& predicted, const PosePrior& prior,
                      bool allow_retry);
   LocalizerResult globalStep(const LocalizerScan& scan, const std::optional<linemap::Pose2>& step);
+  /// Tracks rival hypotheses while the track's smoothed share is below doubt_share; replaces the
+  /// track by one that does better.
+  void challengeTrack(const LocalizerScan& scan, const std::optional<linemap::Pose2>& step,
+                      LocalizerResult& result);
+  /// Moves every hypothesis by the odometry, matches, prunes and merges them, and searches the map
+  /// again when there are none or research_every scans have passed.
+  void updateHypotheses(const LocalizerScan& scan, const std::optional<linemap::Pose2>& step);
+  /// The best hypothesis tested over enough motion whose mean share reaches `floor` and leads every
+  /// distinct rival by accept_margin; null if none.
+  const Hypothesis* acceptable(double floor) const;
 
   LocalizerParams params_;
   LocalizationSegmentIndex index_;
@@ -140,6 +156,7 @@ class LineMapLocalizer
   bool have_stamp_ = false;
   double last_stamp_ = 0.0;
   std::size_t poor_in_row_ = 0, scans_since_search_ = 0;
+  double track_share_ = 1.0;  ///< smoothed inlier share of the track
   std::vector<Hypothesis> hypotheses_;
   LocalizerCounters counters_;
   LocalizerResult last_;
