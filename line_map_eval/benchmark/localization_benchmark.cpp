@@ -2,8 +2,8 @@
 // localizer on a CARMEN log and a saved map of it. First the whole log is tracked from the first
 // scan's pose (the reference trajectory, unless --reference gives one), then TRIALS times the
 // localizer starts at a random scan from a random wrong pose (anywhere in the map's bounding box, any
-// heading, at least 1 m off) and runs SCANS scans: a trial succeeds when the pose is localized and
-// within 0.3 m and 5 degrees of the reference by then, and still at the last scan.
+// heading, at least 1 m off: a kidnapping) and runs SCANS scans: a trial succeeds when the pose is
+// localized and within 0.3 m and 5 degrees of the reference by then, and still at the last scan.
 //
 //   rosrun line_map_eval localization_benchmark RAW_LOG MAP_FILE [--initial-pose X,Y,THETA]
 //       [--reference FILE] [--trials N] [--scans N] [--seed N] [--config FILE]
@@ -151,8 +151,9 @@ int main(int argc, char** argv)
       std::printf("trial %2zu: scan %5zu, wrong pose (%.2f, %.2f, %.0f deg): %s", t, first, wrong.x, wrong.y,
                   wrong.theta * 180.0 / linemap::kPi, success ? "recovered" : "NOT recovered");
       if (success) std::printf(" after %zu scans", good_since);
-      std::printf(" (lost %zu, recovered %zu, global searches %zu)\n", localizer.counters().lost,
-                  localizer.counters().recovered, localizer.counters().global_searches);
+      std::printf(" (lost %zu, recovered %zu, replaced by a rival %zu, global searches %zu)\n",
+                  localizer.counters().lost, localizer.counters().recovered, localizer.counters().replaced,
+                  localizer.counters().global_searches);
     }
     std::printf(
         "global localization: %zu of %zu recovered within %zu scans; median %.0f scans to recover; "

@@ -256,7 +256,7 @@ int main(int argc, char** argv)
       extra << std::setprecision(1) << std::fixed << r.cpu_seconds << " s CPU, " << segments.size()
             << " map segments, " << std::setprecision(3) << (ms.empty() ? 0.0 : ms[ms.size() / 2])
             << " ms/scan median, " << c.tracked << " tracked, " << c.predicted << " predicted, " << c.lost
-            << " lost";
+            << " lost, " << c.replaced << " replaced by a rival";
       if (!initial_pose)
         extra << (r.recovered_at ? ", global localization at scan " + std::to_string(*r.recovered_at)
                                  : std::string(", global localization failed"));

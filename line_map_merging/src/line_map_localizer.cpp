@@ -187,14 +187,17 @@ LocalizerResult LineMapLocalizer::addScan(const LocalizerScan& in)
   for (const auto& p : in.points)
     if (p.allFinite() && p.squaredNorm() <= max2 && p.squaredNorm() > 0.0) scan.points.push_back(p);
   std::optional<Pose2> odom = in.odom && finitePose(*in.odom) ? in.odom : std::nullopt;
-  std::optional<Pose2> step;
+  std::optional<Pose2> step, jump;
   if (odom && last_odom_)
   {
     const Pose2 s = last_odom_->inverse() * *odom;
     if (std::hypot(s.x, s.y) <= params_.max_odometry_step && std::fabs(s.theta) <= params_.max_odometry_turn)
       step = s;
     else
+    {
       ++counters_.odometry_jumps;
+      jump = s;
+    }
   }
   if (odom) last_odom_ = odom;
 
@@ -213,7 +216,21 @@ LocalizerResult LineMapLocalizer::addScan(const LocalizerScan& in)
       ++counters_.few_points;
     else if (!index_.empty())
     {
-      const SegmentMatch m = track(scan, predicted, prior, true);
+      SegmentMatch m = track(scan, predicted, prior, true);
+      if (jump)
+      {
+        // The odometry jumped: a glitch, or real motion across a gap in the data. Both are searched
+        // widely and the better match wins.
+        for (const Pose2& centre : {pose_ * *jump, pose_})
+        {
+          const auto found =
+              correlativeSearch(global_.fineField(), scan.points, centre, params_.jump_window, 1);
+          if (found.empty()) continue;
+          const SegmentMatch c = matchToSegments(index_, scan.points, found.front().pose, std::nullopt,
+                                                 params_.match, scan.sensor);
+          if (c.valid && c.inlier_share > m.inlier_share) m = c;
+        }
+      }
       result.score = m.score;
       result.inlier_share = m.inlier_share;
       poor = m.inlier_share < params_.lost_inlier_share;

@@ -45,6 +45,8 @@ struct LocalizerParams
   // Recovery of a poor match by a correlative search around the prediction.
   double retry_inlier_share = 0.6;
   SearchWindow retry_window{0.3, 0.2, 0.05, 0.01, 0.0, 0.0};
+  /// Across an odometry jump: around the jumped prediction and around the last pose.
+  SearchWindow jump_window{0.5, 0.6, 0.05, 0.01, 0.0, 0.0};
   // Lost detection.
   double lost_inlier_share = 0.25;
   std::size_t lost_scans = 15;
