@@ -83,6 +83,8 @@ LocalizerParams LocalizerParams::fromParams(const linemap::ParamSet& p)
   s.lost_inlier_share = share(p, "tracking/lost_inlier_share", s.lost_inlier_share);
   s.lost_scans = count(p, "tracking/lost_scans", s.lost_scans, 1);
   s.doubt_share = share(p, "tracking/doubt_share", s.doubt_share);
+  s.doubt_research_every = count(p, "tracking/doubt_research_every", s.doubt_research_every, 1);
+  s.doubt_hypotheses = count(p, "tracking/doubt_hypotheses", s.doubt_hypotheses, 1);
   s.global.coarse_resolution = positive(p, "global/coarse_resolution", s.global.coarse_resolution);
   s.global.coarse_sigma = positive(p, "global/coarse_sigma", s.global.coarse_sigma);
   s.global.coarse_angular_step = positive(p, "global/coarse_angular_step", s.global.coarse_angular_step);
@@ -280,7 +282,7 @@ LocalizerResult LineMapLocalizer::globalStep(const LocalizerScan& scan, const st
       if (step) h.pose = h.pose * *step;
     return result;
   }
-  updateHypotheses(scan, step);
+  updateHypotheses(scan, step, params_.research_every, params_.hypotheses);
   if (hypotheses_.empty()) return result;
   result.score = hypotheses_.front().last.score;
   result.inlier_share = hypotheses_.front().last.inlier_share;
@@ -307,7 +309,9 @@ void LineMapLocalizer::challengeTrack(const LocalizerScan& scan, const std::opti
     return;
   }
   if (hypotheses_.empty()) ++counters_.doubted;
-  updateHypotheses(scan, step);
+  // Fewer rivals and rarer searches than when lost: a doubted track is usually right (a part of the
+  // map missing), and this runs beside it.
+  updateHypotheses(scan, step, params_.doubt_research_every, params_.doubt_hypotheses);
   // Hypotheses at the track itself are no rivals of it.
   hypotheses_.erase(std::remove_if(hypotheses_.begin(), hypotheses_.end(),
                                    [&](const Hypothesis& h) {
@@ -325,7 +329,8 @@ void LineMapLocalizer::challengeTrack(const LocalizerScan& scan, const std::opti
   result.outcome = LocalizerOutcome::kRecovered;
 }
 
-void LineMapLocalizer::updateHypotheses(const LocalizerScan& scan, const std::optional<Pose2>& step)
+void LineMapLocalizer::updateHypotheses(const LocalizerScan& scan, const std::optional<Pose2>& step,
+                                        std::size_t research_every, std::size_t max_hypotheses)
 {
   // Every hypothesis follows the odometry and is matched.
   const double alpha = params_.hypothesis_smoothing;
@@ -358,7 +363,7 @@ void LineMapLocalizer::updateHypotheses(const LocalizerScan& scan, const std::op
       kept.push_back(h);
   hypotheses_ = std::move(kept);
 
-  if (hypotheses_.empty() || scans_since_search_ >= params_.research_every)
+  if (hypotheses_.empty() || scans_since_search_ >= research_every)
   {
     const double t0 = nowMs();
     ++counters_.global_searches;
@@ -382,7 +387,7 @@ void LineMapLocalizer::updateHypotheses(const LocalizerScan& scan, const std::op
     ++scans_since_search_;
   std::stable_sort(hypotheses_.begin(), hypotheses_.end(),
                    [](const Hypothesis& a, const Hypothesis& b) { return a.mean_share > b.mean_share; });
-  if (hypotheses_.size() > params_.hypotheses) hypotheses_.resize(params_.hypotheses);
+  if (hypotheses_.size() > max_hypotheses) hypotheses_.resize(max_hypotheses);
 }
 
 const LineMapLocalizer::Hypothesis* LineMapLocalizer::acceptable(double floor) const

@@ -55,6 +55,8 @@ struct LocalizerParams
   /// accept_margin, over the motion acceptance needs, replaces it (a wrong initial pose that still
   /// matches a part of the map, a kidnapping to a similar place).
   double doubt_share = 0.5;
+  std::size_t doubt_research_every = 30;  ///< scans between global searches while doubted
+  std::size_t doubt_hypotheses = 10;      ///< rivals tracked at most
   // Global localization.
   GlobalSearchParams global;
   double hypothesis_min_share = 0.45;  ///< a hypothesis whose mean inlier share falls below is dropped
@@ -142,9 +144,10 @@ class LineMapLocalizer
   /// track by one that does better.
   void challengeTrack(const LocalizerScan& scan, const std::optional<linemap::Pose2>& step,
                       LocalizerResult& result);
-  /// Moves every hypothesis by the odometry, matches, prunes and merges them, and searches the map
-  /// again when there are none or research_every scans have passed.
-  void updateHypotheses(const LocalizerScan& scan, const std::optional<linemap::Pose2>& step);
+  /// Moves every hypothesis by the odometry, matches, prunes and merges them, searches the map again
+  /// when there are none or research_every scans have passed, and keeps the max_hypotheses best.
+  void updateHypotheses(const LocalizerScan& scan, const std::optional<linemap::Pose2>& step,
+                        std::size_t research_every, std::size_t max_hypotheses);
   /// The best hypothesis tested over enough motion whose mean share reaches `floor` and leads every
   /// distinct rival by accept_margin; null if none.
   const Hypothesis* acceptable(double floor) const;
