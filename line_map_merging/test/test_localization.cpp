@@ -253,6 +253,22 @@ TEST(LineMapLocalizer, KidnappedRobotIsRecovered)
   EXPECT_LT(std::hypot(last.pose.x - drive.truth(69).x, last.pose.y - drive.truth(69).y), 0.01);
 }
 
+TEST(LineMapLocalizer, DoubtedTrackIsReplacedByABetterRival)
+{
+  // The wrong pose of the kidnapping above under the default parameters: it keeps matching half the
+  // points, too many to be lost, too few to go unchallenged.
+  const Drive drive{lRoom()};
+  LineMapLocalizer localizer(lRoom());
+  localizer.setPose({2.0, 6.5, -1.6});
+  LocalizerResult last;
+  for (int i = 0; i < 70; ++i) last = localizer.addScan(drive.scan(i));
+  EXPECT_EQ(localizer.counters().lost, 0u);
+  EXPECT_EQ(localizer.counters().replaced, 1u);
+  EXPECT_TRUE(last.localized);
+  EXPECT_LT(std::hypot(last.pose.x - drive.truth(69).x, last.pose.y - drive.truth(69).y), 0.01);
+  EXPECT_LT(std::fabs(last.pose.theta), 0.2 * kDeg);
+}
+
 TEST(LineMapLocalizer, BadInput)
 {
   const Drive drive{lRoom()};
