@@ -149,6 +149,15 @@ class LocalizationNodelet : public nodelet::Nodelet
     std::lock_guard<std::mutex> lock(mutex_);
     if (!localizer_) return;
     const ros::Time stamp = msg->header.stamp;
+    if (have_stamp_ && stamp.toSec() < last_stamp_ - params_.time_jump_tolerance)
+    {
+      // A replay from the start: the tf buffer holds the future. The localizer drops its odometry
+      // reference itself; a bag looping back to its start is then lost and found again.
+      NODELET_WARN("localization: time jumped back by %.1f s", last_stamp_ - stamp.toSec());
+      buffer_->clear();
+    }
+    have_stamp_ = true;
+    last_stamp_ = stamp.toSec();
     const std::string laser_frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
     std::string error;
     std::optional<linemap::Pose2> mount = lookup(base_frame_, laser_frame, stamp, error);
@@ -255,7 +264,8 @@ class LocalizationNodelet : public nodelet::Nodelet
   ros::WallTimer map_file_timer_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
   std::string map_frame_, odom_frame_, base_frame_, map_error_;
-  double tf_timeout_ = 0.1;
+  double tf_timeout_ = 0.1, last_stamp_ = 0.0;
+  bool have_stamp_ = false;
   linemap::Pose2 pose_;
   std::optional<linemap::Pose2> map_odom_, pending_initial_;
   std::size_t dropped_ = 0, no_odometry_ = 0;
