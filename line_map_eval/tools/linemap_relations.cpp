@@ -179,6 +179,9 @@ int main(int argc, char** argv)
     slam = true;
   try
   {
+    // The map first: a bad map file is reported before the log is read.
+    const auto map_segments =
+        localize.empty() ? std::vector<linemap::Segment2>() : line_map_merging::loadLineMapSegments(localize);
     const CarmenLog raw = readCarmenLog(positional[0]);
     const auto relations = readRelations(positional[1]);
     CarmenLog corrected_log;
@@ -247,7 +250,7 @@ int main(int argc, char** argv)
           loadParameterFiles(configFiles(localize_config, "config/localization.yaml"));
       for (const auto& o : localize_overrides) applyOverride(loc_params, o);
       const auto params = line_map_merging::LocalizerParams::fromParams(loc_params);
-      const auto segments = line_map_merging::loadLineMapSegments(localize);
+      const auto& segments = map_segments;
       const LocalizationRunResult r = runLocalization(recording, segments, params, initial_pose);
       std::vector<double> ms = r.scan_ms;
       std::sort(ms.begin(), ms.end());
