@@ -1,13 +1,16 @@
 // linemap_relations: the relations error (Kümmerle et al. 2009) of trajectories of a raw CARMEN log
 // against its relations file: our laser SLAM (with or without the log's odometry), the raw odometry,
 // the corrected log's keyframes (every other scan anchored to its nearest keyframe by relative
-// odometry) or a trajectory file ("timestamp x y theta" per line, raw log timestamps).
+// odometry), a trajectory file ("timestamp x y theta" per line, raw log timestamps), or the log
+// localized in a saved line map (--localize).
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -15,6 +18,7 @@
 #include "line_map_eval/batch.hpp"
 #include "line_map_eval/carmen_log.hpp"
 #include "line_map_eval/carmen_recording.hpp"
+#include "line_map_eval/localization_recording.hpp"
 #include "line_map_eval/relations.hpp"
 #include "line_map_eval/slam_recording.hpp"
 
@@ -29,6 +33,8 @@ void usage(std::ostream& out)
   out << "usage: linemap_relations RAW_LOG RELATIONS [--slam] [--slam-no-odometry] [--odometry]\n"
          "                         [--corrected LOG] [--trajectory FILE]... [--param key=value]...\n"
          "                         [--config FILE] [--write FILE]\n"
+         "                         [--localize MAP_FILE [--initial-pose X,Y,THETA] [--localize-config FILE]\n"
+         "                          [--localize-param key=value]...]\n"
          "Prints the mean and standard deviation of the translational and rotational relation error of\n"
          "each trajectory (default: --slam).\n"
          "  --slam              laser SLAM on the log's scans and odometry\n"
@@ -39,7 +45,13 @@ void usage(std::ostream& out)
          "  --param key=value   a SLAM parameter by its config/slam.yaml name (e.g. loop/min_score=0.6)\n"
          "  --config FILE       the SLAM parameter file (default: $LINEMAP_ROOT/config/slam.yaml or\n"
          "                      ./config/slam.yaml when present)\n"
-         "  --write FILE        write the (last) SLAM trajectory of every scan as 'timestamp x y theta'\n";
+         "  --write FILE        write the (last) SLAM or localized trajectory of every scan as\n"
+         "                      'timestamp x y theta'\n"
+         "  --localize MAP_FILE the log's scans and odometry localized in a saved line map, from the\n"
+         "                      first scan's base pose in the map given by --initial-pose, or by global\n"
+         "                      localization without it\n"
+         "  --localize-config FILE  localization parameters (default: config/localization.yaml as above)\n"
+         "  --localize-param key=value  a localization parameter by its config/localization.yaml name\n";
 }
 
 Trajectory readTrajectory(const std::string& path)
@@ -62,6 +74,24 @@ Trajectory readTrajectory(const std::string& path)
   return t;
 }
 
+// The given file, else `name` under $LINEMAP_ROOT or the working directory when present.
+std::vector<std::string> configFiles(const std::string& given, const std::string& name)
+{
+  if (!given.empty()) return {given};
+  const char* root = std::getenv("LINEMAP_ROOT");
+  for (const fs::path& p : {root ? fs::path(root) / name : fs::path(), fs::path(name)})
+    if (!p.empty() && fs::exists(p)) return {p.string()};
+  return {};
+}
+
+void writeTrajectory(const std::string& path, const Trajectory& t)
+{
+  std::ofstream out(path);
+  out << std::setprecision(17);
+  for (const auto& [stamp, p] : t) out << stamp << " " << p.x << " " << p.y << " " << p.theta << "\n";
+  if (!out) throw std::runtime_error(path + ": cannot write the trajectory");
+}
+
 void print(const std::string& name, const RelationsError& e, const std::string& extra)
 {
   const double deg = 180.0 / linemap::kPi;
@@ -75,8 +105,9 @@ void print(const std::string& name, const RelationsError& e, const std::string& 
 
 int main(int argc, char** argv)
 {
-  std::vector<std::string> positional, overrides, trajectories;
-  std::string corrected, config, write;
+  std::vector<std::string> positional, overrides, trajectories, localize_overrides;
+  std::string corrected, config, write, localize, localize_config;
+  std::optional<Pose2> initial_pose;
   bool slam = false, slam_no_odom = false, odometry = false;
   for (int i = 1; i < argc; ++i)
   {
@@ -111,6 +142,25 @@ int main(int argc, char** argv)
       config = value();
     else if (arg == "--write")
       write = value();
+    else if (arg == "--localize")
+      localize = value();
+    else if (arg == "--localize-param")
+      localize_overrides.push_back(value());
+    else if (arg == "--localize-config")
+      localize_config = value();
+    else if (arg == "--initial-pose")
+    {
+      const std::string v = value();
+      Pose2 p;
+      char c1 = 0, c2 = 0;
+      std::istringstream f(v);
+      if (!(f >> p.x >> c1 >> p.y >> c2 >> p.theta) || c1 != ',' || c2 != ',' || !f.eof())
+      {
+        std::cerr << "linemap_relations: --initial-pose expects X,Y,THETA, got '" << v << "'\n";
+        return 2;
+      }
+      initial_pose = p;
+    }
     else if (!arg.empty() && arg[0] == '-')
     {
       std::cerr << "linemap_relations: unknown option " << arg << "\n";
@@ -125,9 +175,13 @@ int main(int argc, char** argv)
     usage(std::cerr);
     return 2;
   }
-  if (!slam && !slam_no_odom && !odometry && corrected.empty() && trajectories.empty()) slam = true;
+  if (!slam && !slam_no_odom && !odometry && corrected.empty() && trajectories.empty() && localize.empty())
+    slam = true;
   try
   {
+    // The map first: a bad map file is reported before the log is read.
+    const auto map_segments =
+        localize.empty() ? std::vector<linemap::Segment2>() : line_map_merging::loadLineMapSegments(localize);
     const CarmenLog raw = readCarmenLog(positional[0]);
     const auto relations = readRelations(positional[1]);
     CarmenLog corrected_log;
@@ -170,21 +224,7 @@ int main(int argc, char** argv)
       print(fs::path(path).filename().string(), relationsError(relations, readTrajectory(path)), "");
     if (slam || slam_no_odom)
     {
-      std::vector<std::string> files;
-      if (!config.empty())
-        files.push_back(config);
-      else
-      {
-        const char* root = std::getenv("LINEMAP_ROOT");
-        for (const fs::path& p :
-             {root ? fs::path(root) / "config/slam.yaml" : fs::path(), fs::path("config/slam.yaml")})
-          if (!p.empty() && fs::exists(p))
-          {
-            files.push_back(p.string());
-            break;
-          }
-      }
-      linemap::ParamSet params = loadParameterFiles(files);
+      linemap::ParamSet params = loadParameterFiles(configFiles(config, "config/slam.yaml"));
       for (const auto& o : overrides) applyOverride(params, o);
       const auto slam_params = line_map_merging::LaserSlamParams::fromParams(params);
       for (int pass = 0; pass < 2; ++pass)
@@ -201,15 +241,30 @@ int main(int argc, char** argv)
               << c.poor_matches << " poor matches";
         print(with_odom ? "laser SLAM" : "laser SLAM, no odometry",
               relationsError(relations, byRawStamp(r.scan_poses)), extra.str());
-        if (!write.empty())
-        {
-          std::ofstream out(write);
-          out << std::setprecision(17);
-          for (const auto& [t, p] : byRawStamp(r.scan_poses))
-            out << t << " " << p.x << " " << p.y << " " << p.theta << "\n";
-          if (!out) throw std::runtime_error(write + ": cannot write the trajectory");
-        }
+        if (!write.empty()) writeTrajectory(write, byRawStamp(r.scan_poses));
       }
+    }
+    if (!localize.empty())
+    {
+      linemap::ParamSet loc_params =
+          loadParameterFiles(configFiles(localize_config, "config/localization.yaml"));
+      for (const auto& o : localize_overrides) applyOverride(loc_params, o);
+      const auto params = line_map_merging::LocalizerParams::fromParams(loc_params);
+      const auto& segments = map_segments;
+      const LocalizationRunResult r = runLocalization(recording, segments, params, initial_pose);
+      std::vector<double> ms = r.scan_ms;
+      std::sort(ms.begin(), ms.end());
+      const auto& c = r.counters;
+      std::ostringstream extra;
+      extra << std::setprecision(1) << std::fixed << r.cpu_seconds << " s CPU, " << segments.size()
+            << " map segments, " << std::setprecision(3) << (ms.empty() ? 0.0 : ms[ms.size() / 2])
+            << " ms/scan median, " << c.tracked << " tracked, " << c.predicted << " predicted, " << c.lost
+            << " lost, " << c.replaced << " replaced by a rival";
+      if (!initial_pose)
+        extra << (r.recovered_at ? ", global localization at scan " + std::to_string(*r.recovered_at)
+                                 : std::string(", global localization failed"));
+      print("localized in the map", relationsError(relations, byRawStamp(r.scan_poses)), extra.str());
+      if (!write.empty()) writeTrajectory(write, byRawStamp(r.scan_poses));
     }
   }
   catch (const std::exception& e)

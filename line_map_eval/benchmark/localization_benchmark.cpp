@@ -1,0 +1,170 @@
+// localization_benchmark: tracking time per scan and global localization success of the line-map
+// localizer on a CARMEN log and a saved map of it. First the whole log is tracked from the first
+// scan's pose (the reference trajectory, unless --reference gives one), then TRIALS times the
+// localizer starts at a random scan from a random wrong pose (anywhere in the map's bounding box, any
+// heading, at least 1 m off: a kidnapping) and runs SCANS scans: a trial succeeds when the pose is
+// localized and within 0.3 m and 5 degrees of the reference by then, and still at the last scan.
+//
+//   rosrun line_map_eval localization_benchmark RAW_LOG MAP_FILE [--initial-pose X,Y,THETA]
+//       [--reference FILE] [--trials N] [--scans N] [--seed N] [--config FILE]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "line_map_eval/batch.hpp"
+#include "line_map_eval/carmen_log.hpp"
+#include "line_map_eval/carmen_recording.hpp"
+#include "line_map_eval/localization_recording.hpp"
+
+using namespace line_map_eval;
+
+namespace
+{
+double percentile(std::vector<double> v, double q)
+{
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+}
+
+bool near(const Pose2& a, const Pose2& b)
+{
+  return std::hypot(a.x - b.x, a.y - b.y) <= 0.3 &&
+         std::fabs(linemap::normalizeAngle(a.theta - b.theta)) <= 5.0 * linemap::kPi / 180.0;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  std::vector<std::string> positional;
+  std::string reference, config;
+  Pose2 initial;
+  std::size_t trials = 20, scans = 200;
+  unsigned seed = 1;
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (arg == "--initial-pose" && has_value)
+    {
+      char c1 = 0, c2 = 0;
+      std::istringstream f(argv[++i]);
+      f >> initial.x >> c1 >> initial.y >> c2 >> initial.theta;
+    }
+    else if (arg == "--reference" && has_value)
+      reference = argv[++i];
+    else if (arg == "--config" && has_value)
+      config = argv[++i];
+    else if (arg == "--trials" && has_value)
+      trials = std::stoul(argv[++i]);
+    else if (arg == "--scans" && has_value)
+      scans = std::stoul(argv[++i]);
+    else if (arg == "--seed" && has_value)
+      seed = static_cast<unsigned>(std::stoul(argv[++i]));
+    else if (!arg.empty() && arg[0] == '-')
+    {
+      std::cerr << "localization_benchmark: unknown option " << arg << "\n";
+      return 2;
+    }
+    else
+      positional.push_back(arg);
+  }
+  if (positional.size() != 2)
+  {
+    std::cerr
+        << "usage: localization_benchmark RAW_LOG MAP_FILE [--initial-pose X,Y,THETA] [--reference FILE]\n"
+           "       [--trials N] [--scans N] [--seed N] [--config FILE]\n";
+    return 2;
+  }
+  try
+  {
+    const CarmenLog raw = readCarmenLog(positional[0]);
+    const Recording recording = fromCarmen(raw, nullptr);
+    const auto segments = line_map_merging::loadLineMapSegments(positional[1]);
+    std::vector<std::string> files;
+    if (!config.empty()) files.push_back(config);
+    const auto params = line_map_merging::LocalizerParams::fromParams(loadParameterFiles(files));
+
+    const LocalizationRunResult tracked = runLocalization(recording, segments, params, initial);
+    std::printf(
+        "tracking: %zu scans, %zu map segments, per scan median %.3f ms, mean %.3f ms, p95 %.3f ms, "
+        "max %.2f ms; %zu lost\n",
+        tracked.scan_ms.size(), segments.size(), percentile(tracked.scan_ms, 0.5),
+        std::accumulate(tracked.scan_ms.begin(), tracked.scan_ms.end(), 0.0) /
+            std::max<std::size_t>(1, tracked.scan_ms.size()),
+        percentile(tracked.scan_ms, 0.95), percentile(tracked.scan_ms, 1.0), tracked.counters.lost);
+    std::vector<Pose2> ref = tracked.scan_poses;
+    if (!reference.empty())
+    {
+      // 'timestamp x y theta' per line in scan order (linemap_relations --write).
+      std::ifstream in(reference);
+      ref.clear();
+      double t, x, y, th;
+      while (in >> t >> x >> y >> th) ref.push_back({x, y, th});
+      if (ref.size() != recording.scans.size())
+        throw std::runtime_error(reference + ": " + std::to_string(ref.size()) + " poses for " +
+                                 std::to_string(recording.scans.size()) + " scans");
+    }
+
+    line_map_merging::LineMapLocalizer probe(segments, params);
+    const auto lo = probe.index().lower(), hi = probe.index().upper();
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> ux(lo.x(), hi.x()), uy(lo.y(), hi.y()),
+        ut(-linemap::kPi, linemap::kPi);
+    std::uniform_int_distribution<std::size_t> us(0, recording.scans.size() - scans - 1);
+    std::size_t successes = 0;
+    std::vector<double> search_ms, recovery_scans;
+    for (std::size_t t = 0; t < trials; ++t)
+    {
+      const std::size_t first = us(rng);
+      Pose2 wrong;
+      do wrong = {ux(rng), uy(rng), ut(rng)};
+      while (std::hypot(wrong.x - ref[first].x, wrong.y - ref[first].y) < 1.0);
+      line_map_merging::LineMapLocalizer localizer(segments, params);
+      localizer.setPose(wrong);
+      constexpr std::size_t kNever = static_cast<std::size_t>(-1);
+      std::size_t good_since = kNever;  // scans after the start from which the pose stayed right
+      std::size_t searches_seen = 0;
+      for (std::size_t i = first; i < first + scans; ++i)
+      {
+        const auto r = localizer.addScan(localizerScan(recording, i));
+        if (localizer.counters().global_searches > searches_seen)
+        {
+          searches_seen = localizer.counters().global_searches;
+          search_ms.push_back(localizer.counters().last_global_search_ms);
+        }
+        const bool ok = r.localized && near(r.pose, ref[i]);
+        if (ok && good_since == kNever) good_since = i - first;
+        if (!ok) good_since = kNever;
+      }
+      const bool success = good_since != kNever;
+      successes += success;
+      if (success) recovery_scans.push_back(static_cast<double>(good_since));
+      std::printf("trial %2zu: scan %5zu, wrong pose (%.2f, %.2f, %.0f deg): %s", t, first, wrong.x, wrong.y,
+                  wrong.theta * 180.0 / linemap::kPi, success ? "recovered" : "NOT recovered");
+      if (success) std::printf(" after %zu scans", good_since);
+      std::printf(" (lost %zu, recovered %zu, replaced by a rival %zu, global searches %zu)\n",
+                  localizer.counters().lost, localizer.counters().recovered, localizer.counters().replaced,
+                  localizer.counters().global_searches);
+    }
+    std::printf(
+        "global localization: %zu of %zu recovered within %zu scans; median %.0f scans to recover; "
+        "global search median %.0f ms, max %.0f ms\n",
+        successes, trials, scans, percentile(recovery_scans, 0.5), percentile(search_ms, 0.5),
+        percentile(search_ms, 1.0));
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "localization_benchmark: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
