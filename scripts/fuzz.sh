@@ -56,8 +56,8 @@ core_sources() {
     carmen) echo line_map_eval/src/carmen_log.cpp; return ;;
   esac
   for p in "${pkgs[@]}"; do
-    # Not the ROS wrappers, nor the laser SLAM (it needs Ceres, and no fuzz target reaches it).
-    ls "$p"/src/*.cpp | grep -v -E '/(node|nodelet|slam_nodelet|laser_slam|scan_matcher|pose_graph|likelihood_grid)\.cpp$'
+    # Not the ROS wrappers, nor the laser SLAM and the localizer (they need Ceres; no fuzz target reaches them).
+    ls "$p"/src/*.cpp | grep -v -E '/(node|nodelet|slam_nodelet|localization_nodelet|laser_slam|line_map_localizer|localization_global_search|scan_matcher|pose_graph|likelihood_grid)\.cpp$'
   done
 }
 target_source() {
