@@ -1,0 +1,44 @@
+// Small helpers every package needs once: elapsed time, the median, a path's file name and stem.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace linemap
+{
+/// Milliseconds on the steady clock since `start`.
+inline double millisecondsSince(std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// The median (the mean of the middle two for an even count); NaN for no value.
+inline double median(std::vector<double> values)
+{
+  if (values.empty()) return std::nan("");
+  const std::size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid), values.end());
+  const double upper = values[mid];
+  if (values.size() % 2 == 1) return upper;
+  const double lower = *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid));
+  return 0.5 * (lower + upper);
+}
+
+/// The part of `path` after its last '/'.
+inline std::string baseName(const std::string& path)
+{
+  const std::size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+/// The file name without its extensions: "/logs/intel.clf.bz2" -> "intel" (a leading dot is kept).
+inline std::string fileStem(const std::string& path)
+{
+  const std::string name = baseName(path);
+  const std::size_t dot = name.find('.');
+  return dot == std::string::npos || dot == 0 ? name : name.substr(0, dot);
+}
+}  // namespace linemap
