@@ -2,11 +2,15 @@
 // localizer on a CARMEN log and a saved map of it. First the whole log is tracked from the first
 // scan's pose (the reference trajectory, unless --reference gives one), then TRIALS times the
 // localizer starts at a random scan from a random wrong pose (anywhere in the map's bounding box, any
-// heading, at least 1 m off: a kidnapping) and runs SCANS scans: a trial succeeds when the pose is
-// localized and within 0.3 m and 5 degrees of the reference by then, and still at the last scan.
+// heading, at least 1 m off) and runs SCANS scans: a trial succeeds when the pose is localized and
+// within 0.3 m and 5 degrees of the reference by then, and still at the last scan.
+// Then KIDNAPPINGS times a localizer tracks the log from its first scan up to a random scan in its
+// middle half, and the robot is carried at least 3 m away unknown to the odometry: the scans continue
+// from another random scan of the log, with the odometry rebased to go on from where it stopped. A
+// kidnapping is recovered when the pose is right again within SCANS scans and stays so.
 //
 //   rosrun line_map_eval localization_benchmark RAW_LOG MAP_FILE [--initial-pose X,Y,THETA]
-//       [--reference FILE] [--trials N] [--scans N] [--seed N] [--config FILE]
+//       [--reference FILE] [--trials N] [--kidnappings N] [--scans N] [--seed N] [--config FILE]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -40,6 +44,66 @@ bool near(const Pose2& a, const Pose2& b)
   return std::hypot(a.x - b.x, a.y - b.y) <= 0.3 &&
          std::fabs(linemap::normalizeAngle(a.theta - b.theta)) <= 5.0 * linemap::kPi / 180.0;
 }
+/// Scans after `start` from which the pose stayed localized and right up to the last one fed.
+struct RecoveryWatch
+{
+  static constexpr std::size_t kNever = static_cast<std::size_t>(-1);
+  std::size_t good_since = kNever;
+  void observe(std::size_t scans_since_start, bool right)
+  {
+    if (right && good_since == kNever) good_since = scans_since_start;
+    if (!right) good_since = kNever;
+  }
+  bool recovered() const { return good_since != kNever; }
+};
+
+void runKidnappings(const Recording& recording, const std::vector<linemap::Segment2>& segments,
+                    const line_map_merging::LocalizerParams& params, const Pose2& initial,
+                    const std::vector<Pose2>& ref, std::size_t kidnappings, std::size_t scans,
+                    std::mt19937& rng)
+{
+  const std::size_t n = recording.scans.size();
+  std::uniform_int_distribution<std::size_t> at(n / 4, 3 * n / 4), to(0, n - scans - 1);
+  std::size_t recovered = 0;
+  std::vector<double> recovery_scans;
+  for (std::size_t t = 0; t < kidnappings; ++t)
+  {
+    const std::size_t kidnap = at(rng);
+    std::size_t resume;
+    do resume = to(rng);
+    while (std::hypot(ref[resume].x - ref[kidnap].x, ref[resume].y - ref[kidnap].y) < 3.0);
+    line_map_merging::LineMapLocalizer localizer(segments, params);
+    localizer.setPose(initial);
+    for (std::size_t i = 0; i < kidnap; ++i) localizer.addScan(localizerScan(recording, i));
+    const bool tracked_before =
+        localizer.localized() && near(localizer.addScan(localizerScan(recording, kidnap)).pose, ref[kidnap]);
+    // The odometry goes on from its reading at the kidnapping: the carrying was not driven.
+    const auto odom_at = [&](std::size_t i) { return localizerScan(recording, i).odom; };
+    const std::optional<Pose2> odom_kidnap = odom_at(kidnap), odom_resume = odom_at(resume);
+    const double stamp_shift = recording.scans[kidnap].stamp + 0.1 - recording.scans[resume].stamp;
+    RecoveryWatch watch;
+    for (std::size_t i = resume; i < resume + scans; ++i)
+    {
+      line_map_merging::LocalizerScan scan = localizerScan(recording, i);
+      scan.stamp += stamp_shift;
+      if (scan.odom && odom_kidnap && odom_resume)
+        scan.odom = *odom_kidnap * odom_resume->inverse() * *scan.odom;
+      const auto r = localizer.addScan(scan);
+      watch.observe(i - resume, r.localized && near(r.pose, ref[i]));
+    }
+    recovered += watch.recovered();
+    if (watch.recovered()) recovery_scans.push_back(static_cast<double>(watch.good_since));
+    std::printf("kidnapping %2zu: at scan %5zu (%s before) to scan %5zu, %.1f m away: %s", t, kidnap,
+                tracked_before ? "tracked" : "NOT tracked", resume,
+                std::hypot(ref[resume].x - ref[kidnap].x, ref[resume].y - ref[kidnap].y),
+                watch.recovered() ? "recovered" : "NOT recovered");
+    if (watch.recovered()) std::printf(" after %zu scans", watch.good_since);
+    std::printf(" (lost %zu, recovered %zu, replaced by a rival %zu)\n", localizer.counters().lost,
+                localizer.counters().recovered, localizer.counters().replaced);
+  }
+  std::printf("kidnapping: %zu of %zu recovered within %zu scans; median %.0f scans to recover\n", recovered,
+              kidnappings, scans, percentile(recovery_scans, 0.5));
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -47,7 +111,7 @@ int main(int argc, char** argv)
   std::vector<std::string> positional;
   std::string reference, config;
   Pose2 initial;
-  std::size_t trials = 20, scans = 200;
+  std::size_t trials = 20, kidnappings = 20, scans = 200;
   unsigned seed = 1;
   for (int i = 1; i < argc; ++i)
   {
@@ -65,6 +129,8 @@ int main(int argc, char** argv)
       config = argv[++i];
     else if (arg == "--trials" && has_value)
       trials = std::stoul(argv[++i]);
+    else if (arg == "--kidnappings" && has_value)
+      kidnappings = std::stoul(argv[++i]);
     else if (arg == "--scans" && has_value)
       scans = std::stoul(argv[++i]);
     else if (arg == "--seed" && has_value)
@@ -81,7 +147,7 @@ int main(int argc, char** argv)
   {
     std::cerr
         << "usage: localization_benchmark RAW_LOG MAP_FILE [--initial-pose X,Y,THETA] [--reference FILE]\n"
-           "       [--trials N] [--scans N] [--seed N] [--config FILE]\n";
+           "       [--trials N] [--kidnappings N] [--scans N] [--seed N] [--config FILE]\n";
     return 2;
   }
   try
@@ -130,8 +196,7 @@ int main(int argc, char** argv)
       while (std::hypot(wrong.x - ref[first].x, wrong.y - ref[first].y) < 1.0);
       line_map_merging::LineMapLocalizer localizer(segments, params);
       localizer.setPose(wrong);
-      constexpr std::size_t kNever = static_cast<std::size_t>(-1);
-      std::size_t good_since = kNever;  // scans after the start from which the pose stayed right
+      RecoveryWatch watch;
       std::size_t searches_seen = 0;
       for (std::size_t i = first; i < first + scans; ++i)
       {
@@ -141,11 +206,10 @@ int main(int argc, char** argv)
           searches_seen = localizer.counters().global_searches;
           search_ms.push_back(localizer.counters().last_global_search_ms);
         }
-        const bool ok = r.localized && near(r.pose, ref[i]);
-        if (ok && good_since == kNever) good_since = i - first;
-        if (!ok) good_since = kNever;
+        watch.observe(i - first, r.localized && near(r.pose, ref[i]));
       }
-      const bool success = good_since != kNever;
+      const bool success = watch.recovered();
+      const std::size_t good_since = watch.good_since;
       successes += success;
       if (success) recovery_scans.push_back(static_cast<double>(good_since));
       std::printf("trial %2zu: scan %5zu, wrong pose (%.2f, %.2f, %.0f deg): %s", t, first, wrong.x, wrong.y,
@@ -160,6 +224,7 @@ int main(int argc, char** argv)
         "global search median %.0f ms, max %.0f ms\n",
         successes, trials, scans, percentile(recovery_scans, 0.5), percentile(search_ms, 0.5),
         percentile(search_ms, 1.0));
+    runKidnappings(recording, segments, params, initial, ref, kidnappings, scans, rng);
   }
   catch (const std::exception& e)
   {

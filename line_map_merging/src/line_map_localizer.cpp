@@ -107,7 +107,8 @@ LineMapLocalizer::LineMapLocalizer(const std::vector<linemap::Segment2>& segment
                                    const LocalizerParams& params)
     : params_(params),
       index_(segments, params.index_cell, params.match.max_distance),
-      global_(index_.segments(), params.global)
+      global_(index_.segments(), params.global),
+      time_jumps_(params.time_jump_tolerance, {"scan"})
 {
 }
 
@@ -165,18 +166,18 @@ LocalizerResult LineMapLocalizer::addScan(const LocalizerScan& in)
 {
   const double start = nowMs();
   ++counters_.scans;
-  if (have_stamp_ && !(in.stamp > last_stamp_))
+  if (time_jumps_.observe(0.0, in.stamp))
   {
-    if (!(in.stamp < last_stamp_ - params_.time_jump_tolerance))
-    {
-      ++counters_.rejected;
-      LocalizerResult r = last_;
-      r.outcome = LocalizerOutcome::kRejected;
-      return r;
-    }
     // The clock jumped back (a replayed bag): the odometry before it tells nothing about the motion.
     ++counters_.time_jumps;
     last_odom_.reset();
+  }
+  else if (have_stamp_ && !(in.stamp > last_stamp_))
+  {
+    ++counters_.rejected;
+    LocalizerResult r = last_;
+    r.outcome = LocalizerOutcome::kRejected;
+    return r;
   }
   have_stamp_ = true;
   last_stamp_ = in.stamp;
@@ -443,6 +444,20 @@ std::vector<std::pair<std::string, std::string>> LineMapLocalizer::diagnostics()
           {"global searches", n(c.global_searches)},
           {"last scan [ms]", ms(c.last_ms)},
           {"last global search [ms]", ms(c.last_global_search_ms)}};
+}
+
+std::vector<linemap::Vec2> beamPoints(const line_extraction::ScanInput& scan, const linemap::Pose2& mount)
+{
+  std::vector<linemap::Vec2> points;
+  points.reserve(scan.count);
+  for (std::size_t i = 0; i < scan.count; ++i)
+  {
+    const double r = scan.ranges[i];
+    if (!(r >= scan.range_min && r < scan.range_max)) continue;  // NaN and inf fail too
+    const double a = scan.angle_min + static_cast<double>(i) * scan.angle_increment;
+    points.push_back(mount.apply({r * std::cos(a), r * std::sin(a)}));
+  }
+  return points;
 }
 
 std::vector<linemap::Segment2> loadLineMapSegments(const std::string& path)

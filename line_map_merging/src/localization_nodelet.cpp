@@ -51,6 +51,8 @@ geometry_msgs::TransformStamped toTransform(const linemap::Pose2& p, const std::
 class LocalizationNodelet : public nodelet::Nodelet
 {
  private:
+  using ScanQueue = linemap_ros::TfWaitQueue<sensor_msgs::LaserScan>;
+
   void onInit() override
   {
     ros::NodeHandle& nh = getNodeHandle();
@@ -60,6 +62,7 @@ class LocalizationNodelet : public nodelet::Nodelet
     try
     {
       params_ = LocalizerParams::fromParams(linemap_ros::loadParamSet(pnh));
+      time_jumps_.setTolerance(params_.time_jump_tolerance);
     }
     catch (const linemap::ParameterError& e)
     {
@@ -82,7 +85,14 @@ class LocalizationNodelet : public nodelet::Nodelet
                                            if (!map_file.empty() && !localizer_) loadFile(map_file);
                                          });
     initial_sub_ = nh.subscribe("initialpose", 1, &LocalizationNodelet::onInitialPose, this);
-    scan_sub_ = nh.subscribe("scan", 100, &LocalizationNodelet::onScan, this, linemap_ros::noDelay());
+    // Scans wait until tf places them in the odometry frame; one that waits tf_timeout in vain is
+    // matched without the odometry.
+    scans_ = std::make_unique<ScanQueue>(
+        *buffer_, odom_frame_, 100, ros::Duration(tf_timeout_), nh,
+        [this](const ScanQueue::Event& e) { onScan(*e.getConstMessage(), true); },
+        [this](const ScanQueue::Event& e, const std::string& why)
+        { onScan(*e.getConstMessage(), false, why); });
+    scans_->subscribe(nh, "scan", 100, [this](const ScanQueue::Event& e) { return onArrival(e); });
     global_srv_ = nh.advertiseService("global_localization", &LocalizationNodelet::onGlobal, this);
     diagnostics_ = std::make_unique<linemap_ros::WallDiagnostics>(nh, pnh, "line map localization", this,
                                                                   &LocalizationNodelet::diagnose);
@@ -144,48 +154,51 @@ class LocalizationNodelet : public nodelet::Nodelet
     return true;
   }
 
-  void onScan(const sensor_msgs::LaserScan::ConstPtr& msg)
+  /// On arrival, before the scan waits for tf: a clock or stamp going back (a replayed bag) empties
+  /// the tf buffer, which holds the future, and the scans waiting.
+  bool onArrival(const ScanQueue::Event& event)
+  {
+    const double stamp = event.getConstMessage()->header.stamp.toSec();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (time_jumps_.observe(ros::Time::now().toSec(), stamp))
+    {
+      NODELET_WARN("localization: %s: tf and the waiting scans are cleared", time_jumps_.cause().c_str());
+      buffer_->clear();
+      scans_->clear();
+    }
+    return true;
+  }
+
+  /// A scan tf can place in the odometry frame, or one that waited for it in vain (`odometry` false):
+  /// matched without the odometry prior when at least the laser's mount is known.
+  void onScan(const sensor_msgs::LaserScan& msg, bool odometry, const std::string& why = {})
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!localizer_) return;
-    const ros::Time stamp = msg->header.stamp;
-    if (have_stamp_ && stamp.toSec() < last_stamp_ - params_.time_jump_tolerance)
-    {
-      // A replay from the start: the tf buffer holds the future. The localizer drops its odometry
-      // reference itself; a bag looping back to its start is then lost and found again.
-      NODELET_WARN("localization: time jumped back by %.1f s", last_stamp_ - stamp.toSec());
-      buffer_->clear();
-    }
-    have_stamp_ = true;
-    last_stamp_ = stamp.toSec();
-    const std::string laser_frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
-    std::string error;
-    std::optional<linemap::Pose2> mount = lookup(base_frame_, laser_frame, stamp, error);
-    if (!mount && base_frame_ == laser_frame) mount = linemap::Pose2();
+    const ros::Time stamp = msg.header.stamp;
+    const std::string laser_frame = linemap_ros::stripLeadingSlash(msg.header.frame_id);
+    std::optional<linemap::Pose2> mount =
+        base_frame_ == laser_frame ? linemap::Pose2() : lookup(base_frame_, laser_frame, stamp);
     if (!mount)
     {
       ++dropped_;
-      NODELET_WARN_THROTTLE(10.0, "localization: no tf %s -> %s (%s): scan dropped", base_frame_.c_str(),
-                            laser_frame.c_str(), error.c_str());
+      NODELET_WARN_THROTTLE(10.0, "localization: no tf %s -> %s: scan dropped (%s)", base_frame_.c_str(),
+                            laser_frame.c_str(), why.c_str());
       return;
     }
     LocalizerScan scan;
     scan.stamp = stamp.toSec();
     scan.sensor = mount->translation();
-    scan.odom = lookup(odom_frame_, base_frame_, stamp, error);
+    if (odometry) scan.odom = lookup(odom_frame_, base_frame_, stamp);
     if (!scan.odom)
     {
       ++no_odometry_;
       NODELET_WARN_THROTTLE(10.0, "localization: no odometry tf %s -> %s (%s): matching without it",
-                            odom_frame_.c_str(), base_frame_.c_str(), error.c_str());
+                            odom_frame_.c_str(), base_frame_.c_str(), why.c_str());
     }
-    for (std::size_t i = 0; i < msg->ranges.size(); ++i)
-    {
-      const double r = msg->ranges[i];
-      if (!(r >= msg->range_min && r < msg->range_max)) continue;
-      const double a = msg->angle_min + static_cast<double>(i) * msg->angle_increment;
-      scan.points.push_back(mount->apply({r * std::cos(a), r * std::sin(a)}));
-    }
+    const line_extraction::ScanInput ranges{msg.ranges.data(),   msg.ranges.size(), msg.angle_min,
+                                            msg.angle_increment, msg.range_min,     msg.range_max};
+    scan.points = beamPoints(ranges, *mount);
     const LocalizerResult r = localizer_->addScan(scan);
     if (r.outcome == LocalizerOutcome::kRejected) return;
     if (r.outcome == LocalizerOutcome::kRecovered)
@@ -197,6 +210,11 @@ class LocalizationNodelet : public nodelet::Nodelet
     // map -> odom from the pose and the odometry at the same stamp; without odometry it is kept.
     if (scan.odom) map_odom_ = r.pose * scan.odom->inverse();
     if (map_odom_) broadcaster_.sendTransform(toTransform(*map_odom_, map_frame_, odom_frame_, stamp));
+    publishPose(r, stamp);
+  }
+
+  void publishPose(const LocalizerResult& r, const ros::Time& stamp)
+  {
     geometry_msgs::PoseWithCovarianceStamped out;
     out.header.stamp = stamp;
     out.header.frame_id = map_frame_;
@@ -204,33 +222,23 @@ class LocalizationNodelet : public nodelet::Nodelet
     out.pose.pose.position.y = r.pose.y;
     out.pose.pose.orientation.z = std::sin(0.5 * r.pose.theta);
     out.pose.pose.orientation.w = std::cos(0.5 * r.pose.theta);
-    // 6x6 row-major over (x, y, z, roll, pitch, yaw).
-    const int idx[3] = {0, 1, 5};
+    const int idx[3] = {0, 1, 5};  // the covariance is 6x6 row-major over (x, y, z, roll, pitch, yaw)
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) out.pose.covariance[idx[i] * 6 + idx[j]] = r.covariance(i, j);
     pose_pub_.publish(out);
   }
 
+  /// The transform now in the buffer (the wait queue has waited for it), if any.
   std::optional<linemap::Pose2> lookup(const std::string& target, const std::string& source,
-                                       const ros::Time& stamp, std::string& error)
+                                       const ros::Time& stamp)
   {
-    const ros::Time end = ros::Time::now() + ros::Duration(tf_timeout_);
-    const ros::WallTime wall_end = ros::WallTime::now() + ros::WallDuration(std::max(tf_timeout_, 1.0));
-    while (!buffer_->canTransform(target, source, stamp, &error))
-    {
-      if (linemap_ros::extrapolatesIntoThePast(error) || ros::Time::now() >= end ||
-          ros::WallTime::now() >= wall_end)
-        return std::nullopt;
-      ros::WallDuration(0.001).sleep();
-    }
     try
     {
       const auto t = buffer_->lookupTransform(target, source, stamp).transform;
       return linemap::Pose2(t.translation.x, t.translation.y, tf2::getYaw(t.rotation));
     }
-    catch (const tf2::TransformException& e)
+    catch (const tf2::TransformException&)
     {
-      error = e.what();
       return std::nullopt;
     }
   }
@@ -258,14 +266,15 @@ class LocalizationNodelet : public nodelet::Nodelet
   std::unique_ptr<tf2_ros::Buffer> buffer_;
   std::unique_ptr<tf2_ros::TransformListener> listener_;
   tf2_ros::TransformBroadcaster broadcaster_;
-  ros::Subscriber scan_sub_, map_sub_, initial_sub_;
+  std::unique_ptr<ScanQueue> scans_;
+  ros::Subscriber map_sub_, initial_sub_;
   ros::Publisher pose_pub_;
   ros::ServiceServer global_srv_;
   ros::WallTimer map_file_timer_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
   std::string map_frame_, odom_frame_, base_frame_, map_error_;
-  double tf_timeout_ = 0.1, last_stamp_ = 0.0;
-  bool have_stamp_ = false;
+  double tf_timeout_ = 0.1;
+  linemap::TimeJumpDetector time_jumps_;
   linemap::Pose2 pose_;
   std::optional<linemap::Pose2> map_odom_, pending_initial_;
   std::size_t dropped_ = 0, no_odometry_ = 0;

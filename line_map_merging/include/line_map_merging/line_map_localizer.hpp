@@ -20,6 +20,8 @@
 
 #include "line_extraction/geometry.hpp"
 #include "line_extraction/params.hpp"
+#include "line_extraction/time_jump_detector.hpp"
+#include "line_extraction/types.hpp"
 #include "line_map_merging/localization_global_search.hpp"
 #include "line_map_merging/localization_segment_matcher.hpp"
 
@@ -163,9 +165,13 @@ class LineMapLocalizer
   std::size_t poor_in_row_ = 0, scans_since_search_ = 0;
   double track_share_ = 1.0;  ///< smoothed inlier share of the track
   std::vector<Hypothesis> hypotheses_;
+  linemap::TimeJumpDetector time_jumps_;
   LocalizerCounters counters_;
   LocalizerResult last_;
 };
+
+/// The valid returns of `scan` (range_min <= r < range_max) in the frame the laser is mounted in.
+std::vector<linemap::Vec2> beamPoints(const line_extraction::ScanInput& scan, const linemap::Pose2& mount);
 
 /// The segments a saved map file (CAE-RLSM's format, map_file.cpp) shows; throws MapFileError.
 std::vector<linemap::Segment2> loadLineMapSegments(const std::string& path);
