@@ -9,7 +9,7 @@ PACKAGES=(
   libnodeletlib-dev libnodeletlib-tools python3-nodelet libtf2-ros-dev libtf2-msgs-dev libtf2-geometry-msgs-dev
   librosbag-dev python3-rosbag libdiagnostic-updater-dev
   libgtest-dev librostest-dev python3-rostest rosbash python3-rosnode python3-roslaunch python3-rostopic python3-rosservice
-  python3-sensor-msgs python3-visualization-msgs python3-nav-msgs python3-geometry-msgs python3-diagnostic-msgs
+  python3-sensor-msgs python3-visualization-msgs python3-nav-msgs python3-geometry-msgs python3-diagnostic-msgs python3-std-srvs
   libeigen3-dev libboost-dev libboost-iostreams-dev libtbb-dev libyaml-cpp-dev libcairo2-dev libceres-dev
   libbenchmark-dev libbz2-dev zlib1g-dev tf2-tools libdxflib-dev nlohmann-json3-dev
   rviz xvfb xauth imagemagick libgl1-mesa-dri

@@ -109,8 +109,9 @@ class LocalizationNodelet : public nodelet::Nodelet
     }
     catch (const std::exception& e)
     {
+      if (map_error_ != e.what())  // once per distinct error, not at every retry
+        NODELET_ERROR("localization: %s; waiting for a good map file (retrying every 5 s)", e.what());
       map_error_ = e.what();
-      NODELET_ERROR("localization: %s; waiting for a good map file (retrying every 5 s)", e.what());
     }
   }
 
