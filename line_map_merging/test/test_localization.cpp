@@ -302,6 +302,18 @@ TEST(LineMapLocalizer, BadInput)
   }
   EXPECT_FALSE(r.localized);
   EXPECT_EQ(localizer.counters().lost, 1u);
+  // The clock going back: within the tolerance a scan is out of order and rejected; beyond it (a
+  // replayed bag) the scan is taken, as a time jump.
+  LineMapLocalizer replayed(lRoom());
+  replayed.setPose(drive.truth(0));
+  LocalizerScan late = drive.scan(0), early = drive.scan(0);
+  late.stamp = 100.0;
+  early.stamp = 100.0 - 0.5 * replayed.params().time_jump_tolerance;
+  EXPECT_NE(replayed.addScan(late).outcome, LocalizerOutcome::kRejected);
+  EXPECT_EQ(replayed.addScan(early).outcome, LocalizerOutcome::kRejected);
+  early.stamp = 100.0 - 2.0 * replayed.params().time_jump_tolerance;
+  EXPECT_EQ(replayed.addScan(early).outcome, LocalizerOutcome::kTracked);
+  EXPECT_EQ(replayed.counters().time_jumps, 1u);
   // An empty map: every scan predicted, no crash.
   LineMapLocalizer nothing({});
   nothing.setPose({0, 0, 0});
