@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "line_map_merging/online/trajectory_anchor.hpp"
+
 namespace line_map_merging
 {
 std::optional<std::size_t> matchByStamp(const std::vector<KeyframeInfo>& keyframes, double stamp,
@@ -107,20 +109,6 @@ std::vector<linemap::Pose2> continuousPoses(const std::vector<KeyframeInfo>& key
   }
   return continuous;
 }
-
-/// The correction at `stamp`: the nearest one's beyond the first or the last, else interpolated in
-/// time between its neighbours (`corrections` in stamp order, not empty).
-linemap::Pose2 correctionAt(const std::vector<std::pair<double, linemap::Pose2>>& corrections, double stamp)
-{
-  auto after = std::lower_bound(corrections.begin(), corrections.end(), stamp,
-                                [](const auto& c, double s) { return c.first < s; });
-  if (after == corrections.begin()) return after->second;
-  if (after == corrections.end()) return corrections.back().second;
-  const auto& before = *(after - 1);
-  const double span = after->first - before.first;
-  const double t = span > 0.0 ? (stamp - before.first) / span : 0.0;
-  return linemap::interpolate(before.second, after->second, t);
-}
 }  // namespace
 
 std::vector<std::pair<std::uint64_t, linemap::Pose2>> correctKeyframes(
@@ -146,7 +134,8 @@ std::vector<std::pair<std::uint64_t, linemap::Pose2>> correctKeyframes(
     if (it != matched.end())
       out.emplace_back(k.index, it->second);
     else
-      out.emplace_back(k.index, correctionAt(corrections, k.stamp) * continuous[i]);
+      out.emplace_back(k.index,
+                       correctionAt(corrections, k.stamp, CorrectionMode::kInterpolate) * continuous[i]);
   }
   return out;
 }
