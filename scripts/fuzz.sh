@@ -47,18 +47,22 @@ CXXFLAGS=(-std=c++17 "${OPT[@]}" -g $SAN -I line_extraction/include -I line_map_
 export ASAN_OPTIONS="halt_on_error=1:print_stacktrace=1:detect_leaks=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
 
-# Core sources of each target (the ROS-free <pkg>_core sources, as the CMake GLOB takes them).
+# Core sources of each target: the folders of the ROS-free libraries it links, as the CMakeLists
+# build them. The merging targets take line_map_merging_core (mergers, online mapping, map grids);
+# the laser SLAM and the localization (their own libraries, with Ceres) are not reached by any target.
 core_sources() {
-  local pkgs=()
   case "$1" in
-    extractors) pkgs=(line_extraction) ;;
-    merging | map_file) pkgs=(line_extraction line_map_merging) ;;
-    carmen) echo line_map_eval/src/carmen_log.cpp; return ;;
+    extractors) extraction_core ;;
+    merging | map_file)
+      extraction_core
+      find line_map_merging/src/mergers line_map_merging/src/online line_map_merging/src/map -name '*.cpp' | sort
+      ;;
+    carmen) find line_map_eval/src -name carmen_log.cpp ;;  # wherever line_map_eval keeps its datasets
   esac
-  for p in "${pkgs[@]}"; do
-    # Not the ROS wrappers, nor the laser SLAM and the localizer (they need Ceres; no fuzz target reaches them).
-    ls "$p"/src/*.cpp | grep -v -E '/(node|nodelet|slam_nodelet|localization_nodelet|laser_slam|line_map_localizer|localization_global_search|scan_matcher|pose_graph|likelihood_grid)\.cpp$'
-  done
+}
+# line_extraction_core: line_extraction/src but its ROS wrappers.
+extraction_core() {
+  find line_extraction/src -name '*.cpp' -not -path '*/ros/*' -not -name node.cpp -not -name nodelet.cpp | sort
 }
 target_source() {
   case "$1" in
@@ -71,7 +75,7 @@ target_source() {
 }
 target_libs() {
   case "$1" in
-    merging | map_file) echo "-ltbb -lyaml-cpp -lceres -lglog" ;;  # the laser SLAM's scan matcher uses Ceres
+    merging | map_file) echo "-ltbb -lyaml-cpp" ;;
     carmen) echo "-lboost_iostreams -lz -lbz2" ;;
   esac
 }

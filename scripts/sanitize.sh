@@ -13,16 +13,13 @@ case "${1:-tsan}" in
   tsan)
     out="$BUILD_DIR/tsan"
     mkdir -p "$out"
-    srcs=()
-    for p in line_extraction line_map_merging; do
-      for s in "$p"/src/*.cpp; do
-        case "$s" in */node.cpp | */nodelet.cpp | */*_nodelet.cpp) ;; *) srcs+=("$s") ;; esac
-      done
-    done
+    # line_extraction_core and line_map_merging_core, as fuzz.sh takes them (no Ceres).
+    mapfile -t srcs < <(find line_extraction/src -name '*.cpp' -not -path '*/ros/*' -not -name node.cpp \
+      -not -name nodelet.cpp; find line_map_merging/src/mergers line_map_merging/src/online line_map_merging/src/map -name '*.cpp')
     echo "sanitize: building $out/tsan_mp_gma"
     clang++ -std=c++17 -O1 -g -fsanitize=thread -fno-omit-frame-pointer -DLINEMAP_TSAN -I line_extraction/include \
       -I line_map_merging/include -I /usr/include/eigen3 "${srcs[@]}" line_map_merging/fuzz/tsan_mp_gma.cpp \
-      -ltbb -lyaml-cpp -lceres -lglog -o "$out/tsan_mp_gma"
+      -ltbb -lyaml-cpp -o "$out/tsan_mp_gma"
     TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1${TSAN_OPTIONS:+:$TSAN_OPTIONS}" "$out/tsan_mp_gma"
     ;;
   *) echo "usage: sanitize.sh tsan" >&2; exit 2 ;;

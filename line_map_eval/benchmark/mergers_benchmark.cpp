@@ -22,7 +22,7 @@
 #include "line_map_eval/carmen_log.hpp"
 #include "line_map_eval/simulator.hpp"
 #include "line_map_eval/world.hpp"
-#include "line_map_merging/merger.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 namespace
 {

@@ -19,10 +19,10 @@
 #include "line_map_eval/figures.hpp"
 #include "line_map_eval/lookup_table.hpp"
 #include "line_map_eval/progress.hpp"
-#include "line_map_merging/fusion.hpp"
-#include "line_map_merging/keyframe_gate.hpp"
-#include "line_map_merging/merger.hpp"
-#include "line_map_merging/trajectory_correction.hpp"
+#include "line_map_merging/mergers/fusion.hpp"
+#include "line_map_merging/mergers/merger.hpp"
+#include "line_map_merging/online/keyframe_gate.hpp"
+#include "line_map_merging/online/trajectory_correction.hpp"
 
 namespace line_map_eval
 {

@@ -8,7 +8,7 @@
 #include <utility>
 
 #include "line_map_eval/coverage.hpp"
-#include "line_map_merging/fusion.hpp"
+#include "line_map_merging/mergers/fusion.hpp"
 
 namespace line_map_eval
 {

@@ -11,9 +11,9 @@
 #include <stdexcept>
 
 #include "line_map_eval/figures.hpp"
-#include "line_map_merging/cae_rlsm.hpp"
-#include "line_map_merging/map_server_file.hpp"
-#include "line_map_merging/occupancy_grid.hpp"
+#include "line_map_merging/map/map_server_file.hpp"
+#include "line_map_merging/map/occupancy_grid.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
 
 namespace line_map_eval
 {

@@ -13,7 +13,7 @@
 
 #include "line_map_eval/batch.hpp"
 #include "line_map_eval/report.hpp"
-#include "line_map_merging/merger.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 using namespace line_map_eval;
 namespace fs = std::filesystem;

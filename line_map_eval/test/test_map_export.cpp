@@ -16,7 +16,7 @@
 #include <sstream>
 
 #include "line_map_eval/map_export.hpp"
-#include "line_map_merging/cae_rlsm.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
 
 using line_map_eval::exportMap;
 using line_map_eval::ExportOptions;

@@ -22,7 +22,7 @@
 #include "line_extraction/line_extractor.hpp"
 #include "line_map_eval/simulator.hpp"
 #include "line_map_eval/world.hpp"
-#include "line_map_merging/merger.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 namespace
 {

@@ -22,7 +22,7 @@
 #include "line_map_eval/report.hpp"
 #include "line_map_eval/slam_recording.hpp"
 #include "line_map_eval/world.hpp"
-#include "line_map_merging/merger.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 namespace fs = std::filesystem;
 using namespace line_map_eval;

@@ -8,21 +8,8 @@
 #include <cstdlib>
 #include <string>
 
-#include "line_map_merging/merger.hpp"
-
-namespace
-{
-// A violated property: name it, then abort so that libFuzzer keeps the input.
-#define check(ok)                                                                       \
-  do                                                                                    \
-  {                                                                                     \
-    if (!(ok))                                                                          \
-    {                                                                                   \
-      std::fprintf(stderr, "property violated: %s (%s:%d)\n", #ok, __FILE__, __LINE__); \
-      std::abort();                                                                     \
-    }                                                                                   \
-  } while (false)
-}  // namespace
+#include "fuzz_check.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {

@@ -13,21 +13,11 @@
 #include <utility>
 #include <vector>
 
-#include "line_map_merging/merger.hpp"
+#include "fuzz_check.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 namespace
 {
-// A violated property: name it, then abort so that libFuzzer keeps the input.
-#define check(ok)                                                                       \
-  do                                                                                    \
-  {                                                                                     \
-    if (!(ok))                                                                          \
-    {                                                                                   \
-      std::fprintf(stderr, "property violated: %s (%s:%d)\n", #ok, __FILE__, __LINE__); \
-      std::abort();                                                                     \
-    }                                                                                   \
-  } while (false)
-
 // Mostly coordinates of a small world (so segments actually fuse); sometimes any double.
 // Extreme values only for `wild` (CAE-RLSM); the competing methods get bounded values.
 bool wild = true;

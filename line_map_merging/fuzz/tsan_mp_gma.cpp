@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "line_map_merging/merger.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 int main()
 {

@@ -6,7 +6,7 @@
 
 #include <vector>
 
-#include "line_map_merging/online_mapper.hpp"
+#include "line_map_merging/online/online_mapper.hpp"
 
 namespace drift_drive
 {

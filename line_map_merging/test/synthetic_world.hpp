@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "line_extraction/geometry.hpp"
-#include "line_map_merging/merger.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 namespace synthetic
 {
@@ -137,6 +137,18 @@ inline std::vector<line_map_merging::Keyframe> observe(const std::vector<Segment
     kfs.push_back(std::move(k));
   }
   return kfs;
+}
+
+/// Keyframe `index` (stamped `index` s) at `pose`, seeing the `world` segments exactly, in its frame.
+inline line_map_merging::Keyframe keyframeOf(std::uint64_t index, const Pose2& pose,
+                                             const std::vector<Segment2>& world)
+{
+  line_map_merging::Keyframe k;
+  k.index = index;
+  k.stamp = static_cast<double>(index);
+  k.pose = pose;
+  for (const Segment2& s : world) k.segments.push_back(s.transformed(pose.inverse()));
+  return k;
 }
 
 }  // namespace synthetic

@@ -3,8 +3,8 @@
 
 #include <random>
 
-#include "line_map_merging/cae_offline.hpp"
-#include "line_map_merging/cae_rlsm.hpp"
+#include "line_map_merging/mergers/cae_offline.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
 #include "synthetic_world.hpp"
 
 using line_map_merging::CaeOffline;

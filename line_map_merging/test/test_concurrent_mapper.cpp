@@ -9,7 +9,7 @@
 #include <random>
 
 #include "drift_drive.hpp"
-#include "line_map_merging/concurrent_mapper.hpp"
+#include "line_map_merging/online/concurrent_mapper.hpp"
 
 using namespace line_map_merging;
 using namespace drift_drive;

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "line_map_merging/crossing_pairs.hpp"
+#include "line_map_merging/mergers/crossing_pairs.hpp"
 
 using line_map_merging::CrossingPair;
 using line_map_merging::findCrossingPairs;

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "line_map_merging/cae_rlsm.hpp"
-#include "line_map_merging/crossing_pairs.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
+#include "line_map_merging/mergers/crossing_pairs.hpp"
 #include "synthetic_world.hpp"
 
 using line_map_merging::CaeParams;

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "line_map_merging/fusion.hpp"
+#include "line_map_merging/mergers/fusion.hpp"
 
 using line_map_merging::fuse;
 using line_map_merging::FusionParams;

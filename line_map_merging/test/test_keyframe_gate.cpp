@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "line_map_merging/keyframe_gate.hpp"
+#include "line_map_merging/online/keyframe_gate.hpp"
 
 using line_map_merging::KeyframeGate;
 using line_map_merging::KeyframeGateParams;

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "line_map_merging/laser_slam.hpp"
+#include "line_map_merging/slam/laser_slam.hpp"
 #include "slam_world.hpp"
 
 using line_map_merging::LaserSlam;
@@ -136,9 +136,11 @@ TEST(LaserSlam, BadInputIsCountedAndHarmless)
   const std::size_t keyframes = run.slam.keyframes().size();
   const Pose2 before = run.slam.currentPose();
 
-  // Time going back by 5 s: ignored, counted; nothing changes.
+  // Time going back by 5 s: ignored, counted; nothing changes. (Stamps stay positive, as ROS and the
+  // logs have them: linemap::TimeJumpDetector takes a stamp <= 0 for an unknown one.)
   SlamScan back = run.scan(n, true);
-  back.stamp -= 5.0 + 0.2 * static_cast<double>(n);
+  back.stamp -= 5.0;
+  ASSERT_GT(back.stamp, 0.0);
   EXPECT_EQ(run.slam.addScan(back), SlamOutcome::kRejected);
   EXPECT_EQ(run.slam.counters().time_jumps, 1u);
   EXPECT_EQ(run.slam.keyframes().size(), keyframes);

@@ -4,7 +4,8 @@
 
 #include <cmath>
 
-#include "line_map_merging/li2023.hpp"
+#include "line_map_merging/mergers/li2023.hpp"
+#include "segment_checks.hpp"
 
 using line_map_merging::Keyframe;
 using line_map_merging::Li2023;
@@ -30,14 +31,6 @@ std::vector<line_map_merging::MapSegment> merge(const std::vector<std::vector<Se
     li.addKeyframe(k);
   }
   return li.map();
-}
-
-void expectSegment(const Segment2& s, const Vec2& a, const Vec2& b, double tol = 1e-9)
-{
-  EXPECT_NEAR(s.start.x(), a.x(), tol);
-  EXPECT_NEAR(s.start.y(), a.y(), tol);
-  EXPECT_NEAR(s.end.x(), b.x(), tol);
-  EXPECT_NEAR(s.end.y(), b.y(), tol);
 }
 }  // namespace
 

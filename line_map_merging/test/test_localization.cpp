@@ -5,8 +5,8 @@
 #include <cmath>
 #include <random>
 
-#include "line_map_merging/line_map_localizer.hpp"
-#include "line_map_merging/merger.hpp"
+#include "line_map_merging/localization/line_map_localizer.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 using linemap::Pose2;
 using linemap::Segment2;

@@ -11,7 +11,7 @@
 #include <random>
 #include <sstream>
 
-#include "line_map_merging/cae_rlsm.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
 #include "synthetic_world.hpp"
 
 using line_map_merging::CaeParams;

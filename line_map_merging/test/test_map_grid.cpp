@@ -8,8 +8,8 @@
 #include <limits>
 #include <stdexcept>
 
-#include "line_map_merging/cae_rlsm.hpp"
-#include "line_map_merging/map_grid.hpp"
+#include "line_map_merging/map/map_grid.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
 
 using line_map_merging::buildOccupancyGrid;
 using line_map_merging::GridInput;

@@ -10,7 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "line_map_merging/map_server_file.hpp"
+#include "line_map_merging/map/map_server_file.hpp"
 
 using line_map_merging::buildOccupancyGrid;
 using line_map_merging::OccupancyGrid;

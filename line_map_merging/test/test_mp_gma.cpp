@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <random>
 
-#include "line_map_merging/cae_rlsm.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
 #include "synthetic_world.hpp"
 
 using line_map_merging::CaeParams;

@@ -4,7 +4,8 @@
 
 #include <cmath>
 
-#include "line_map_merging/ms_rlsm.hpp"
+#include "line_map_merging/mergers/ms_rlsm.hpp"
+#include "segment_checks.hpp"
 
 using line_map_merging::Keyframe;
 using line_map_merging::MsParams;
@@ -32,14 +33,6 @@ std::vector<line_map_merging::MapSegment> merge(const std::vector<Segment2>& wor
     ++index;
   }
   return ms.map();
-}
-
-void expectSegment(const Segment2& s, const Vec2& a, const Vec2& b, double tol = 1e-9)
-{
-  EXPECT_NEAR(s.start.x(), a.x(), tol);
-  EXPECT_NEAR(s.start.y(), a.y(), tol);
-  EXPECT_NEAR(s.end.x(), b.x(), tol);
-  EXPECT_NEAR(s.end.y(), b.y(), tol);
 }
 }  // namespace
 

@@ -3,8 +3,8 @@
 
 #include <random>
 
-#include "line_map_merging/o2to_ilsm.hpp"
-#include "line_map_merging/oto_ilsm.hpp"
+#include "line_map_merging/mergers/o2to_ilsm.hpp"
+#include "line_map_merging/mergers/oto_ilsm.hpp"
 #include "synthetic_world.hpp"
 
 using line_map_merging::Keyframe;

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "line_map_merging/cae_rlsm.hpp"
-#include "line_map_merging/occupancy_grid.hpp"
+#include "line_map_merging/map/occupancy_grid.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
 
 using line_map_merging::buildOccupancyGrid;
 using line_map_merging::CaeRlsm;

@@ -10,7 +10,7 @@
 #include <random>
 
 #include "drift_drive.hpp"
-#include "line_map_merging/online_mapper.hpp"
+#include "line_map_merging/online/online_mapper.hpp"
 
 using namespace line_map_merging;
 using linemap::Pose2;

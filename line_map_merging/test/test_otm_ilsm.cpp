@@ -5,7 +5,7 @@
 #include <limits>
 #include <random>
 
-#include "line_map_merging/cae_rlsm.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
 #include "synthetic_world.hpp"
 
 using line_map_merging::CaeParams;
@@ -14,19 +14,10 @@ using line_map_merging::Keyframe;
 using linemap::Pose2;
 using linemap::Segment2;
 using linemap::Vec2;
+using synthetic::keyframeOf;
 
 namespace
 {
-Keyframe keyframeOf(std::uint64_t index, const Pose2& pose, const std::vector<Segment2>& world)
-{
-  Keyframe k;
-  k.index = index;
-  k.stamp = static_cast<double>(index);
-  k.pose = pose;
-  for (const Segment2& s : world) k.segments.push_back(s.transformed(pose.inverse()));
-  return k;
-}
-
 /// Keyframes driving along x under walls `walls`, heading wobbling, noisy segments.
 std::vector<Keyframe> drive(const std::vector<Segment2>& walls, int scans, std::uint32_t seed)
 {

@@ -3,8 +3,10 @@
 
 #include <limits>
 
-#include "line_map_merging/cae_rlsm.hpp"
-#include "line_map_merging/oto_ilsm.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
+#include "line_map_merging/mergers/oto_ilsm.hpp"
+#include "segment_checks.hpp"
+#include "synthetic_world.hpp"
 
 using line_map_merging::CaeRlsm;
 using line_map_merging::Keyframe;
@@ -12,19 +14,10 @@ using line_map_merging::OtoIlsm;
 using linemap::Pose2;
 using linemap::Segment2;
 using linemap::Vec2;
+using synthetic::keyframeOf;
 
 namespace
 {
-Keyframe keyframeOf(std::uint64_t index, const Pose2& pose, const std::vector<Segment2>& world)
-{
-  Keyframe k;
-  k.index = index;
-  k.stamp = static_cast<double>(index);
-  k.pose = pose;
-  for (const Segment2& s : world) k.segments.push_back(s.transformed(pose.inverse()));
-  return k;
-}
-
 /// The loop case: a wall seen at the start (A) and the end (B) of a loop with a 1 m gap, then one
 /// segment C bridging both; C is nearer to B's line (0.01 m) than to A's (0.02 m).
 std::vector<Keyframe> loopCase()
@@ -41,14 +34,6 @@ line_map_merging::FusionParams countWeighting()
   line_map_merging::FusionParams p;
   p.weighting = line_map_merging::FusionWeighting::count;
   return p;
-}
-
-void expectSegment(const Segment2& s, const Vec2& a, const Vec2& b, double tol = 1e-9)
-{
-  EXPECT_NEAR(s.start.x(), a.x(), tol);
-  EXPECT_NEAR(s.start.y(), a.y(), tol);
-  EXPECT_NEAR(s.end.x(), b.x(), tol);
-  EXPECT_NEAR(s.end.y(), b.y(), tol);
 }
 }  // namespace
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <vector>
 
-#include "line_map_merging/pose_graph.hpp"
+#include "line_map_merging/slam/pose_graph.hpp"
 
 using line_map_merging::PoseGraph;
 using line_map_merging::PoseGraphEdge;

@@ -14,7 +14,7 @@
 #include <thread>
 #include <tuple>
 
-#include "line_map_merging/merger.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 using line_map_merging::Keyframe;
 using line_map_merging::Merger;

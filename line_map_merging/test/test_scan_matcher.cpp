@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "line_map_merging/likelihood_grid.hpp"
-#include "line_map_merging/scan_matcher.hpp"
+#include "line_map_merging/slam/likelihood_grid.hpp"
+#include "line_map_merging/slam/scan_matcher.hpp"
 #include "slam_world.hpp"
 
 using line_map_merging::correlativeSearch;

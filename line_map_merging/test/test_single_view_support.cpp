@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "line_map_merging/cae_rlsm.hpp"
+#include "line_map_merging/mergers/cae_rlsm.hpp"
 
 using line_map_merging::CaeParams;
 using line_map_merging::CaeRlsm;

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "line_map_merging/trajectory_correction.hpp"
+#include "line_map_merging/online/trajectory_correction.hpp"
 
 using line_map_merging::correctKeyframes;
 using line_map_merging::KeyframeInfo;

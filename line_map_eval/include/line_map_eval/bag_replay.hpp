@@ -11,7 +11,7 @@
 #include "line_extraction/params.hpp"
 #include "line_map_eval/bag_reader.hpp"
 #include "line_map_eval/map_evaluator.hpp"
-#include "line_map_merging/online_mapper.hpp"
+#include "line_map_merging/online/online_mapper.hpp"
 
 namespace line_map_eval
 {

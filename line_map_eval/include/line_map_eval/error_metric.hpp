@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "line_extraction/geometry.hpp"
-#include "line_map_merging/fusion.hpp"
+#include "line_map_merging/mergers/fusion.hpp"
 
 namespace line_map_eval
 {

@@ -1,4 +1,4 @@
-// Localizing a whole recording in a saved line map (line_map_merging/line_map_localizer.hpp),
+// Localizing a whole recording in a saved line map (line_map_merging/localization/line_map_localizer.hpp),
 // ROS-free: the trajectory source of `linemap_relations --localize` and of the localization benchmark.
 #pragma once
 
@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "line_map_eval/recording.hpp"
-#include "line_map_merging/line_map_localizer.hpp"
+#include "line_map_merging/localization/line_map_localizer.hpp"
 
 namespace line_map_eval
 {

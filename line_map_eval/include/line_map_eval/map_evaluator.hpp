@@ -16,10 +16,10 @@
 #include "line_map_eval/map_metrics.hpp"
 #include "line_map_eval/map_quality.hpp"
 #include "line_map_eval/map_statistics.hpp"
-#include "line_map_merging/fusion.hpp"
-#include "line_map_merging/keyframe_gate.hpp"
-#include "line_map_merging/node_keyframes.hpp"
-#include "line_map_merging/trajectory_anchor.hpp"
+#include "line_map_merging/mergers/fusion.hpp"
+#include "line_map_merging/online/keyframe_gate.hpp"
+#include "line_map_merging/online/node_keyframes.hpp"
+#include "line_map_merging/online/trajectory_anchor.hpp"
 
 namespace line_map_eval
 {
@@ -29,7 +29,8 @@ struct EvaluatorParams
   double stamp_tolerance = 0.05;  ///< [s] trajectory node <-> scan matching
   double max_gap = 1.0;           ///< [s] a node between two scans at most this far apart is interpolated
   line_map_merging::CorrectionMode correction = line_map_merging::CorrectionMode::kNearest;
-  /// Which scans are stored, as the merger chooses its keyframes (line_map_merging/node_keyframes.hpp).
+  /// Which scans are stored, as the merger chooses its keyframes
+  /// (line_map_merging/online/node_keyframes.hpp).
   line_map_merging::KeyframeSource keyframe_source = line_map_merging::KeyframeSource::kAuto;
   double keyframe_buffer = 300.0;  ///< [s] scans held for a trajectory to name them nodes
   LookupTableParams table;
@@ -62,7 +63,7 @@ class MapEvaluator
                    const std::optional<linemap::Pose2>& odom_pose = std::nullopt);
 
   /// Re-registers every stored frame on a trajectory of laser poses (map frame) at any stamps: as
-  /// the merger does (line_map_merging/trajectory_anchor.hpp), each node found among the scans and
+  /// the merger does (line_map_merging/online/trajectory_anchor.hpp), each node found among the scans and
   /// segment sets seen gives the corrected map->odom there, and every frame takes that of its nearest
   /// node (or the interpolation). Then, unless keyframe_source is tf, the nodes newer than the stored
   /// frames store their held scans and segment sets at the nodes' poses, through the keyframe gate,

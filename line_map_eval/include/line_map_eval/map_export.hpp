@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "line_map_merging/merger.hpp"
+#include "line_map_merging/mergers/merger.hpp"
 
 namespace line_map_eval
 {

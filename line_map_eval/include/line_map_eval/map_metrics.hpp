@@ -13,8 +13,8 @@
 #include "line_map_eval/map_statistics.hpp"
 #include "line_map_eval/redundant_pairs.hpp"
 #include "line_map_eval/structure_coverage.hpp"
-#include "line_map_merging/crossing_pairs.hpp"
-#include "line_map_merging/fusion.hpp"
+#include "line_map_merging/mergers/crossing_pairs.hpp"
+#include "line_map_merging/mergers/fusion.hpp"
 
 namespace line_map_eval
 {

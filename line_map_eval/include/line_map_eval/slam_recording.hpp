@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "line_map_eval/recording.hpp"
-#include "line_map_merging/laser_slam.hpp"
+#include "line_map_merging/slam/laser_slam.hpp"
 
 namespace line_map_eval
 {

@@ -2,7 +2,7 @@
 """Rostest checker (test/rviz_screenshot.test): starts Xvfb on a free display and RViz with
 rviz/linemap.rviz, replays the simulated office through the pipeline, takes a screenshot with
 imagemagick's import and checks that the merger's marker colours (start points red 1.0/0/0, end
-points green 0/0.8/0, line_map_merging/src/nodelet.cpp) appear in the 3D view."""
+points green 0/0.8/0, line_map_merging/src/ros/nodelet.cpp) appear in the 3D view."""
 import os
 import shutil
 import signal

@@ -1,10 +1,12 @@
 // Message conversions of the merging nodelet (header-only, ROS side): poses from tf and
-// nav_msgs/Path, the map as line_map_msgs/LineMap, its RViz markers, errors as service answers.
+// nav_msgs/Path, the map as line_map_msgs/LineMap, its RViz markers and its occupancy grid, errors as
+// service answers.
 #pragma once
 
 #include <geometry_msgs/Quaternion.h>
 #include <line_map_msgs/LineMap.h>
 #include <line_map_msgs/LineSegmentArray.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Path.h>
 #include <tf2_ros/buffer.h>
 #include <visualization_msgs/MarkerArray.h>
@@ -14,8 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "line_map_merging/merger.hpp"
-#include "line_map_merging/online_mapper.hpp"
+#include "line_extraction/ros/message_conversions.hpp"
+#include "line_map_merging/map/occupancy_grid.hpp"
+#include "line_map_merging/mergers/merger.hpp"
+#include "line_map_merging/online/online_mapper.hpp"
 
 namespace line_map_merging
 {
@@ -39,15 +43,6 @@ inline std::vector<std::pair<double, linemap::Pose2>> toNodes(const nav_msgs::Pa
       nodes.emplace_back(p.header.stamp.toSec(), *pose);
   bad = path.poses.size() - nodes.size();
   return nodes;
-}
-
-inline std::vector<linemap::Segment2> toSegments(const line_map_msgs::LineSegmentArray& msg)
-{
-  std::vector<linemap::Segment2> out;
-  out.reserve(msg.segments.size());
-  for (const auto& s : msg.segments)
-    out.emplace_back(linemap::Vec2(s.start.x, s.start.y), linemap::Vec2(s.end.x, s.end.y));
-  return out;
 }
 
 /// The pose of `frame` in `target` at `stamp` (identity for the same frame: the map frame may be
@@ -85,7 +80,7 @@ inline std::optional<StampedScan> toStampedScan(const tf2_ros::Buffer& tf,
   mount_found = mount.has_value();
   scan.mount = mount.value_or(linemap::Pose2());
   if (!odom.empty() && odom != map) scan.odom = lookupPose(tf, odom, frame, msg.header.stamp);
-  scan.segments = toSegments(msg);
+  scan.segments = linemap_ros::toSegments(msg);
   return scan;
 }
 
@@ -187,6 +182,31 @@ inline visualization_msgs::MarkerArray toMarkers(const line_map_msgs::LineMap& m
     array.markers.push_back(label);
   }
   return array;
+}
+
+inline nav_msgs::OccupancyGrid toGridMessage(const OccupancyGrid& grid, const std::string& frame,
+                                             const ros::Time& stamp)
+{
+  nav_msgs::OccupancyGrid msg;
+  msg.header.frame_id = frame;
+  msg.header.stamp = stamp;
+  msg.info.map_load_time = stamp;
+  msg.info.resolution = static_cast<float>(grid.resolution);
+  msg.info.width = static_cast<std::uint32_t>(grid.width);
+  msg.info.height = static_cast<std::uint32_t>(grid.height);
+  msg.info.origin.position.x = grid.origin.x();
+  msg.info.origin.position.y = grid.origin.y();
+  msg.info.origin.orientation.w = 1.0;
+  msg.data = grid.cells;  // both row-major from the origin corner, -1 / 0 / 100
+  return msg;
+}
+
+/// A grid's stamp: its newest keyframe's (ros::Time throws for one out of range); the newest input's
+/// exact one when it is that keyframe's (the double lost the nanoseconds), or stands in for an empty map.
+inline ros::Time gridStamp(double newest_keyframe, const ros::Time& newest_input)
+{
+  const bool same = std::abs(newest_keyframe - newest_input.toSec()) < 1e-6;
+  return std::isfinite(newest_keyframe) && !same ? ros::Time(newest_keyframe) : newest_input;
 }
 
 }  // namespace line_map_merging

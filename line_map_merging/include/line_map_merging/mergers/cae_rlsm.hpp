@@ -1,0 +1,204 @@
+// CAE-RLSM: online one-to-many incremental line segment merging (OTM-ILSM) over a provenance tree,
+// and multi-processing global map adjustment (MP-GMA) when an optimised trajectory arrives.
+// One class, its parts in src/mergers/cae_rlsm/, a file per part:
+//   cae_rlsm.cpp             parameters, addKeyframe, read access to the tree
+//   otm_ilsm.cpp             OTM-ILSM: candidate search (R-tree) and insertion of a segment
+//   map_merge.cpp            map-level merge (map segment against map segment) and regroup
+//   crossing_resolution.cpp  no two map segments cross (bent walls into chains, T junctions)
+//   mp_gma.cpp               MP-GMA: adjust() to new keyframe poses, the consistency pass
+//   map_file.cpp             save() and load(): the map file (YAML)
+//
+// Provenance tree: root = the map; children = map segments (stable ids); leaves = the original
+// segments in their keyframe's laser frame. Leaves are never dropped, so the map can always be
+// rebuilt from them under new keyframe poses.
+#pragma once
+
+#include <tbb/task_arena.h>
+
+#include <Eigen/Core>
+#include <boost/geometry.hpp>
+#include <boost/geometry/index/rtree.hpp>
+#include <cstdint>
+#include <set>
+#include <unordered_map>
+#include <vector>
+
+#include "line_map_merging/mergers/fusion.hpp"
+#include "line_map_merging/mergers/merger.hpp"
+
+namespace YAML
+{
+class Node;
+}
+
+namespace line_map_merging
+{
+struct CaeParams
+{
+  FusionParams fusion;
+  int threads = 0;                    ///< MP-GMA worker threads; 0 = all cores
+  bool consistent_adjustment = true;  ///< split/merge after re-fusing (off = the paper's behaviour)
+  bool spatial_index = true;          ///< R-tree candidate search (off = linear reference search)
+  /// Map-level merge: after each keyframe's OTM-ILSM, the map segments it touched are merged with
+  /// every map segment they meet the fusion conditions with (either way round), until none is left;
+  /// the consistency pass after MP-GMA uses the same symmetric test. Off = the paper's behaviour,
+  /// where two map segments born apart stay apart unless one scan segment bridges them.
+  bool map_merge = true;
+  /// With map_merge: a map segment lying wholly inside another's fusion band (liesWithin) is merged
+  /// into it even when their headings differ by more than theta_max, as short segments fitted to a
+  /// wall's noisy glimpses do. Off = only the three fusion conditions.
+  bool absorb_contained = true;
+  /// After MP-GMA (with consistent_adjustment): regroup the leaves from scratch, OTM-ILSM over every
+  /// leaf in arrival order under the new poses, instead of re-fusing each map segment's own leaves;
+  /// ids carry over by the leaves. Groups formed on drifted poses otherwise stay as formed.
+  bool regroup_on_adjust = true;
+  /// Crossing resolution (crossing_resolution.cpp): no two map segments may cross (both running on past
+  /// their intersection by more than crossing_overhang). A pair crossing at up to crossing_chain_angle
+  /// (same facing side) is one bent wall: its originals are split at the bend, each side re-fused
+  /// separately, and the two pieces cut at the vertex into a chain. A pair crossing at a larger angle
+  /// loses its least supported arm (a T). Off = the paper's behaviour.
+  bool resolve_crossings = true;
+  double crossing_overhang = 0.01;  ///< [m] overhangs up to this are not crossings; >= 1 mm
+  double crossing_chain_angle = 20.0 * linemap::kPi / 180.0;  ///< [rad] largest heading deviation of a chain
+  /// A map segment all of whose originals come from one keyframe is withheld from map() while it is
+  /// shorter than this [m]: a short piece seen once is no evidence of a wall yet (a person, a chair
+  /// leg, noise), while a wall glimpsed in pieces through doors is seen again from other keyframes,
+  /// and the first original of another keyframe fused into it admits it. Its originals stay in the
+  /// provenance either way. 0 = every map segment is shown (the paper's behaviour).
+  double single_view_min_length = 0.6;
+
+  /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge",
+  /// "absorb_contained", "regroup_on_adjust", "resolve_crossings", "crossing_overhang",
+  /// "crossing_chain_angle", "single_view_min_length".
+  static CaeParams fromParams(const linemap::ParamSet& params);
+  /// Throws linemap::ParameterError naming the key for an out-of-range value.
+  void validate() const;
+};
+
+class CaeRlsm : public Merger
+{
+ public:
+  explicit CaeRlsm(const CaeParams& params = CaeParams());
+
+  const char* name() const override { return "cae"; }
+  AddResult addKeyframe(const Keyframe& keyframe) override;
+  AdjustResult adjust(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses) override;
+  bool supportsAdjustment() const override { return true; }
+  std::vector<MapSegment> map() const override;
+  std::vector<KeyframeInfo> keyframes() const override;
+  std::vector<Leaf> leaves(std::uint64_t id) const override;
+  bool hasProvenance() const override { return true; }
+  std::size_t keyframeCount() const override { return keyframes_.size(); }
+  std::size_t leafCount() const override { return leaves_.size(); }
+  /// Map segments map() shows (see single_view_min_length).
+  std::size_t segmentCount() const override;
+  void reset() override;
+  std::unique_ptr<Merger> clone() const override { return std::make_unique<CaeRlsm>(*this); }
+  void save(const std::string& path) const override;
+  void load(const std::string& path) override;
+
+  const CaeParams& params() const { return params_; }
+  std::uint64_t nextId() const { return next_id_; }
+
+ private:
+  using Point = boost::geometry::model::point<double, 2, boost::geometry::cs::cartesian>;
+  using Box = boost::geometry::model::box<Point>;
+  using Entry = std::pair<Box, std::uint64_t>;
+  using RTree = boost::geometry::index::rtree<Entry, boost::geometry::index::quadratic<16>>;
+  using Transform = Eigen::Matrix<double, 2, 3>;  // [R | t] of a keyframe pose
+
+  struct LeafRecord
+  {
+    std::uint32_t slot = 0;  // into keyframes_
+    Segment2 local;
+  };
+
+  struct Node
+  {
+    Segment2 segment;
+    FusionMoments moments;
+    std::vector<std::uint32_t> leaves;  // into leaves_
+    Box box;                            // as stored in the index
+  };
+
+  // OTM-ILSM (otm_ilsm.cpp).
+  /// Returns the id of the map segment that now holds the leaf.
+  std::uint64_t insertSegment(const Segment2& world, std::uint32_t leaf);
+  /// Map segments but `exclude` that meet the fusion conditions with `scan` as S, or with either as
+  /// M when `symmetric` (map segment against map segment; then also either lying within the other,
+  /// with absorb_contained); in id order.
+  void findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out,
+                      bool symmetric = false);
+  /// Read-only, thread-safe: whether findCandidates would find any. Needs a fresh index (or the
+  /// linear search); `hits` is the caller's scratch.
+  bool hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vector<Entry>& hits,
+                    bool symmetric = false) const;
+  bool candidateMeets(const Segment2& map, const Segment2& scan, bool symmetric) const;
+  /// Map-level merge (map_merge.cpp): merges each pending map segment with the map segments it meets
+  /// the conditions with, either way round, re-queueing the result, until none is left; the smallest
+  /// id survives and takes the others' leaves. Returns how many map segments were merged away.
+  /// `changed` (optional) receives the ids of the surviving segments that a merge changed.
+  std::size_t mergeMapSegments(std::set<std::uint64_t> pending, std::set<std::uint64_t>* changed = nullptr);
+  /// Crossing resolution (crossing_resolution.cpp): resolves every crossing of the pending map segments,
+  /// re-queueing what it changes, until none of them crosses another. Returns how many pairs it resolved.
+  std::size_t resolveCrossings(std::set<std::uint64_t> pending);
+  /// One crossing pair at `x`, a < b. `trim_only`: cut, never move originals or merge.
+  void resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool trim_only,
+                   std::set<std::uint64_t>& pending);
+  /// A bent wall's pair: their originals split at the bend (the vertex moved with the split until it
+  /// settles) and re-fused, `na` keeping the side before the bend when `a_before`; unchanged when the
+  /// split does not settle.
+  void splitAtBend(Node& na, Node& nb, const Vec2& x, bool a_before);
+  /// Merges map segment `from` into `into` (leaves, re-fused); the caller re-queues `into`.
+  void absorbNode(std::uint64_t into, std::uint64_t from);
+  /// Rebuilds the map from the leaves under the current poses (map_merge.cpp); each new map segment
+  /// keeps the smallest old id among its leaves' not taken by a segment before it. Returns the count.
+  std::size_t regroup();
+  /// After regroup(): the map segments renamed by their leaves' old ids (`old_id` by leaf), fresh ids
+  /// from `first_fresh`.
+  void keepOldIds(const std::vector<std::uint64_t>& old_id, std::uint64_t first_fresh);
+  Box paddedBox(const Segment2& s) const;  // padded by the fusion conditions' reach
+  static Box boundingBox(const Segment2& s, double pad = 0.0);
+  void indexInsert(std::uint64_t id, Node& node);
+  void indexRemove(std::uint64_t id, const Node& node);
+
+  // MP-GMA (mp_gma.cpp).
+  /// The keyframes' new poses and transforms (counted in `result`: moved, unknown).
+  void moveKeyframes(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses,
+                     tbb::task_arena& arena, AdjustResult& result);
+  /// Every map segment re-fused from its leaves under the new poses, then (consistent_adjustment) the
+  /// consistency pass; crossings resolved.
+  void refuseAll(tbb::task_arena& arena, AdjustResult& result);
+  Segment2 worldLeaf(std::uint32_t leaf) const;
+  void updateTransforms();
+  void refuse(Node& node) const;
+  std::vector<std::uint32_t> splitInconsistentLeaves(Node& node) const;
+  std::size_t mergeConsistentSegments(tbb::task_arena& arena);
+  void rebuildIndex();
+  /// resolveCrossings over every map segment (with resolve_crossings), after re-fusing.
+  void resolveAllCrossings();
+
+  // The parts of load() (map_file.cpp), on a fresh state; each throws MapFileError naming the field.
+  void loadKeyframes(const std::string& path, const YAML::Node& root);
+  void loadSegments(const std::string& path, const YAML::Node& root);
+  LeafRecord readLeaf(const std::string& path, const YAML::Node& leaf) const;
+  /// Puts the leaves in keyframe order, as they arrived (the file lists them by segment).
+  void sortLeavesByKeyframe();
+
+  CaeParams params_;
+  std::vector<KeyframeInfo> keyframes_;  // by slot, in arrival order
+  std::vector<Transform> transforms_;    // by slot
+  std::unordered_map<std::uint64_t, std::uint32_t> slot_of_;
+  std::vector<LeafRecord> leaves_;
+  /// Whether map() shows the node (single_view_min_length).
+  bool shown(const Node& node) const;
+
+  std::unordered_map<std::uint64_t, Node> nodes_;
+  RTree index_;
+  bool index_stale_ = false;  // set by adjust(): rebuilt in one go by the next search
+  std::uint64_t next_id_ = 0;
+  mutable std::vector<std::uint64_t> candidates_;  // scratch
+  mutable std::vector<Entry> hits_;                // scratch
+};
+
+}  // namespace line_map_merging

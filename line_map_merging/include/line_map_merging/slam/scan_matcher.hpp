@@ -1,0 +1,84 @@
+// Scan-to-map matching on a likelihood field (ROS-free): a brute-force correlative search over a
+// window of poses (Olson 2009; it cannot be trapped in a local optimum inside the window, and it is
+// what gives the front end its robustness to bad odometry and the loop closer its reach), then a
+// Ceres least-squares refinement of the best candidate on the bicubically interpolated field
+// (sub-cell precision the search's grid steps cannot give).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+#include "line_extraction/geometry.hpp"
+#include "line_map_merging/slam/likelihood_grid.hpp"
+
+namespace line_map_merging
+{
+struct SearchWindow
+{
+  double linear = 0.1;         ///< [m] half width in x and y
+  double angular = 0.05;       ///< [rad] half width
+  double linear_step = 0.0;    ///< [m]; rounded to whole cells, 0 = one cell
+  double angular_step = 0.01;  ///< [rad]
+  /// Candidates further from the window's centre score lower, by exp(-(w_t d^2 + w_r a^2)): among
+  /// equally good poses (a corridor) the one nearest the prior wins.
+  double translation_penalty = 0.0;  ///< [1/m^2]
+  double rotation_penalty = 0.0;     ///< [1/rad^2]
+  /// Candidates whose translation lies within this of `exclude_centre` are skipped (0: none): the
+  /// best pose away from a peak already found, i.e. how ambiguous that peak is.
+  double exclude_radius = 0.0;  ///< [m]
+  linemap::Vec2 exclude_centre = linemap::Vec2::Zero();
+};
+
+struct RefinementParams
+{
+  /// Weights of the prior's residuals against the points' (whose total weight is 1): they hold the
+  /// pose where the scan alone does not (a corridor along its axis).
+  double translation_weight = 1.0;  ///< [1/m]
+  double rotation_weight = 1.0;     ///< [1/rad]
+  int max_iterations = 20;
+};
+
+struct MatchResult
+{
+  linemap::Pose2 pose;
+  double score = 0.0;  ///< mean field value of the points at `pose`, in [0, 1]
+  /// Minus the Hessian of the score at `pose` over (x, y, theta), without the prior: how sharply the
+  /// scan fixes each direction. Filled by refineMatch; a corridor's is near zero along its axis.
+  Eigen::Matrix3d curvature = Eigen::Matrix3d::Zero();
+};
+
+/// What a match determines of a relative pose, as a shape over the translation: the curvature's
+/// (x, y) block scaled so that its best-determined direction has weight 1, and every direction
+/// determined at least `isotropic_ratio` as well as that one counted as fully determined (weight 1).
+/// Below that ratio a direction's weight falls in proportion (down to `floor`): the match barely
+/// says where along it the pose lies.
+struct TranslationShape
+{
+  Eigen::Matrix2d weights = Eigen::Matrix2d::Identity();  ///< symmetric, eigenvalues in [floor, 1]
+  double ratio = 1.0;       ///< weakest / strongest curvature of the translation block
+  bool degenerate = false;  ///< some direction weighs less than 1
+  /// The length of `v` in the shape's metric: |v| along determined directions, less along others.
+  double norm(const linemap::Vec2& v) const { return std::sqrt(std::max(0.0, v.dot(weights * v))); }
+};
+TranslationShape translationShape(const Eigen::Matrix3d& curvature, double isotropic_ratio, double floor);
+
+/// Mean nearest-cell field value of `points` (in the frame whose pose is sought) at `pose`.
+double matchScore(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
+                  const linemap::Pose2& pose);
+
+/// The `keep` best poses of the window around `center`, best first (score without the penalty).
+std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
+                                           const std::vector<linemap::Vec2>& points,
+                                           const linemap::Pose2& center, const SearchWindow& window,
+                                           std::size_t keep = 1);
+
+/// Least-squares refinement from `initial`, held towards `prior`; the result's score is the mean
+/// interpolated field value.
+MatchResult refineMatch(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
+                        const linemap::Pose2& initial, const linemap::Pose2& prior,
+                        const RefinementParams& params);
+
+}  // namespace line_map_merging

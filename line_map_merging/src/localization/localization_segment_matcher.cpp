@@ -1,0 +1,230 @@
+#include "line_map_merging/localization/localization_segment_matcher.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace line_map_merging
+{
+using linemap::Pose2;
+using linemap::Segment2;
+using linemap::Vec2;
+
+namespace
+{
+Vec2 closestOnSegment(const Vec2& p, const Vec2& a, const Vec2& b)
+{
+  const Vec2 d = b - a;
+  const double len2 = d.squaredNorm();
+  if (len2 <= 0.0) return a;
+  const double t = std::clamp((p - a).dot(d) / len2, 0.0, 1.0);
+  return a + t * d;
+}
+
+double cross(const Vec2& a, const Vec2& b)
+{
+  return a.x() * b.y() - a.y() * b.x();
+}
+}  // namespace
+
+LocalizationSegmentIndex::LocalizationSegmentIndex(std::vector<Segment2> segments, double cell_size,
+                                                   double reach)
+    : cell_size_(cell_size), reach_(reach)
+{
+  for (const auto& s : segments)
+    if (s.start.allFinite() && s.end.allFinite() && s.length() > 0.0) segments_.push_back(s);
+  if (segments_.empty() || !(cell_size > 0.0) || !(reach >= 0.0)) return;
+  lower_ = upper_ = segments_.front().start;
+  for (const auto& s : segments_)
+  {
+    lower_ = lower_.cwiseMin(s.start).cwiseMin(s.end);
+    upper_ = upper_.cwiseMax(s.start).cwiseMax(s.end);
+  }
+  origin_ = lower_ - Vec2::Constant(reach + cell_size);
+  width_ = static_cast<int>(std::ceil((upper_.x() - origin_.x() + reach + cell_size) / cell_size)) + 1;
+  height_ = static_cast<int>(std::ceil((upper_.y() - origin_.y() + reach + cell_size) / cell_size)) + 1;
+  // A cell lists a segment when some point of the cell may lie within reach of it: the distance from
+  // the cell's centre minus half its diagonal.
+  const double slack = reach + 0.5 * std::sqrt(2.0) * cell_size;
+  std::vector<std::vector<std::size_t>> lists(static_cast<std::size_t>(width_) * height_);
+  for (std::size_t i = 0; i < segments_.size(); ++i)
+  {
+    const auto& s = segments_[i];
+    const Vec2 lo = s.start.cwiseMin(s.end) - Vec2::Constant(slack);
+    const Vec2 hi = s.start.cwiseMax(s.end) + Vec2::Constant(slack);
+    const int x0 = std::max(0, static_cast<int>(std::floor((lo.x() - origin_.x()) / cell_size)));
+    const int y0 = std::max(0, static_cast<int>(std::floor((lo.y() - origin_.y()) / cell_size)));
+    const int x1 = std::min(width_ - 1, static_cast<int>(std::floor((hi.x() - origin_.x()) / cell_size)));
+    const int y1 = std::min(height_ - 1, static_cast<int>(std::floor((hi.y() - origin_.y()) / cell_size)));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x)
+      {
+        const Vec2 centre = origin_ + Vec2((x + 0.5) * cell_size, (y + 0.5) * cell_size);
+        if ((closestOnSegment(centre, s.start, s.end) - centre).norm() <= slack)
+          lists[static_cast<std::size_t>(y) * width_ + x].push_back(i);
+      }
+  }
+  cell_start_.reserve(lists.size() + 1);
+  cell_start_.push_back(0);
+  for (const auto& l : lists)
+  {
+    cell_segments_.insert(cell_segments_.end(), l.begin(), l.end());
+    cell_start_.push_back(cell_segments_.size());
+  }
+}
+
+std::optional<LocalizationSegmentIndex::Nearest> LocalizationSegmentIndex::nearest(const Vec2& p,
+                                                                                   const Vec2* sensor) const
+{
+  if (segments_.empty() || !p.allFinite()) return std::nullopt;
+  const int x = static_cast<int>(std::floor((p.x() - origin_.x()) / cell_size_));
+  const int y = static_cast<int>(std::floor((p.y() - origin_.y()) / cell_size_));
+  if (x < 0 || y < 0 || x >= width_ || y >= height_) return std::nullopt;
+  const std::size_t cell = static_cast<std::size_t>(y) * width_ + x;
+  std::optional<Nearest> best;
+  double best_d2 = reach_ * reach_;
+  for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k)
+  {
+    const auto& s = segments_[cell_segments_[k]];
+    if (sensor && cross(s.end - s.start, *sensor - s.start) < 0.0) continue;
+    const Vec2 c = closestOnSegment(p, s.start, s.end);
+    const double d2 = (p - c).squaredNorm();
+    if (d2 <= best_d2)
+    {
+      best_d2 = d2;
+      best = Nearest{cell_segments_[k], c, 0.0};
+    }
+  }
+  if (best) best->distance = std::sqrt(best_d2);
+  return best;
+}
+
+namespace
+{
+struct Accumulated
+{
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+  double score = 0.0;
+  std::size_t inliers = 0, paired = 0;
+};
+
+// Linearises every point's residual at `pose`; the residual of a point is its distance to the nearest
+// point c of its segment along u = (q - c) / |q - c| (the segment's normal inside it, the direction
+// from an end point beyond it), with c held fixed.
+Accumulated accumulate(const LocalizationSegmentIndex& index, const std::vector<Vec2>& points,
+                       const Pose2& pose, const SegmentMatchParams& params, const Vec2& sensor_offset)
+{
+  Accumulated acc;
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  const Vec2 t(pose.x, pose.y);
+  const Vec2 sensor = pose.apply(sensor_offset);
+  const double inv_var = 1.0 / (params.point_sigma * params.point_sigma);
+  const double k_score = -0.5 * inv_var;
+  for (const auto& p : points)
+  {
+    const Vec2 rotated(c * p.x() - s * p.y(), s * p.x() + c * p.y());
+    const Vec2 q = rotated + t;
+    const auto near = index.nearest(q, params.check_free_side ? &sensor : nullptr);
+    if (!near || near->distance > params.max_distance) continue;
+    const double d = near->distance;
+    acc.score += std::exp(k_score * d * d);
+    if (d <= params.inlier_distance) ++acc.inliers;
+    ++acc.paired;
+    Vec2 u;
+    if (d > 1e-12)
+      u = (q - near->closest) / d;
+    else
+    {
+      const auto& seg = index.segments()[near->segment];
+      const Vec2 dir = (seg.end - seg.start).normalized();
+      u = Vec2(-dir.y(), dir.x());
+    }
+    const Eigen::Vector3d j(u.x(), u.y(), u.x() * -rotated.y() + u.y() * rotated.x());
+    const double ratio = d / params.loss_scale;
+    const double w = inv_var / (1.0 + ratio * ratio);
+    acc.information += w * j * j.transpose();
+    acc.gradient += w * j * d;
+  }
+  return acc;
+}
+
+void finish(SegmentMatch& m, const Accumulated& acc, std::size_t n, const SegmentMatchParams& params)
+{
+  const double far =
+      std::exp(-0.5 * params.max_distance * params.max_distance / (params.point_sigma * params.point_sigma));
+  m.score = n == 0 ? 0.0 : (acc.score + static_cast<double>(n - acc.paired) * far) / static_cast<double>(n);
+  m.inliers = acc.inliers;
+  m.inlier_share = n == 0 ? 0.0 : static_cast<double>(acc.inliers) / static_cast<double>(n);
+  m.scan_information = acc.information;
+  m.valid = acc.paired > 0;
+}
+}  // namespace
+
+SegmentMatch evaluateOnSegments(const LocalizationSegmentIndex& index, const std::vector<Vec2>& points,
+                                const Pose2& pose, const SegmentMatchParams& params,
+                                const Vec2& sensor_offset)
+{
+  SegmentMatch m;
+  m.pose = pose;
+  finish(m, accumulate(index, points, pose, params, sensor_offset), points.size(), params);
+  return m;
+}
+
+namespace
+{
+// Gauss-Newton iterations from `pose` with the points paired within `gate`; returns the last pose.
+Pose2 solve(const LocalizationSegmentIndex& index, const std::vector<Vec2>& points, Pose2 pose,
+            const std::optional<PosePrior>& prior, const SegmentMatchParams& params,
+            const Vec2& sensor_offset, int& iterations)
+{
+  for (int it = 0; it < params.max_iterations; ++it)
+  {
+    const Accumulated acc = accumulate(index, points, pose, params, sensor_offset);
+    Eigen::Matrix3d h = acc.information;
+    Eigen::Vector3d g = acc.gradient;
+    if (prior)
+    {
+      const Eigen::Vector3d e(pose.x - prior->mean.x, pose.y - prior->mean.y,
+                              linemap::normalizeAngle(pose.theta - prior->mean.theta));
+      h += prior->information;
+      g += prior->information * e;
+    }
+    ++iterations;
+    if (acc.paired == 0 && !prior) break;
+    // A tiny damping keeps the step finite where neither the scan nor a prior constrains a direction.
+    const Eigen::Vector3d step = -(h + 1e-9 * Eigen::Matrix3d::Identity()).ldlt().solve(g);
+    if (!step.allFinite()) break;
+    pose = {pose.x + step.x(), pose.y + step.y(), linemap::normalizeAngle(pose.theta + step.z())};
+    if (std::hypot(step.x(), step.y()) < 1e-6 && std::fabs(step.z()) < 1e-7) break;
+  }
+  return pose;
+}
+}  // namespace
+
+SegmentMatch matchToSegments(const LocalizationSegmentIndex& index, const std::vector<Vec2>& points,
+                             const Pose2& initial, const std::optional<PosePrior>& prior,
+                             const SegmentMatchParams& params, const Vec2& sensor_offset)
+{
+  SegmentMatch m;
+  Pose2 pose = solve(index, points, initial, prior, params, sensor_offset, m.iterations);
+  SegmentMatchParams near = params;
+  near.max_distance = std::min(params.max_distance, params.refine_distance);
+  pose = solve(index, points, pose, prior, near, sensor_offset, m.iterations);
+  // Score and inliers over the wide gate, the covariance from the points the pose rests on.
+  m.pose = pose;
+  finish(m, accumulate(index, points, pose, params, sensor_offset), points.size(), params);
+  const Accumulated acc = accumulate(index, points, pose, near, sensor_offset);
+  m.scan_information = acc.information;
+  Eigen::Matrix3d h = acc.information;
+  if (prior) h += prior->information;
+  Eigen::FullPivLU<Eigen::Matrix3d> lu(h);
+  m.covariance = lu.isInvertible()
+                     ? Eigen::Matrix3d(lu.inverse())
+                     : Eigen::Matrix3d(Eigen::Matrix3d::Identity() * std::numeric_limits<double>::infinity());
+  return m;
+}
+
+}  // namespace line_map_merging

@@ -1,0 +1,157 @@
+// CAE-RLSM state: parameters, keyframe bookkeeping and read access to the provenance tree.
+#include "line_map_merging/mergers/cae_rlsm.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace line_map_merging
+{
+CaeParams CaeParams::fromParams(const linemap::ParamSet& params)
+{
+  CaeParams p;
+  p.fusion = FusionParams::fromParams(params);
+  p.threads = params.getInt("threads", p.threads);
+  if (p.threads < 0)
+    throw linemap::ParameterError("parameter 'threads': " + std::to_string(p.threads) +
+                                  " must be >= 0 (0 = all cores)");
+  p.consistent_adjustment = params.getBool("consistent_adjustment", p.consistent_adjustment);
+  p.spatial_index = params.getBool("spatial_index", p.spatial_index);
+  p.map_merge = params.getBool("map_merge", p.map_merge);
+  p.absorb_contained = params.getBool("absorb_contained", p.absorb_contained);
+  p.regroup_on_adjust = params.getBool("regroup_on_adjust", p.regroup_on_adjust);
+  p.resolve_crossings = params.getBool("resolve_crossings", p.resolve_crossings);
+  p.crossing_overhang = params.getDouble("crossing_overhang", p.crossing_overhang);
+  p.crossing_chain_angle = params.getDouble("crossing_chain_angle", p.crossing_chain_angle);
+  p.single_view_min_length = params.getDouble("single_view_min_length", p.single_view_min_length);
+  p.validate();
+  return p;
+}
+
+void CaeParams::validate() const
+{
+  fusion.validate();
+  // A segment cut at a crossing ends there up to rounding, which must not count as an overhang again.
+  if (!(crossing_overhang >= 1e-3 && std::isfinite(crossing_overhang)))
+    throw linemap::ParameterError("parameter 'crossing_overhang': " + std::to_string(crossing_overhang) +
+                                  " is not a finite distance >= 0.001 m");
+  if (!(crossing_chain_angle >= 0.0 && crossing_chain_angle < 0.5 * linemap::kPi))
+    throw linemap::ParameterError("parameter 'crossing_chain_angle': " +
+                                  std::to_string(crossing_chain_angle) + " is not in [0, pi/2) rad");
+  if (!(single_view_min_length >= 0.0 && std::isfinite(single_view_min_length)))
+    throw linemap::ParameterError("parameter 'single_view_min_length': " +
+                                  std::to_string(single_view_min_length) + " is not a finite length >= 0 m");
+}
+
+CaeRlsm::CaeRlsm(const CaeParams& params) : params_(params)
+{
+  params_.validate();
+}
+
+AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
+{
+  const linemap::Pose2& p = keyframe.pose;
+  if (!(std::abs(p.x) <= kMaxCoordinate && std::abs(p.y) <= kMaxCoordinate && std::isfinite(p.theta)))
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) +
+                                ": pose is not finite or lies beyond " + std::to_string(kMaxCoordinate) +
+                                " m");
+  const linemap::Pose2& m = keyframe.mount;
+  if (!(std::abs(m.x) <= kMaxCoordinate && std::abs(m.y) <= kMaxCoordinate && std::isfinite(m.theta)))
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) +
+                                ": mount is not finite or lies beyond " + std::to_string(kMaxCoordinate) +
+                                " m");
+  if (!std::isfinite(keyframe.stamp))
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) + ": stamp is not finite");
+  if (slot_of_.count(keyframe.index))
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.index) + ": index already merged");
+
+  const auto slot = static_cast<std::uint32_t>(keyframes_.size());
+  slot_of_.emplace(keyframe.index, slot);
+  keyframes_.push_back({keyframe.index, keyframe.stamp, p, m});
+  transforms_.emplace_back();
+  const double c = std::cos(p.theta), s = std::sin(p.theta);
+  transforms_.back() << c, -s, p.x, s, c, p.y;
+
+  AddResult result;
+  std::set<std::uint64_t> touched;
+  for (const Segment2& local : keyframe.segments)
+  {
+    // A finite segment under a huge (finite) pose can still overflow in the map frame.
+    const Segment2 global = local.transformed(p);
+    if (!isValidSegment(local) || !isValidSegment(global))
+    {
+      ++result.rejected;
+      continue;
+    }
+    const auto leaf = static_cast<std::uint32_t>(leaves_.size());
+    leaves_.push_back({slot, local});
+    touched.insert(insertSegment(global, leaf));
+    ++result.merged;
+  }
+  std::set<std::uint64_t> changed;
+  if (params_.map_merge) mergeMapSegments(touched, &changed);
+  if (params_.resolve_crossings)
+  {
+    changed.insert(touched.begin(), touched.end());
+    resolveCrossings(std::move(changed));
+  }
+  return result;
+}
+
+std::vector<MapSegment> CaeRlsm::map() const
+{
+  std::vector<MapSegment> out;
+  out.reserve(nodes_.size());
+  for (const auto& [id, node] : nodes_)
+    if (shown(node)) out.push_back({id, node.segment, static_cast<std::uint32_t>(node.leaves.size())});
+  std::sort(out.begin(), out.end(), [](const MapSegment& a, const MapSegment& b) { return a.id < b.id; });
+  return out;
+}
+
+bool CaeRlsm::shown(const Node& node) const
+{
+  if (params_.single_view_min_length <= 0.0 || node.segment.length() >= params_.single_view_min_length)
+    return true;
+  for (std::uint32_t leaf : node.leaves)
+    if (leaves_[leaf].slot != leaves_[node.leaves.front()].slot) return true;
+  return false;
+}
+
+std::size_t CaeRlsm::segmentCount() const
+{
+  std::size_t n = 0;
+  for (const auto& entry : nodes_) n += shown(entry.second);
+  return n;
+}
+
+std::vector<KeyframeInfo> CaeRlsm::keyframes() const
+{
+  std::vector<KeyframeInfo> out = keyframes_;
+  std::sort(out.begin(), out.end(),
+            [](const KeyframeInfo& a, const KeyframeInfo& b) { return a.index < b.index; });
+  return out;
+}
+
+std::vector<Leaf> CaeRlsm::leaves(std::uint64_t id) const
+{
+  std::vector<Leaf> out;
+  auto it = nodes_.find(id);
+  if (it == nodes_.end()) return out;
+  for (std::uint32_t l : it->second.leaves)
+    out.push_back({keyframes_[leaves_[l].slot].index, leaves_[l].local});
+  return out;
+}
+
+void CaeRlsm::reset()
+{
+  keyframes_.clear();
+  transforms_.clear();
+  slot_of_.clear();
+  leaves_.clear();
+  nodes_.clear();
+  index_.clear();
+  index_stale_ = false;
+  next_id_ = 0;
+}
+
+}  // namespace line_map_merging

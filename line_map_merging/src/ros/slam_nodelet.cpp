@@ -1,0 +1,214 @@
+// line_map_merging/SlamNodelet: a thin ROS wrapper of LaserSlam (slam/laser_slam.hpp). Subscribes to
+// `scan`, takes odometry from tf odom -> base at the scan's stamp (optional), publishes tf
+// map -> odom (and, laser only, odom -> base from the front end), the optimised keyframe poses on
+// `optimized_trajectory` (nav_msgs/Path, each pose stamped with its scan's stamp) and diagnostics.
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <nav_msgs/Path.h>
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <sensor_msgs/LaserScan.h>
+#include <tf2/utils.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <pluginlib/class_list_macros.hpp>
+
+#include "line_extraction/ros/message_conversions.hpp"
+#include "line_extraction/ros/param_loader.hpp"
+#include "line_extraction/ros/tf_wait_queue.hpp"
+#include "line_extraction/ros/transport.hpp"
+#include "line_extraction/ros/wall_diagnostics.hpp"
+#include "line_map_merging/slam/laser_slam.hpp"
+
+namespace line_map_merging
+{
+namespace
+{
+linemap::Pose2 toPose(const geometry_msgs::Transform& t)
+{
+  return {t.translation.x, t.translation.y, tf2::getYaw(t.rotation)};
+}
+
+}  // namespace
+
+class SlamNodelet : public nodelet::Nodelet
+{
+ public:
+  ~SlamNodelet() override
+  {
+    listener_.reset();  // its thread calls into the wait
+    waiting_.reset();
+  }
+
+ private:
+  using ScanEvent = ros::MessageEvent<const sensor_msgs::LaserScan>;
+
+  void onInit() override
+  {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    std::tie(map_frame_, base_frame_, odom_frame_) = linemap_ros::frameParams(pnh);
+    use_odometry_ = pnh.param("use_odometry", true);
+    const double tf_timeout = pnh.param("tf_timeout", 0.1);
+    publish_period_ = pnh.param("publish_period", 0.0);
+    LaserSlamParams params;
+    try
+    {
+      params = LaserSlamParams::fromParams(linemap_ros::loadParamSet(pnh));
+    }
+    catch (const linemap::ParameterError& e)
+    {
+      NODELET_ERROR("slam: bad parameter (%s); running on the built-in defaults", e.what());
+    }
+    slam_ = std::make_unique<LaserSlam>(params);
+    buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(600.0));  // the SLAM may lag the bag
+    listener_ = std::make_unique<tf2_ros::TransformListener>(*buffer_, nh, true, linemap_ros::noDelay());
+    path_pub_ = nh.advertise<nav_msgs::Path>("optimized_trajectory", 1, true);
+    // A scan waits up to ~tf_timeout for the tf it needs (odom -> base -> laser, or base -> laser
+    // without odometry); then it is matched with what tf has (see onScan).
+    const int queue = std::max(1, pnh.param("queue_size", 1000));
+    waiting_ = std::make_unique<linemap_ros::TfWaitQueue<sensor_msgs::LaserScan>>(
+        *buffer_, use_odometry_ ? odom_frame_ : base_frame_, queue, ros::Duration(tf_timeout), nh,
+        [this](const ScanEvent& e) { onScan(e); },
+        [this](const ScanEvent& e, const std::string&) { onScan(e); });
+    waiting_->subscribe(nh, "scan", queue, [this](const ScanEvent& e) { return arrive(e); });
+    diagnostics_ =
+        std::make_unique<linemap_ros::WallDiagnostics>(nh, pnh, "laser slam", this, &SlamNodelet::diagnose);
+  }
+
+  /// Before the tf wait (false: turned away): a zero stamp would be posed at the latest transform;
+  /// a replay from the start makes a new trajectory on a clean tf buffer.
+  bool arrive(const ScanEvent& event)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const ros::Time stamp = event.getConstMessage()->header.stamp;
+    if (stamp.isZero())
+    {
+      slam_->countZeroStamp();
+      NODELET_WARN_THROTTLE(10.0, "slam: scan stamped zero dropped");
+      return false;
+    }
+    if (slam_->restartOnTimeJump(stamp.toSec()))
+    {
+      NODELET_WARN("slam: time jumped back (a scan stamped %.3f s): new trajectory", stamp.toSec());
+      buffer_->clear();
+      for (std::size_t n = waiting_->clear(); n > 0; --n) slam_->countDropped();  // the old time line's
+      last_publish_ = 0.0;
+    }
+    return true;
+  }
+
+  /// A scan tf can place, or one that waited for it in vain: without base -> laser it is dropped
+  /// (unless the laser is the base), without odometry it is matched without.
+  void onScan(const ScanEvent& event)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto& msg = event.getConstMessage();
+    const ros::Time stamp = msg->header.stamp;
+    const std::string laser_frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
+    std::string error;
+    std::optional<linemap::Pose2> mount = lookup(base_frame_, laser_frame, stamp, error);
+    if (!mount && (base_frame_ == laser_frame || !use_odometry_)) mount = linemap::Pose2();  // laser = base
+    if (!mount)
+    {
+      slam_->countDropped();
+      NODELET_WARN_THROTTLE(10.0, "slam: no tf %s -> %s (%s): scan dropped", base_frame_.c_str(),
+                            laser_frame.c_str(), error.c_str());
+      return;
+    }
+    SlamScan scan;
+    scan.stamp = stamp.toSec();
+    if (use_odometry_ && !(scan.odom = lookup(odom_frame_, base_frame_, stamp, error)))
+      NODELET_WARN_THROTTLE(10.0, "slam: no odometry tf %s -> %s (%s): matching without it",
+                            odom_frame_.c_str(), base_frame_.c_str(), error.c_str());
+    for (std::size_t i = 0; i < msg->ranges.size(); ++i)
+    {
+      const double r = msg->ranges[i];
+      if (!(r >= msg->range_min && r <= msg->range_max)) continue;
+      const double a = msg->angle_min + static_cast<double>(i) * msg->angle_increment;
+      scan.points.push_back(mount->apply({r * std::cos(a), r * std::sin(a)}));
+    }
+    if (slam_->addScan(scan) == SlamOutcome::kRejected) return;
+    publishTf(stamp, scan.odom);
+    if (slam_->graphOptimized() || (slam_->keyframeAdded() && publish_period_ > 0.0 &&
+                                    ros::WallTime::now().toSec() - last_publish_ >= publish_period_))
+      publishPath(stamp);
+  }
+
+  /// tf at the stamp, as the buffer has it now (the wait queue waited).
+  std::optional<linemap::Pose2> lookup(const std::string& target, const std::string& source,
+                                       const ros::Time& stamp, std::string& error)
+  {
+    try
+    {
+      return toPose(buffer_->lookupTransform(target, source, stamp).transform);
+    }
+    catch (const tf2::TransformException& e)
+    {
+      error = e.what();
+      return std::nullopt;
+    }
+  }
+
+  void publishTf(const ros::Time& stamp, const std::optional<linemap::Pose2>& odom)
+  {
+    const linemap::Pose2 map_base = slam_->currentPose();
+    // Without odometry the front end is the odometry: odom -> base is its pose.
+    const linemap::Pose2 odom_base = odom ? *odom : slam_->currentLocal();
+    std::vector<geometry_msgs::TransformStamped> out{
+        linemap_ros::toTransform(map_base * odom_base.inverse(), map_frame_, odom_frame_, stamp)};
+    if (!use_odometry_) out.push_back(linemap_ros::toTransform(odom_base, odom_frame_, base_frame_, stamp));
+    broadcaster_.sendTransform(out);
+  }
+
+  void publishPath(const ros::Time& stamp)
+  {
+    nav_msgs::Path path;
+    path.header.stamp = stamp;
+    path.header.frame_id = map_frame_;
+    for (const auto& [t, p] : slam_->trajectory())
+    {
+      geometry_msgs::PoseStamped ps;
+      ps.header.stamp.fromSec(t);
+      ps.header.frame_id = map_frame_;
+      ps.pose.position.x = p.x;
+      ps.pose.position.y = p.y;
+      ps.pose.orientation.z = std::sin(0.5 * p.theta);
+      ps.pose.orientation.w = std::cos(0.5 * p.theta);
+      path.poses.push_back(ps);
+    }
+    path_pub_.publish(path);
+    slam_->countPublished();
+    last_publish_ = ros::WallTime::now().toSec();
+  }
+
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const bool dropped = slam_->counters().dropped > 0;
+    stat.summary(dropped ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
+                 dropped ? "scans dropped (no base -> laser tf)" : "ok");
+    for (const auto& [key, value] : slam_->diagnostics()) stat.add(key, value);
+  }
+
+  std::mutex mutex_;
+  std::unique_ptr<LaserSlam> slam_;
+  std::unique_ptr<tf2_ros::Buffer> buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> listener_;
+  std::unique_ptr<linemap_ros::TfWaitQueue<sensor_msgs::LaserScan>> waiting_;
+  tf2_ros::TransformBroadcaster broadcaster_;
+  ros::Publisher path_pub_;
+  std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
+  std::string map_frame_, odom_frame_, base_frame_;
+  bool use_odometry_ = true;
+  double publish_period_ = 0.0, last_publish_ = 0.0;
+};
+
+}  // namespace line_map_merging
+
+PLUGINLIB_EXPORT_CLASS(line_map_merging::SlamNodelet, nodelet::Nodelet)

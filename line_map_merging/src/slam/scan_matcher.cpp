@@ -1,0 +1,243 @@
+#include "line_map_merging/slam/scan_matcher.hpp"
+
+#include <ceres/ceres.h>
+#include <ceres/cubic_interpolation.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace line_map_merging
+{
+namespace
+{
+using Interpolator = ceres::BiCubicInterpolator<ceres::Grid2D<double, 1>>;
+
+// One residual per point: 1 - field value, scaled so that all points together weigh 1.
+struct FieldCost
+{
+  FieldCost(const Interpolator& field, const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points)
+      : field_(field),
+        grid_(grid),
+        points_(points),
+        scale_(1.0 / std::sqrt(static_cast<double>(points.size())))
+  {
+  }
+  template <typename T>
+  bool operator()(const T* pose, T* residual) const
+  {
+    const T c = cos(pose[2]), s = sin(pose[2]);
+    const double inv = 1.0 / grid_.resolution();
+    for (std::size_t i = 0; i < points_.size(); ++i)
+    {
+      const auto& p = points_[i];
+      const T x = c * p.x() - s * p.y() + pose[0];
+      const T y = s * p.x() + c * p.y() + pose[1];
+      T value;
+      field_.Evaluate((y - grid_.origin().y()) * inv, (x - grid_.origin().x()) * inv, &value);
+      residual[i] = scale_ * (1.0 - value);
+    }
+    return true;
+  }
+  const Interpolator& field_;
+  const LikelihoodGrid& grid_;
+  const std::vector<linemap::Vec2>& points_;
+  double scale_;
+};
+
+/// Mean interpolated field value of the points at `pose`.
+double interpolatedScore(const Interpolator& field, const LikelihoodGrid& grid,
+                         const std::vector<linemap::Vec2>& points, const linemap::Pose2& pose)
+{
+  double sum = 0.0;
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  for (const auto& p : points)
+  {
+    double v;
+    field.Evaluate((s * p.x() + c * p.y() + pose.y - grid.origin().y()) / grid.resolution(),
+                   (c * p.x() - s * p.y() + pose.x - grid.origin().x()) / grid.resolution(), &v);
+    sum += v;
+  }
+  return sum / static_cast<double>(points.size());
+}
+
+/// How sharply the score falls off around `pose`: minus its Hessian over (x, y, theta) by central
+/// differences (one cell, 0.01 rad), negative curvatures clipped to zero. The least-squares J^T J
+/// would not do: at the peak of a field the points' gradients vanish, whatever the scan determines.
+Eigen::Matrix3d scoreCurvature(const Interpolator& field, const LikelihoodGrid& grid,
+                               const std::vector<linemap::Vec2>& points, const linemap::Pose2& pose)
+{
+  const double h[3] = {grid.resolution(), grid.resolution(), 0.01};
+  auto at = [&](int i, double di, int j, double dj)
+  {
+    double d[3] = {0.0, 0.0, 0.0};
+    d[i] += di;
+    d[j] += dj;
+    return interpolatedScore(field, grid, points,
+                             linemap::Pose2(pose.x + d[0], pose.y + d[1], pose.theta + d[2]));
+  };
+  const double centre = interpolatedScore(field, grid, points, pose);
+  Eigen::Matrix3d hessian;
+  for (int i = 0; i < 3; ++i)
+  {
+    hessian(i, i) = (at(i, h[i], i, 0.0) - 2.0 * centre + at(i, -h[i], i, 0.0)) / (h[i] * h[i]);
+    for (int j = i + 1; j < 3; ++j)
+      hessian(i, j) = hessian(j, i) =
+          (at(i, h[i], j, h[j]) - at(i, h[i], j, -h[j]) - at(i, -h[i], j, h[j]) + at(i, -h[i], j, -h[j])) /
+          (4.0 * h[i] * h[j]);
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(-hessian);
+  return eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() *
+         eigen.eigenvectors().transpose();
+}
+
+struct PriorCost
+{
+  PriorCost(const linemap::Pose2& prior, double wt, double wr) : prior_(prior), wt_(wt), wr_(wr) {}
+  template <typename T>
+  bool operator()(const T* pose, T* residual) const
+  {
+    residual[0] = wt_ * (pose[0] - prior_.x);
+    residual[1] = wt_ * (pose[1] - prior_.y);
+    T d = pose[2] - prior_.theta;
+    const double two_pi = 2.0 * linemap::kPi;
+    d = d - two_pi * ceres::floor((d + linemap::kPi) / two_pi);
+    residual[2] = wr_ * d;
+    return true;
+  }
+  linemap::Pose2 prior_;
+  double wt_, wr_;
+};
+}  // namespace
+
+double matchScore(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
+                  const linemap::Pose2& pose)
+{
+  if (points.empty()) return 0.0;
+  double sum = 0.0;
+  for (const auto& p : points)
+  {
+    const linemap::Vec2 q = pose.apply(p);
+    sum += grid.nearest(q.x(), q.y());
+  }
+  return sum / static_cast<double>(points.size());
+}
+
+std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
+                                           const std::vector<linemap::Vec2>& points,
+                                           const linemap::Pose2& center, const SearchWindow& window,
+                                           std::size_t keep)
+{
+  std::vector<MatchResult> best;
+  if (grid.empty() || points.empty() || keep == 0) return best;
+  const double res = grid.resolution();
+  const int step = std::max(1, static_cast<int>(std::lround(window.linear_step / res)));
+  const int reach = static_cast<int>(std::floor(window.linear / (step * res) + 1e-9));
+  const double astep = window.angular_step > 0.0 ? window.angular_step : 0.01;
+  const int areach = static_cast<int>(std::floor(window.angular / astep + 1e-9));
+  const double inv_n = 1.0 / static_cast<double>(points.size());
+  const int w = grid.width(), h = grid.height();
+  const double* cells = grid.cells().data();
+  // Cell of every rotated point at the window's centre; translations then shift whole cells.
+  std::vector<int> ix(points.size()), iy(points.size());
+  // Ranked by penalised score; `keep` is small, so a sorted vector is enough.
+  std::vector<std::pair<double, MatchResult>> ranked;
+  for (int a = -areach; a <= areach; ++a)
+  {
+    const double da = a * astep, theta = center.theta + da;
+    const double c = std::cos(theta), s = std::sin(theta);
+    for (std::size_t i = 0; i < points.size(); ++i)
+    {
+      const auto& p = points[i];
+      ix[i] = static_cast<int>(std::lround((c * p.x() - s * p.y() + center.x - grid.origin().x()) / res));
+      iy[i] = static_cast<int>(std::lround((s * p.x() + c * p.y() + center.y - grid.origin().y()) / res));
+    }
+    for (int oy = -reach; oy <= reach; ++oy)
+      for (int ox = -reach; ox <= reach; ++ox)
+      {
+        const int dx = ox * step, dy = oy * step;
+        if (window.exclude_radius > 0.0 &&
+            std::hypot(center.x + dx * res - window.exclude_centre.x(),
+                       center.y + dy * res - window.exclude_centre.y()) < window.exclude_radius)
+          continue;
+        double sum = 0.0;
+        for (std::size_t i = 0; i < points.size(); ++i)
+        {
+          const int x = ix[i] + dx, y = iy[i] + dy;
+          if (x >= 0 && y >= 0 && x < w && y < h) sum += cells[static_cast<std::size_t>(y) * w + x];
+        }
+        const double score = sum * inv_n;
+        const double tx = dx * res, ty = dy * res;
+        const double ranked_score =
+            score *
+            std::exp(-(window.translation_penalty * (tx * tx + ty * ty) + window.rotation_penalty * da * da));
+        if (ranked.size() == keep && ranked_score <= ranked.back().first) continue;
+        MatchResult m;
+        m.pose = {center.x + tx, center.y + ty, linemap::normalizeAngle(theta)};
+        m.score = score;
+        auto at = std::upper_bound(ranked.begin(), ranked.end(), ranked_score,
+                                   [](double v, const auto& e) { return v > e.first; });
+        ranked.insert(at, {ranked_score, m});
+        if (ranked.size() > keep) ranked.pop_back();
+      }
+  }
+  for (auto& r : ranked) best.push_back(r.second);
+  return best;
+}
+
+MatchResult refineMatch(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
+                        const linemap::Pose2& initial, const linemap::Pose2& prior,
+                        const RefinementParams& params)
+{
+  MatchResult result{initial, 0.0};
+  if (grid.empty() || points.empty()) return result;
+  ceres::Grid2D<double, 1> data(grid.cells().data(), 0, grid.height(), 0, grid.width());
+  Interpolator field(data);
+  double pose[3] = {initial.x, initial.y, initial.theta};
+  ceres::Problem problem;
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FieldCost, ceres::DYNAMIC, 3>(
+                               new FieldCost(field, grid, points), static_cast<int>(points.size())),
+                           nullptr, pose);
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorCost, 3, 3>(
+                               new PriorCost(prior, params.translation_weight, params.rotation_weight)),
+                           nullptr, pose);
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = params.max_iterations;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  result.pose = {pose[0], pose[1], linemap::normalizeAngle(pose[2])};
+  result.curvature = scoreCurvature(field, grid, points, result.pose);
+  double sum = 0.0;
+  const double c = std::cos(result.pose.theta), s = std::sin(result.pose.theta);
+  for (const auto& p : points)
+  {
+    double v;
+    field.Evaluate((s * p.x() + c * p.y() + result.pose.y - grid.origin().y()) / grid.resolution(),
+                   (c * p.x() - s * p.y() + result.pose.x - grid.origin().x()) / grid.resolution(), &v);
+    sum += v;
+  }
+  result.score = sum / static_cast<double>(points.size());
+  return result;
+}
+
+TranslationShape translationShape(const Eigen::Matrix3d& curvature, double isotropic_ratio, double floor)
+{
+  TranslationShape shape;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(curvature.topLeftCorner<2, 2>());
+  const Eigen::Vector2d values = eigen.eigenvalues();                 // ascending
+  if (!(values(1) > 0.0) || !std::isfinite(values(1))) return shape;  // nothing known: no shaping
+  shape.ratio = std::max(0.0, values(0)) / values(1);
+  Eigen::Vector2d weights;
+  for (int i = 0; i < 2; ++i)
+  {
+    const double relative = std::max(0.0, values(i)) / values(1);
+    weights(i) = relative >= isotropic_ratio ? 1.0 : std::max(floor, relative / isotropic_ratio);
+  }
+  shape.degenerate = weights(0) < 1.0;
+  shape.weights = eigen.eigenvectors() * weights.asDiagonal() * eigen.eigenvectors().transpose();
+  return shape;
+}
+
+}  // namespace line_map_merging
