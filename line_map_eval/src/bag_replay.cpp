@@ -7,27 +7,12 @@
 #include <stdexcept>
 
 #include "line_extraction/line_extractor.hpp"
+#include "line_extraction/small_helpers.hpp"
 #include "line_extraction/submap_extraction.hpp"
 #include "line_map_eval/online_evaluator.hpp"
 
 namespace line_map_eval
 {
-namespace
-{
-/// Pose at `t` from samples sorted by time: interpolated between the two around it, clamped at the
-/// ends (tf would wait for a later sample; the bags carry one at every scan).
-linemap::Pose2 sampleAt(const std::vector<std::pair<double, Pose2>>& samples, double t)
-{
-  const auto after = std::lower_bound(samples.begin(), samples.end(), t,
-                                      [](const auto& s, double v) { return s.first < v; });
-  if (after == samples.end()) return samples.back().second;
-  if (after == samples.begin() || after->first == t) return after->second;
-  const auto& before = *(after - 1);
-  return linemap::interpolate(before.second, after->second,
-                              (t - before.first) / (after->first - before.first));
-}
-}  // namespace
-
 ReplayResult replayBag(const BagContents& bag, const ReplayOptions& options)
 {
   const auto start = std::chrono::steady_clock::now();
@@ -39,51 +24,48 @@ ReplayResult replayBag(const BagContents& bag, const ReplayOptions& options)
                                         line_map_merging::OnlineMapperParams::fromParams(options.params));
   OnlineEvaluator evaluator(OnlineEvaluatorParams::fromParams(options.params));
   const Pose2& mount = rec.base_to_laser;
-  ReplayResult out;
-  std::size_t next_trajectory = 0;
-  for (const RecordedScan& scan : rec.scans)
+  BackEndSchedule schedule{options.trajectories ? bag.trajectory : std::vector<TrajectoryEmission>{},
+                           bag.map_to_odom};
+  auto segments = [&](std::size_t i, const Pose2& odom)
   {
-    ++out.scans;
-    const Pose2 odom = scan.odom * mount;
-    const Pose2 laser = bag.map_to_odom.empty() ? odom : sampleAt(bag.map_to_odom, scan.stamp) * odom;
-    line_map_merging::StampedScan s;
-    s.stamp = scan.stamp;
-    s.laser = laser;
-    s.odom = odom;
-    s.mount = mount;
-    const ScanGeometry& g = rec.geometryOf(scan);
-    for (const auto& seg : extractor.extract(scanInput(g, scan.ranges)).segments)
-      s.segments.emplace_back(seg.start, seg.end);
+    const RecordedScan& scan = rec.scans[i];
+    std::vector<linemap::Segment2> out;
+    for (const auto& seg : extractor.extract(scanInput(rec.geometryOf(scan), scan.ranges)).segments)
+      out.emplace_back(seg.start, seg.end);
     // As the extraction nodelet: registered in the odometry frame.
     for (const auto& seg : submap.update(extractor.preparedScan(), extractor.lastResult(), odom))
-      s.segments.emplace_back(seg.start, seg.end);
-    // The evaluator nodelet receives the scan and the extractor's segments as the merger does.
+      out.emplace_back(seg.start, seg.end);
+    return out;
+  };
+  OnlineDriveHooks hooks;
+  // The evaluator nodelet receives the scan and the extractor's segments as the merger does.
+  hooks.scan = [&](std::size_t i, const line_map_merging::StampedScan& s)
+  {
+    const RecordedScan& scan = rec.scans[i];
+    const ScanGeometry& g = rec.geometryOf(scan);
     const ScanRanges ranges{g.angle_min, g.angle_increment, g.range_min, g.range_max, scan.ranges};
-    evaluator.addScan(scan.stamp, ranges, laser, odom);
-    evaluator.addSegments(scan.stamp, s.segments, laser, odom);
-    mapper.addScan(s);
-    for (; options.trajectories && next_trajectory < bag.trajectory.size() &&
-           bag.trajectory[next_trajectory].stamp <= scan.stamp;
-         ++next_trajectory)
-    {
-      const auto& nodes = bag.trajectory[next_trajectory].poses;
-      mapper.addTrajectory(nodes);
-      std::vector<std::pair<double, Pose2>> laser_poses;
-      for (const auto& [stamp, base] : nodes) laser_poses.emplace_back(stamp, base * mount);
-      evaluator.addTrajectory(laser_poses);
-      ++out.trajectories;
-    }
-  }
+    evaluator.addScan(scan.stamp, ranges, s.laser, *s.odom);
+    evaluator.addSegments(scan.stamp, s.segments, s.laser, *s.odom);
+  };
+  hooks.trajectory = [&](std::size_t, const TrajectoryEmission& t)
+  {
+    std::vector<std::pair<double, Pose2>> laser_poses;
+    for (const auto& [stamp, base] : t.poses) laser_poses.emplace_back(stamp, base * mount);
+    evaluator.addTrajectory(laser_poses);
+  };
+  ReplayResult out;
+  out.trajectories = driveOnline(mapper, rec, schedule, segments, hooks);
+  out.scans = rec.scans.size();
   out.keyframe_stamps = mapper.keyframeStamps();  // tf-gated ones and those trajectory nodes chose
   out.map = mapper.merger().map();
   out.leaves = mapper.merger().leafCount();
   out.counters = mapper.counters();
-  std::vector<linemap::Segment2> segments;
-  for (const auto& m : out.map) segments.push_back(m.segment);
-  evaluator.setMap(segments, rec.scans.empty() ? 0.0 : rec.scans.back().stamp);
+  std::vector<linemap::Segment2> segments_of_map;
+  for (const auto& m : out.map) segments_of_map.push_back(m.segment);
+  evaluator.setMap(segments_of_map, rec.scans.empty() ? 0.0 : rec.scans.back().stamp);
   out.metrics = evaluator.evaluateIfDue(0.0, true);
   out.evaluator_scans = evaluator.evaluator().scanCount();
-  out.wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  out.wall_ms = linemap::millisecondsSince(start);
   return out;
 }
 

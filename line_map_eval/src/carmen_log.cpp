@@ -20,6 +20,8 @@
 #include <string_view>
 #include <unordered_map>
 
+#include "line_extraction/small_helpers.hpp"
+
 namespace line_map_eval
 {
 namespace
@@ -29,12 +31,6 @@ struct LineError
 {
   std::string message;
 };
-
-std::string baseName(const std::string& path)
-{
-  const auto slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
 
 /// Splits a line on blanks into views of the line (no allocation once `out` has grown).
 void tokenize(std::string_view line, std::vector<std::string_view>& out)
@@ -286,7 +282,7 @@ CarmenLog parseCarmenLog(const std::string& text, const std::string& name, const
 {
   CarmenLog log;
   log.path = name;
-  const std::string shown = baseName(name);
+  const std::string shown = linemap::baseName(name);
   std::vector<std::string_view> tokens;
   tokens.reserve(512);
   const char* p = text.data();
@@ -410,8 +406,8 @@ std::vector<std::size_t> pairKeyframes(const CarmenLog& raw, const CarmenLog& co
     if (best == raw.scans.size())
     {
       throw std::runtime_error(
-          baseName(corrected.path) + ":" + std::to_string(corrected.scans[k].line) + ": keyframe " +
-          std::to_string(k) + " has no scan with identical ranges in " + baseName(raw.path) +
+          linemap::baseName(corrected.path) + ":" + std::to_string(corrected.scans[k].line) + ": keyframe " +
+          std::to_string(k) + " has no scan with identical ranges in " + linemap::baseName(raw.path) +
           (has_previous ? " after raw scan " + std::to_string(previous) : std::string()) +
           " (is it the matching raw log, and is the raw log complete?)");
     }

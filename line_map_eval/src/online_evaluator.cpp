@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include "line_extraction/small_helpers.hpp"
+
 namespace line_map_eval
 {
 OnlineEvaluatorParams OnlineEvaluatorParams::fromParams(const linemap::ParamSet& params)
@@ -21,31 +23,17 @@ OnlineEvaluatorParams OnlineEvaluatorParams::fromParams(const linemap::ParamSet&
 }
 
 OnlineEvaluator::OnlineEvaluator(const OnlineEvaluatorParams& params)
-    : params_(params), evaluator_(params.evaluator)
+    : params_(params),
+      evaluator_(params.evaluator),
+      time_jumps_(params.time_jump_tolerance, {"scan", "segment set"})
 {
 }
 
 bool OnlineEvaluator::observeTime(double clock, double stamp, Stream stream)
 {
-  const double tol = params_.time_jump_tolerance;
-  double& last = last_stamp_[stream];
-  const bool clock_back = last_clock_ > 0.0 && clock > 0.0 && last_clock_ - clock > tol;
-  const bool stamp_back = last > 0.0 && stamp > 0.0 && last - stamp > tol;
-  if (clock_back || stamp_back)
-  {
-    char cause[160];
-    if (clock_back)
-      std::snprintf(cause, sizeof cause, "the clock went back from %.3f to %.3f s", last_clock_, clock);
-    else
-      std::snprintf(cause, sizeof cause, "a %s stamped %.3f s after one stamped %.3f s",
-                    stream == kScans ? "scan" : "segment set", stamp, last);
-    time_jump_cause_ = cause;
-    ++counters_.time_jumps;
-    last_stamp_[kScans] = last_stamp_[kSegments] = 0.0;
-  }
-  if (clock > 0.0) last_clock_ = clock;
-  if (stamp > 0.0) last = std::max(last, stamp);
-  return clock_back || stamp_back;
+  if (!time_jumps_.observe(clock, stamp, stream)) return false;
+  ++counters_.time_jumps;
+  return true;
 }
 
 std::vector<linemap::Vec2> OnlineEvaluator::scanPoints(const ScanRanges& scan)
@@ -111,8 +99,7 @@ std::optional<MapMetrics> OnlineEvaluator::evaluateIfDue(double now, bool force)
   last_evaluation_ = now;
   const auto start = std::chrono::steady_clock::now();
   MapMetrics m = evaluator_.evaluate(map_);
-  counters_.last_eval_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  counters_.last_eval_ms = linemap::millisecondsSince(start);
   counters_.last_quality = m.quality.quality;
   counters_.last_structure_coverage = m.structure_coverage.fraction() * 100.0;
   counters_.last_unmapped_structure = m.structure_coverage.unmapped_length;

@@ -193,8 +193,12 @@ void emitRun(YAML::Emitter& out, const MergerRun& r)
   number(out, r.total_ms);
   key(out, "adjust_ms");
   number(out, r.adjust_ms);
+  key(out, "trajectories");
+  out << r.trajectories;
   key(out, "adjustments");
   out << r.adjustments;
+  key(out, "rebuilds");
+  out << r.rebuilds;
   key(out, "evaluation_ms");
   number(out, r.evaluation_ms);
   key(out, "online");
@@ -355,13 +359,15 @@ std::string toMarkdown(const BatchResult& result)
   md << "# Line map comparison: " << result.dataset << "\n\n";
   md << "- dataset kind: " << result.kind
      << (result.loop_closure
-             ? " (online mergers merge on odometry and receive the corrected trajectory every " +
-                   (result.adjust_every ? std::to_string(result.adjust_every) + " keyframes and " : "") +
-                   "at the end; offline mergers get the corrected poses)"
+             ? " (online mergers run through the online mapper as in the nodelets: on odometry until the "
+               "first of " +
+                   std::to_string(result.trajectories) +
+                   " trajectories, then on its nodes; offline mergers get the final poses)"
              : " (the poses are final for every merger)")
      << "\n";
-  md << "- extractor: " << result.extractor << "; " << result.keyframes << " keyframes after gating of "
-     << result.candidate_scans << " candidates; extraction " << fixed(result.extraction_ms, 1) << " ms\n";
+  md << "- extractor: " << result.extractor << "; " << result.keyframes
+     << " keyframes chosen by the online path of " << result.candidate_scans << " candidates; extraction "
+     << fixed(result.extraction_ms, 1) << " ms\n";
   md << "- accuracy at the source: the originals fit their own points with an RMS residual of "
      << fixed(result.original_fit_rms * kMm, 2) << " mm on average (line position standard error "
      << fixed(result.original_line_sigma * kMm, 2)
@@ -410,8 +416,9 @@ std::string toMarkdown(const BatchResult& result)
        << " without a map segment; max " << fixed(r.error.max_error * kMm, 1) << " mm); evaluation "
        << fixed(r.evaluation_ms, 1) << " ms";
     if (r.adjustments) md << "; " << r.adjustments << " adjustments, " << fixed(r.adjust_ms, 1) << " ms";
+    if (r.rebuilds) md << "; rebuilt from the nodes of the first trajectory";
     if (r.quality_before_adjust)
-      md << "; quality before the final adjustment " << fixed(*r.quality_before_adjust, 2) << " %";
+      md << "; quality before the last trajectory " << fixed(*r.quality_before_adjust, 2) << " %";
     if (r.ground_truth)
     {
       const auto& g = *r.ground_truth;

@@ -9,19 +9,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "line_extraction/small_helpers.hpp"
+
 namespace line_map_eval
 {
 namespace
 {
 using linemap::Vec2;
-
-std::string baseName(const std::string& path)
-{
-  const auto slash = path.find_last_of('/');
-  std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
-  const auto dot = base.rfind('.');
-  return dot == std::string::npos ? base : base.substr(0, dot);
-}
 
 YAML::Node loadYaml(const std::string& text, const std::string& source)
 {
@@ -170,7 +164,7 @@ class WorldParser
     if (!root.IsDefined() || root.IsNull()) fail("(top level)", "the file is empty", root);
     checkKeys(root, "", {"name", "laser"});
     SensorProfile p;
-    p.name = root["name"] ? root["name"].as<std::string>() : baseName(source_);
+    p.name = root["name"] ? root["name"].as<std::string>() : linemap::fileStem(source_);
     p.laser = base;
     if (!root["laser"]) fail("laser", "missing key (the sensor's laser block, as in a world file)", root);
     laser(root["laser"], p.laser);
@@ -187,7 +181,7 @@ class WorldParser
                "min_visible_beams"});
 
     if (root["name"]) w.name = root["name"].as<std::string>();
-    if (w.name.empty()) w.name = baseName(source_);
+    if (w.name.empty()) w.name = linemap::fileStem(source_);
     if (root["seed"])
     {
       const double s = number(root["seed"], "seed");

@@ -8,23 +8,17 @@
 #include <vector>
 
 #include "line_map_eval/bag_writer.hpp"
+#include "line_map_eval/online_drive.hpp"
 #include "line_map_eval/recording.hpp"
 
 namespace line_map_eval
 {
-/// One nav_msgs/Path message: its header stamp and the stamped poses it held.
-struct TrajectoryEmission
-{
-  double stamp = 0.0;
-  std::vector<std::pair<double, Pose2>> poses;  ///< (stamp, pose of base_link in map)
-};
-
 struct BagContents
 {
   /// Scans with odometry (odom->base_link at each scan stamp), base->laser from tf_static,
   /// and keyframes from the last trajectory emission (poses whose stamps equal a scan stamp).
   Recording recording;
-  std::vector<TrajectoryEmission> trajectory;          ///< every Path message, in bag order
+  std::vector<TrajectoryEmission> trajectory;  ///< every Path message (TrajectoryEmission), in bag order
   std::vector<std::pair<double, Pose2>> map_to_odom;   ///< every map->odom sample on /tf
   std::vector<std::pair<double, Pose2>> odom_to_base;  ///< every odom->base_link sample on /tf
   std::size_t static_transforms = 0;                   ///< transforms seen on /tf_static

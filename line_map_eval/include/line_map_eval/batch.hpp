@@ -1,5 +1,7 @@
-// The batch comparison pipeline (ROS-free): one extraction of a dataset's keyframes, keyframe
-// gating, every requested merger on the same keyframes, and the evaluation of each map
+// The batch comparison pipeline (ROS-free): one extraction of a dataset's scans, the keyframes the
+// online path chooses (online_drive.hpp: the OnlineMapper the nodelets run), every online merger
+// driven through its own OnlineMapper and every offline merger on the same keyframes at their final
+// poses, and the evaluation of each map
 // (Tables I and III of the CAE-RLSM paper, correlation quality, error metric, runtimes and, for
 // simulated worlds, the ground-truth metrics). The linemap_batch tool is a thin front end.
 #pragma once
@@ -17,6 +19,7 @@
 #include "line_map_eval/map_metrics.hpp"
 #include "line_map_eval/map_quality.hpp"
 #include "line_map_eval/map_statistics.hpp"
+#include "line_map_eval/online_drive.hpp"
 #include "line_map_eval/recording.hpp"
 #include "line_map_eval/simulator.hpp"
 
@@ -34,6 +37,10 @@ struct BatchDataset
   /// closures. False when the keyframe poses are the only poses (every merger uses them).
   bool loop_closure = false;
   std::optional<GroundTruth> truth;  ///< simulated worlds
+  /// What the back end published along the recording (a bag's trajectories and map -> odom); empty:
+  /// made from the keyframe poses (loopClosureSchedule every BatchOptions::adjust_every keyframes, or
+  /// fixedPoseSchedule without loop closure).
+  std::optional<BackEndSchedule> schedule;
 };
 
 /// A raw CARMEN log with its corrected keyframe log (Recording::keyframes pair them).
@@ -73,8 +80,9 @@ struct BatchOptions
   std::vector<std::string> mergers;
   /// Every extractor, merger, gate and evaluation parameter ("block/name" keys).
   linemap::ParamSet params;
-  /// Loop closure runs: online mergers receive the corrected trajectory every this many keyframes
-  /// and at the end; 0 = only at the end (the map before it is then the pure odometry map).
+  /// Loop closure runs without a schedule of their own: the back end publishes the trajectory of the
+  /// keyframe candidates every this many of them and at the end; 0 = only at the end (the map before
+  /// it is then the odometry map).
   std::size_t adjust_every = 50;
   bool progress = true;
   /// Where figures and map files go (DIR/<merger>/...); empty: nothing is written.
@@ -93,7 +101,7 @@ struct LengthStatistics
 struct MergerRun
 {
   std::string name;
-  bool online = false;      ///< merges keyframe by keyframe on the raw odometry in loop closure runs
+  bool online = false;      ///< Merger::isOnline(): driven through the OnlineMapper, as the nodelets drive it
   bool provenance = false;  ///< error metric from the merger's own provenance
   std::size_t scans = 0;    ///< keyframes merged
   std::size_t original_segments = 0;
@@ -108,15 +116,17 @@ struct MergerRun
   RedundancyResult redundancy;           ///< pairs of map segments meeting the fusion conditions
   std::vector<line_map_merging::CrossingPair> crossing_pairs;  ///< map segments crossing in an X
   std::string error_assignment;  ///< "provenance" or "nearest segment meeting the fusion conditions"
-  std::size_t adjustments = 0;   ///< adjust() calls (loop closure runs of online mergers)
-  std::optional<double> quality_before_adjust;  ///< [%] map just before the final adjustment
+  std::size_t trajectories = 0;  ///< trajectories fed to the OnlineMapper (online mergers)
+  std::size_t adjustments = 0;   ///< adjust() calls the OnlineMapper made
+  std::size_t rebuilds = 0;      ///< maps made again from the nodes of the first trajectory
+  std::optional<double> quality_before_adjust;  ///< [%] map just before the last trajectory
   std::optional<GroundTruthResult> ground_truth;
   double per_frame_ms = std::numeric_limits<double>::quiet_NaN();  ///< median addKeyframe, online only
   double total_ms = 0.0;       ///< every addKeyframe and adjust, and the final map() call
   double adjust_ms = 0.0;      ///< of which adjust()
   double evaluation_ms = 0.0;  ///< every metric of this map (computeMapMetrics; table excluded)
   std::vector<linemap::Segment2> final_map;
-  std::vector<linemap::Segment2> map_before_adjust;  ///< loop closure runs of online mergers
+  std::vector<linemap::Segment2> map_before_adjust;  ///< the same map (loop closure runs, online mergers)
   std::vector<std::string> files;                    ///< figures and map file written
 };
 
@@ -127,9 +137,10 @@ struct BatchResult
   std::string extractor;
   bool loop_closure = false;
   std::size_t adjust_every = 0;
-  linemap::ParamSet parameters;  ///< everything the run used
-  std::size_t candidate_scans = 0;
-  std::size_t keyframes = 0;  ///< after gating
+  std::size_t trajectories = 0;     ///< published along the recording (the schedule's)
+  linemap::ParamSet parameters;     ///< everything the run used
+  std::size_t candidate_scans = 0;  ///< keyframes of the recording (trajectory nodes, or every scan)
+  std::size_t keyframes = 0;        ///< chosen by the online path (gate and trajectory nodes)
   LengthStatistics originals;
   /// Accuracy at the source: the mean over originals of the RMS distance of their member points to their
   /// own fitted line, and of that line's position standard error (RMS / sqrt(points)) [m]. Against the

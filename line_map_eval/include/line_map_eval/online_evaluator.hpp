@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "line_extraction/time_jump_detector.hpp"
 #include "line_map_eval/map_evaluator.hpp"
 
 namespace line_map_eval
@@ -58,7 +59,7 @@ class OnlineEvaluator
   /// scans are kept (a replay adds none).
   bool observeTime(double clock, double stamp, Stream stream);
   /// What the last time jump observeTime() reported was: the clock or a stamp, from and to.
-  const std::string& timeJumpCause() const { return time_jump_cause_; }
+  const std::string& timeJumpCause() const { return time_jumps_.cause(); }
 
   /// Stores a keyframe scan (valid ranges as points in the laser frame) taken at `laser` (map
   /// frame); `odom` is the laser in the odometry frame. A geometry without a finite, non-zero
@@ -96,8 +97,7 @@ class OnlineEvaluator
   std::vector<linemap::Segment2> map_;
   double map_stamp_ = 0.0;
   bool have_map_ = false, dirty_ = false;
-  double last_clock_ = 0.0, last_stamp_[2] = {0.0, 0.0};
-  std::string time_jump_cause_;
+  linemap::TimeJumpDetector time_jumps_;  ///< streams: kScans, kSegments
   double last_evaluation_ = -1e300;
 };
 
