@@ -53,7 +53,7 @@ core_sources() {
   case "$1" in
     extractors) pkgs=(line_extraction) ;;
     merging | map_file) pkgs=(line_extraction line_map_merging) ;;
-    carmen) echo line_map_eval/src/carmen_log.cpp; return ;;
+    carmen) echo line_map_eval/src/datasets/carmen_log.cpp; return ;;
   esac
   for p in "${pkgs[@]}"; do
     # Not the ROS wrappers, nor the laser SLAM and the localizer (they need Ceres; no fuzz target reaches them).

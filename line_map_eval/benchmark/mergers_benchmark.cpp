@@ -20,9 +20,9 @@
 
 #include "line_extraction/line_extractor.hpp"
 #include "line_extraction/small_helpers.hpp"
-#include "line_map_eval/carmen_log.hpp"
-#include "line_map_eval/simulator.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
 #include "line_map_merging/merger.hpp"
 
 namespace

@@ -16,7 +16,7 @@
 
 #include "line_extraction/line_extractor.hpp"
 #include "line_extraction/small_helpers.hpp"
-#include "line_map_eval/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_merging/cae_rlsm.hpp"
 
 namespace

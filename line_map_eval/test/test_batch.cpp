@@ -11,8 +11,8 @@
 #include <sstream>
 #include <string>
 
-#include "line_map_eval/batch.hpp"
-#include "line_map_eval/report.hpp"
+#include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/batch/report.hpp"
 #include "line_map_merging/merger.hpp"
 
 using namespace line_map_eval;

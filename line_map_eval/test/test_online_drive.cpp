@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "line_map_eval/online_drive.hpp"
+#include "line_map_eval/online/online_drive.hpp"
 #include "line_map_merging/merger.hpp"
 
 using namespace line_map_eval;

@@ -12,17 +12,17 @@
 #include <vector>
 
 #include "line_extraction/small_helpers.hpp"
-#include "line_map_eval/bag_reader.hpp"
-#include "line_map_eval/bag_replay.hpp"
-#include "line_map_eval/batch.hpp"
-#include "line_map_eval/carmen_log.hpp"
-#include "line_map_eval/carmen_recording.hpp"
-#include "line_map_eval/ground_truth.hpp"
-#include "line_map_eval/progress.hpp"
-#include "line_map_eval/relations.hpp"
-#include "line_map_eval/report.hpp"
-#include "line_map_eval/slam_recording.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/batch/progress.hpp"
+#include "line_map_eval/batch/report.hpp"
+#include "line_map_eval/datasets/bag_reader.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_recording.hpp"
+#include "line_map_eval/datasets/relations.hpp"
+#include "line_map_eval/datasets/slam_recording.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/online/bag_replay.hpp"
+#include "line_map_eval/simulation/ground_truth.hpp"
 #include "line_map_merging/merger.hpp"
 
 namespace fs = std::filesystem;
