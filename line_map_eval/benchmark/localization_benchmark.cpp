@@ -23,10 +23,10 @@
 #include <string>
 #include <vector>
 
-#include "line_map_eval/batch.hpp"
-#include "line_map_eval/carmen_log.hpp"
-#include "line_map_eval/carmen_recording.hpp"
-#include "line_map_eval/localization_recording.hpp"
+#include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_recording.hpp"
+#include "line_map_eval/datasets/localization_recording.hpp"
 
 using namespace line_map_eval;
 

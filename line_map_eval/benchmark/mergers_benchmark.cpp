@@ -19,9 +19,10 @@
 #include <vector>
 
 #include "line_extraction/line_extractor.hpp"
-#include "line_map_eval/carmen_log.hpp"
-#include "line_map_eval/simulator.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_extraction/small_helpers.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
 #include "line_map_merging/mergers/merger.hpp"
 
 namespace
@@ -32,13 +33,6 @@ using line_map_merging::Keyframe;
 double millis(Clock::time_point a, Clock::time_point b)
 {
   return std::chrono::duration<double, std::milli>(b - a).count();
-}
-
-double median(std::vector<double> v)
-{
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v[(v.size() - 1) / 2];
 }
 
 struct Dataset
@@ -120,7 +114,7 @@ Row measure(const Dataset& d, const std::string& method, int runs)
     }
     const auto map = merger->map();
     totals.push_back(millis(t0, Clock::now()));
-    medians.push_back(median(frames));
+    medians.push_back(linemap::median(frames));
     maxima.push_back(*std::max_element(frames.begin(), frames.end()));
     if (r == 0)
     {
@@ -141,11 +135,11 @@ Row measure(const Dataset& d, const std::string& method, int runs)
       row.mean = map.empty() ? 0.0 : sum / static_cast<double>(map.size());
     }
   }
-  row.total_ms = median(totals);
+  row.total_ms = linemap::median(totals);
   if (row.online)
   {
-    row.frame_median_ms = median(medians);
-    row.frame_max_ms = median(maxima);
+    row.frame_median_ms = linemap::median(medians);
+    row.frame_max_ms = linemap::median(maxima);
   }
   return row;
 }

@@ -15,7 +15,8 @@
 #include <vector>
 
 #include "line_extraction/line_extractor.hpp"
-#include "line_map_eval/carmen_log.hpp"
+#include "line_extraction/small_helpers.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
 
 namespace
@@ -252,8 +253,7 @@ int main(int argc, char** argv)
     {
       const auto c0 = std::chrono::steady_clock::now();
       const auto copy = grown.clone();
-      copy_ms.push_back(
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0).count());
+      copy_ms.push_back(linemap::millisecondsSince(c0));
     }
     std::printf("Copy of that map for a background adjustment (merge thread): median %.1f ms\n",
                 percentile(copy_ms, 0.5));

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "line_map_eval/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
 
 namespace
 {

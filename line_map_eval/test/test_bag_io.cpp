@@ -12,10 +12,10 @@
 #include <cmath>
 #include <string>
 
-#include "line_map_eval/bag_reader.hpp"
-#include "line_map_eval/bag_writer.hpp"
-#include "line_map_eval/carmen_log.hpp"
-#include "line_map_eval/carmen_recording.hpp"
+#include "line_map_eval/datasets/bag_reader.hpp"
+#include "line_map_eval/datasets/bag_writer.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_recording.hpp"
 
 using namespace line_map_eval;
 

@@ -11,8 +11,8 @@
 #include <sstream>
 #include <string>
 
-#include "line_map_eval/batch.hpp"
-#include "line_map_eval/report.hpp"
+#include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/batch/report.hpp"
 #include "line_map_merging/mergers/merger.hpp"
 
 using namespace line_map_eval;
@@ -75,9 +75,10 @@ TEST(Batch, EveryMergerProducesEveryColumn)
     EXPECT_GT(r.map_segments, 0u);
     EXPECT_LT(r.map_segments, r.original_segments);
     // No segment can be longer than the room's 4 m walls (plus the noise of its endpoints), unless
-    // the merger kept pieces merged on the drifting odometry (online without adjustment).
+    // the merger kept pieces merged on the drifting odometry (online without adjustment nor rebuild).
     EXPECT_LE(r.originals.longest, 4.05);
-    if (!r.online || line_map_merging::makeMerger(r.name, options.params)->supportsAdjustment())
+    if (!r.online || r.rebuilds > 0 ||
+        line_map_merging::makeMerger(r.name, options.params)->supportsAdjustment())
     {
       EXPECT_LE(r.map.longest, 4.05);
     }
@@ -137,10 +138,12 @@ TEST(Batch, EveryMergerProducesEveryColumn)
     EXPECT_NEAR(m["point_coverage_pct"].as<double>(), r.point_coverage.fraction() * 100.0, 1e-3);
     EXPECT_NEAR(m["length_coverage_pct"].as<double>(), r.length_coverage.fraction() * 100.0, 1e-3);
     // A map on the room's walls covers most of what was scanned (what it misses are short pieces);
-    // an online merger that cannot take the loop closure keeps its drifted map, off the walls.
+    // an online merger that cannot take the loop closure keeps its drifted map, off the walls, unless
+    // the trajectory's nodes made the map again (every scan still held at the first trajectory).
     EXPECT_LE(r.point_coverage.fraction(), 1.0);
     EXPECT_LE(r.length_coverage.fraction(), 1.0);
-    if (!r.online || line_map_merging::makeMerger(r.name, options.params)->supportsAdjustment())
+    if (!r.online || r.rebuilds > 0 ||
+        line_map_merging::makeMerger(r.name, options.params)->supportsAdjustment())
     {
       EXPECT_GT(r.point_coverage.fraction(), 0.9);
       EXPECT_GT(r.length_coverage.fraction(), 0.9);
@@ -181,7 +184,10 @@ TEST(Batch, LoopClosureDoesNotLowerCaeQuality)
   ASSERT_EQ(result.mergers.size(), 1u);
   const MergerRun& cae = result.mergers[0];
   ASSERT_TRUE(cae.quality_before_adjust);
-  EXPECT_EQ(cae.adjustments, 1u);
+  // One trajectory, at the end (adjust_every 0); it moved the map: adjusted, or made again from its
+  // nodes when it names every scan since the first keyframe (OnlineMapper::addTrajectory).
+  EXPECT_EQ(cae.trajectories, 1u);
+  EXPECT_EQ(cae.adjustments + cae.rebuilds, 1u);
   // The odometry map is rotated by up to ~9 degrees against the registered scans, so it must
   // score lower than the adjusted map, which lies on the scans.
   EXPECT_GT(cae.quality.quality, *cae.quality_before_adjust);
@@ -197,9 +203,14 @@ TEST(Batch, PeriodicAdjustmentsFollowEvery)
   options.mergers = {"cae"};
   options.adjust_every = 10;
   const BatchResult result = runBatch(driftingRoom(), options);
-  const std::size_t k = result.keyframes;
-  // One adjustment after every 10 keyframes (not after the last one) plus the final one.
-  EXPECT_EQ(result.mergers[0].adjustments, (k - 1) / 10 + 1);
+  const std::size_t n = result.candidate_scans;
+  // The back end publishes after every 10th keyframe candidate and after the last one.
+  EXPECT_EQ(result.trajectories, (n + 9) / 10);
+  const MergerRun& cae = result.mergers[0];
+  EXPECT_EQ(cae.trajectories, result.trajectories);
+  // Each trajectory moves the map: the first may make it again from its nodes, the others adjust it.
+  EXPECT_EQ(cae.adjustments + cae.rebuilds, cae.trajectories);
+  EXPECT_LE(cae.rebuilds, 1u);
 }
 
 TEST(Batch, ParamOverridesReachTheExtractorAndTheGate)
@@ -301,6 +312,9 @@ TEST(Batch, IntelLoopClosureRecoversTheRegisteredMap)
   EXPECT_EQ(raw.recording.keyframes.size(), 910u);  // every corrected scan pairs with a raw one
   BatchOptions options = quietOptions();
   options.mergers = {"cae"};
+  // Every scan held until the one trajectory at the end, so that its nodes make the map again (as the
+  // online mapper does when the first trajectory names every scan since the first keyframe).
+  applyOverride(options.params, "keyframe_buffer=1e6");
   const BatchResult loop = runBatch(raw, options);
 
   const BatchDataset registered = loadCarmenRegistered(dir + "intel-corrected.log.gz");

@@ -5,7 +5,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include "line_map_eval/bresenham.hpp"
+#include "line_map_eval/metrics/bresenham.hpp"
 
 using line_map_eval::bresenhamLine;
 using line_map_eval::Cell;

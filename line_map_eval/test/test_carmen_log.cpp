@@ -18,12 +18,12 @@
 #include <string>
 #include <utility>
 
-#include "line_map_eval/bag_reader.hpp"
-#include "line_map_eval/bag_writer.hpp"
-#include "line_map_eval/carmen_log.hpp"
-#include "line_map_eval/carmen_recording.hpp"
-#include "line_map_eval/lookup_table.hpp"
-#include "line_map_eval/progress.hpp"
+#include "line_map_eval/batch/progress.hpp"
+#include "line_map_eval/datasets/bag_reader.hpp"
+#include "line_map_eval/datasets/bag_writer.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_recording.hpp"
+#include "line_map_eval/metrics/lookup_table.hpp"
 
 using namespace line_map_eval;
 

@@ -4,7 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "line_map_eval/coverage.hpp"
+#include "line_map_eval/metrics/length_coverage.hpp"
+#include "line_map_eval/metrics/point_coverage.hpp"
 
 using line_map_eval::computeLengthCoverage;
 using line_map_eval::computePointCoverage;

@@ -3,8 +3,8 @@
 
 #include <cmath>
 
-#include "line_map_eval/error_metric.hpp"
-#include "line_map_eval/map_statistics.hpp"
+#include "line_map_eval/metrics/error_metric.hpp"
+#include "line_map_eval/metrics/map_statistics.hpp"
 
 using line_map_eval::assignToMapSegments;
 using line_map_eval::computeErrorMetric;

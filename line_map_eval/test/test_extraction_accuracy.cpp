@@ -12,8 +12,8 @@
 
 #include "line_extraction/line_extractor.hpp"
 #include "line_extraction/segment_matching.hpp"
-#include "line_map_eval/simulator.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
 
 using namespace line_map_eval;
 

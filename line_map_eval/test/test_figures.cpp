@@ -9,7 +9,7 @@
 #include <iterator>
 #include <string>
 
-#include "line_map_eval/figures.hpp"
+#include "line_map_eval/batch/figures.hpp"
 
 using line_map_eval::drawComparison;
 using line_map_eval::drawLookupTable;

@@ -5,9 +5,9 @@
 #include <cmath>
 #include <limits>
 
-#include "line_map_eval/ground_truth_metrics.hpp"
-#include "line_map_eval/simulator.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/metrics/ground_truth_metrics.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
 
 using line_map_eval::evaluateAgainstGroundTruth;
 using line_map_eval::findCorners;

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "line_map_eval/localization_recording.hpp"
+#include "line_map_eval/datasets/localization_recording.hpp"
 
 using linemap::Pose2;
 using linemap::Segment2;

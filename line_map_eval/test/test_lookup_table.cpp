@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "line_map_eval/lookup_table.hpp"
+#include "line_map_eval/metrics/lookup_table.hpp"
 
 using line_map_eval::Cell;
 using line_map_eval::LookupTable;

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <tuple>
 
-#include "line_map_eval/map_evaluator.hpp"
+#include "line_map_eval/online/map_evaluator.hpp"
 
 using line_map_eval::EvaluatorParams;
 using line_map_eval::MapEvaluator;

@@ -15,7 +15,7 @@
 #include <regex>
 #include <sstream>
 
-#include "line_map_eval/map_export.hpp"
+#include "line_map_eval/batch/map_export.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
 
 using line_map_eval::exportMap;

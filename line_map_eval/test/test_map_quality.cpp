@@ -4,7 +4,7 @@
 #include <cmath>
 #include <random>
 
-#include "line_map_eval/map_quality.hpp"
+#include "line_map_eval/metrics/map_quality.hpp"
 
 using line_map_eval::computeMapQuality;
 using line_map_eval::directionBin;

@@ -20,8 +20,8 @@
 #include <utility>
 
 #include "line_extraction/line_extractor.hpp"
-#include "line_map_eval/simulator.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
 #include "line_map_merging/mergers/merger.hpp"
 
 namespace

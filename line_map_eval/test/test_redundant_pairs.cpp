@@ -6,7 +6,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "line_map_eval/redundant_pairs.hpp"
+#include "line_map_eval/metrics/redundant_pairs.hpp"
 
 using line_map_eval::findRedundantPairs;
 using line_map_merging::FusionParams;

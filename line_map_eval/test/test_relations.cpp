@@ -7,11 +7,11 @@
 #include <cstdio>
 #include <fstream>
 
-#include "line_map_eval/batch.hpp"
-#include "line_map_eval/carmen_log.hpp"
-#include "line_map_eval/carmen_recording.hpp"
-#include "line_map_eval/relations.hpp"
-#include "line_map_eval/slam_recording.hpp"
+#include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_recording.hpp"
+#include "line_map_eval/datasets/relations.hpp"
+#include "line_map_eval/datasets/slam_recording.hpp"
 
 using namespace line_map_eval;
 using linemap::Pose2;

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <string>
 
-#include "line_map_eval/report.hpp"
+#include "line_map_eval/batch/report.hpp"
 
 using namespace line_map_eval;
 
@@ -97,6 +97,5 @@ TEST(ReportStructure, MarkdownColumns)
   for (const char* header : {"| structure cov % |", "| unmapped structure m |", "| crossing pairs |"})
     EXPECT_NE(md.find(header), std::string::npos) << header;
   EXPECT_NE(md.find("| 75.00 | 1234.56 |"), std::string::npos);
-  EXPECT_NE(md.find("straight structure: 800 of the registered points (437.3 m)"),
-            std::string::npos);
+  EXPECT_NE(md.find("straight structure: 800 of the registered points (437.3 m)"), std::string::npos);
 }

@@ -9,9 +9,9 @@
 #include <limits>
 #include <string>
 
-#include "line_map_eval/ground_truth.hpp"
-#include "line_map_eval/simulator.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/simulation/ground_truth.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
 
 namespace
 {

@@ -9,9 +9,10 @@
 #include <random>
 #include <stdexcept>
 
-#include "line_map_eval/coverage.hpp"
-#include "line_map_eval/map_metrics.hpp"
-#include "line_map_eval/structure_coverage.hpp"
+#include "line_map_eval/metrics/length_coverage.hpp"
+#include "line_map_eval/metrics/map_metrics.hpp"
+#include "line_map_eval/metrics/point_coverage.hpp"
+#include "line_map_eval/metrics/structure_coverage.hpp"
 
 using line_map_eval::classifyStructure;
 using line_map_eval::computePointCoverage;

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <map>
 
-#include "line_map_eval/ground_truth_metrics.hpp"
-#include "line_map_eval/simulator.hpp"
-#include "line_map_eval/wall_faces.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/metrics/ground_truth_metrics.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
+#include "line_map_eval/simulation/wall_faces.hpp"
 
 namespace
 {

@@ -8,11 +8,11 @@
 #include <fstream>
 #include <string>
 
-#include "line_map_eval/ground_truth.hpp"
-#include "line_map_eval/ground_truth_metrics.hpp"
-#include "line_map_eval/simulator.hpp"
-#include "line_map_eval/wall_faces.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/metrics/ground_truth_metrics.hpp"
+#include "line_map_eval/simulation/ground_truth.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
+#include "line_map_eval/simulation/wall_faces.hpp"
 
 namespace
 {

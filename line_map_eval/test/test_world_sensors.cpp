@@ -6,9 +6,9 @@
 #include <cmath>
 #include <string>
 
-#include "line_map_eval/ground_truth_metrics.hpp"
-#include "line_map_eval/simulator.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/metrics/ground_truth_metrics.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
 
 namespace
 {

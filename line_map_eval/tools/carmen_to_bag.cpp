@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "line_map_eval/bag_writer.hpp"
-#include "line_map_eval/carmen_log.hpp"
-#include "line_map_eval/carmen_recording.hpp"
+#include "line_map_eval/datasets/bag_writer.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_recording.hpp"
 
 namespace
 {

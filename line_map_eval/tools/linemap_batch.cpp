@@ -11,17 +11,18 @@
 #include <string>
 #include <vector>
 
-#include "line_map_eval/bag_reader.hpp"
-#include "line_map_eval/bag_replay.hpp"
-#include "line_map_eval/batch.hpp"
-#include "line_map_eval/carmen_log.hpp"
-#include "line_map_eval/carmen_recording.hpp"
-#include "line_map_eval/ground_truth.hpp"
-#include "line_map_eval/progress.hpp"
-#include "line_map_eval/relations.hpp"
-#include "line_map_eval/report.hpp"
-#include "line_map_eval/slam_recording.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_extraction/small_helpers.hpp"
+#include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/batch/progress.hpp"
+#include "line_map_eval/batch/report.hpp"
+#include "line_map_eval/datasets/bag_reader.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_recording.hpp"
+#include "line_map_eval/datasets/relations.hpp"
+#include "line_map_eval/datasets/slam_recording.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/online/bag_replay.hpp"
+#include "line_map_eval/simulation/ground_truth.hpp"
 #include "line_map_merging/mergers/merger.hpp"
 
 namespace fs = std::filesystem;
@@ -59,7 +60,9 @@ void usage(std::ostream& out)
          "                    executable or the working directory)\n"
          "  --out DIR         write DIR/report.json, DIR/report.md and DIR/<merger>/ figures and map\n"
          "                    files (default: linemap_batch_out)\n"
-         "  --every N         keyframes between trajectory corrections (default 50; 0: only at the end)\n"
+         "  --every N         keyframes between the trajectories of the loop closure (default 50; 0: only "
+         "at\n"
+         "                    the end); a .bag's own trajectories are used as they are\n"
          "  --sensor FILE     (a world file) simulate with this sensor profile (config/sensors/*.yaml):\n"
          "                    its laser block replaces the world's key by key\n"
          "  --no-progress     no progress bars\n"
@@ -97,88 +100,229 @@ fs::path findConfigDir(const std::string& explicit_dir)
   return {};
 }
 
-std::string stem(const std::string& path)
+/// The command line.
+struct Arguments
 {
-  std::string name = fs::path(path).filename().string();
-  const auto dot = name.find('.');
-  return dot == std::string::npos || dot == 0 ? name : name.substr(0, dot);
+  std::string dataset, corrected, config_dir, out_dir = "linemap_batch_out";
+  std::vector<std::string> configs, overrides;
+  bool replay = false, slam = false;
+  std::string relations, sensor;
+  BatchOptions options;
+};
+
+std::size_t parseEvery(const std::string& v)
+{
+  std::size_t used = 0;
+  long n = -1;
+  try
+  {
+    n = std::stol(v, &used);
+  }
+  catch (const std::exception&)
+  {
+  }
+  if (n < 0 || used != v.size())
+    throw std::invalid_argument("--every: expected a count >= 0, got '" + v + "'");
+  return static_cast<std::size_t>(n);
+}
+
+/// Parses the command line; false after --help. Throws std::invalid_argument on a bad one.
+bool parseArguments(int argc, char** argv, Arguments& a)
+{
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string
+    {
+      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
+      return argv[++i];
+    };
+    if (arg == "--help" || arg == "-h") return false;
+    std::string* text = arg == "--corrected"    ? &a.corrected
+                        : arg == "--extractor"  ? &a.options.extractor
+                        : arg == "--config-dir" ? &a.config_dir
+                        : arg == "--out"        ? &a.out_dir
+                        : arg == "--sensor"     ? &a.sensor
+                        : arg == "--relations"  ? &a.relations
+                                                : nullptr;
+    std::vector<std::string>* list = arg == "--merger"   ? &a.options.mergers
+                                     : arg == "--param"  ? &a.overrides
+                                     : arg == "--config" ? &a.configs
+                                                         : nullptr;
+    if (text)
+      *text = value();
+    else if (list)
+      list->push_back(value());
+    else if (arg == "--every")
+      a.options.adjust_every = parseEvery(value());
+    else if (arg == "--no-progress")
+      a.options.progress = false;
+    else if (arg == "--no-figures")
+      a.options.figure_formats = 0;
+    else if (arg == "--slam")
+      a.slam = true;
+    else if (arg == "--replay")
+      a.replay = true;
+    else if (!arg.empty() && arg[0] == '-')
+      throw std::invalid_argument("unknown option " + arg);
+    else if (a.dataset.empty())
+      a.dataset = arg;
+    else
+      throw std::invalid_argument("more than one dataset: " + a.dataset + ", " + arg);
+  }
+  if (a.dataset.empty()) throw std::invalid_argument("no dataset given");
+  return true;
+}
+
+/// The parameter files (config dir, then --config) and the --param overrides; the SLAM's apart (its
+/// frame names are the nodelet's, not the merger's).
+void loadParameters(Arguments& a, linemap::ParamSet& slam_params)
+{
+  const fs::path dir = findConfigDir(a.config_dir);
+  std::vector<std::string> files;
+  if (dir.empty())
+    std::cerr
+        << "linemap_batch: no config directory found (use --config-dir); running on built-in defaults\n";
+  else
+    for (const char* name : kConfigFiles)
+      if (fs::exists(dir / name))
+        files.push_back((dir / name).string());
+      else
+        std::cerr << "linemap_batch: " << (dir / name).string() << " not found; its defaults are built in\n";
+  files.insert(files.end(), a.configs.begin(), a.configs.end());
+  a.options.params = loadParameterFiles(files);
+  if (a.slam && !dir.empty() && fs::exists(dir / "slam.yaml"))
+    slam_params = loadParameterFiles({(dir / "slam.yaml").string()});
+  for (const auto& o : a.overrides)
+  {
+    const std::string key = o.substr(0, o.find('='));
+    if (slam_params.has(key))
+    {
+      applyOverride(slam_params, o);
+      continue;
+    }
+    if (!a.options.params.has(key))
+      std::cerr << "linemap_batch: warning: --param " << key << " is in none of the parameter files\n";
+    applyOverride(a.options.params, o);
+  }
+}
+
+int runReplay(const Arguments& a)
+{
+  if (fs::path(a.dataset).extension() != ".bag") throw std::invalid_argument("--replay needs a .bag");
+  ReplayOptions ro;
+  ro.params = a.options.params;
+  if (!a.options.mergers.empty()) ro.method = a.options.mergers.front();
+  const ReplayResult r = replayBag(readBag(a.dataset), ro);
+  fs::create_directories(a.out_dir);
+  const std::string json = (fs::path(a.out_dir) / "replay.json").string();
+  writeReplayJson(r, json);
+  std::cout << std::fixed << std::setprecision(2) << "replay of " << r.scans << " scans, " << r.trajectories
+            << " trajectories: " << r.keyframe_stamps.size() << " keyframes, " << r.map.size()
+            << " map segments, quality " << (r.metrics ? r.metrics->quality.quality : 0.0) << " %, "
+            << r.evaluator_scans << " evaluator scans, " << r.wall_ms << " ms; wrote " << json << "\n";
+  return 0;
+}
+
+/// A raw CARMEN log with the trajectory of our laser SLAM as the loop closure.
+BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_params)
+{
+  if (!a.corrected.empty() || isWorldFile(a.dataset) || fs::path(a.dataset).extension() == ".bag")
+    throw std::invalid_argument("--slam goes with a raw CARMEN log alone, not with --corrected or " +
+                                a.dataset);
+  const CarmenLog raw = readCarmenLog(a.dataset);
+  Recording recording = fromCarmen(raw, nullptr);
+  const SlamRecordingResult run =
+      runSlam(recording, line_map_merging::LaserSlamParams::fromParams(slam_params),
+              slam_params.getBool("use_odometry", true));
+  const auto& c = run.counters;
+  std::cout << std::fixed << std::setprecision(1) << "laser SLAM: " << recording.scans.size() << " scans in "
+            << run.cpu_seconds << " s CPU, " << c.keyframes << " keyframes, " << c.loops_accepted
+            << " loop closures (" << c.loops_rejected_score + c.loops_rejected_graph << " rejected), "
+            << c.poor_matches << " poor matches\n";
+  if (!a.relations.empty())
+  {
+    std::vector<std::pair<double, Pose2>> poses;
+    for (std::size_t i = 0; i < run.scan_poses.size() && i < raw.scans.size(); ++i)
+      poses.push_back({raw.scans[i].timestamp, run.scan_poses[i]});
+    const RelationsError e = relationsError(readRelations(a.relations), poses);
+    std::cout << std::setprecision(4) << "relations error (" << e.used << " of " << e.relations
+              << "): translation " << e.translation_mean << " +- " << e.translation_std << " m, rotation "
+              << std::setprecision(2) << e.rotation_mean * 180.0 / linemap::kPi << " +- "
+              << e.rotation_std * 180.0 / linemap::kPi << " deg\n";
+  }
+  return datasetFromRecording(withSlamKeyframes(std::move(recording), run), linemap::fileStem(a.dataset),
+                              "carmen+slam");
+}
+
+/// A rosbag: its scans and, when it has them, its trajectories; the ground truth beside a simulated one.
+BatchDataset bagDataset(const std::string& path)
+{
+  BagContents bag = readBag(path);
+  const bool trajectory = !bag.recording.keyframes.empty();
+  BatchDataset dataset = datasetFromRecording(std::move(bag.recording), linemap::fileStem(path),
+                                              trajectory ? "bag+trajectory" : "bag");
+  // The online mergers get the bag's messages as --replay and the nodelets do.
+  dataset.schedule = BackEndSchedule{std::move(bag.trajectory), std::move(bag.map_to_odom)};
+  // A simulated bag carries its ground truth next to it (simulate_world writes OUT.truth.yaml).
+  const std::string truth = truthPathForBag(path);
+  if (fs::exists(truth)) dataset.truth = readGroundTruth(truth);
+  return dataset;
+}
+
+BatchDataset loadDataset(const Arguments& a, const linemap::ParamSet& slam_params)
+{
+  if (a.slam) return slamDataset(a, slam_params);
+  const bool bag = fs::path(a.dataset).extension() == ".bag";
+  if (!a.corrected.empty())
+  {
+    if (isWorldFile(a.dataset) || bag)
+      throw std::invalid_argument("--corrected goes with a raw CARMEN log, not " + a.dataset);
+    return loadCarmenWithCorrection(a.dataset, a.corrected);
+  }
+  if (isWorldFile(a.dataset))
+  {
+    ProgressBar bar("simulate", 0, a.options.progress);
+    SimulationOptions sim;
+    sim.on_scan = [&bar](std::size_t done, std::size_t) { bar.update(done); };
+    World world = loadWorld(a.dataset);
+    if (!a.sensor.empty()) world = withSensorProfile(world, a.sensor);
+    BatchDataset dataset = simulatedDataset(world, sim);
+    bar.finish();
+    return dataset;
+  }
+  return bag ? bagDataset(a.dataset) : loadCarmenRegistered(a.dataset);
+}
+
+void printResult(const BatchResult& result)
+{
+  std::cout << result.dataset << " (" << result.kind << "), extractor " << result.extractor << ", "
+            << result.keyframes << " keyframes of " << result.candidate_scans << " candidates\n"
+            << formatTable(result);
+  double slowest_evaluation = 0.0;
+  for (const auto& r : result.mergers) slowest_evaluation = std::max(slowest_evaluation, r.evaluation_ms);
+  std::cout << std::fixed << std::setprecision(1) << "extraction " << result.extraction_ms
+            << " ms; lookup table of " << result.scan_points << " scan points " << result.table_ms
+            << " ms; evaluation of one map <= " << result.table_ms + slowest_evaluation
+            << " ms (table included)\n"
+            << std::setprecision(2) << "originals fit their own points to " << result.original_fit_rms * 1e3
+            << " mm RMS (line position +-" << result.original_line_sigma * 1e3
+            << " mm): the error column's excess comes from the poses and the merging\n";
 }
 
 }  // namespace
 
 int main(int argc, char** argv)
 {
-  std::string dataset_path, corrected, config_dir, out_dir = "linemap_batch_out";
-  std::vector<std::string> configs, overrides;
-  bool replay = false, slam = false;
-  std::string relations, sensor;
-  BatchOptions options;
-  options.progress = isatty(STDERR_FILENO) != 0;
+  Arguments a;
+  a.options.progress = isatty(STDERR_FILENO) != 0;
   try
   {
-    for (int i = 1; i < argc; ++i)
+    if (!parseArguments(argc, argv, a))
     {
-      const std::string arg = argv[i];
-      auto value = [&]() -> std::string
-      {
-        if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-        return argv[++i];
-      };
-      if (arg == "--help" || arg == "-h")
-      {
-        usage(std::cout);
-        return 0;
-      }
-      else if (arg == "--corrected")
-        corrected = value();
-      else if (arg == "--extractor")
-        options.extractor = value();
-      else if (arg == "--merger")
-        options.mergers.push_back(value());
-      else if (arg == "--param")
-        overrides.push_back(value());
-      else if (arg == "--config")
-        configs.push_back(value());
-      else if (arg == "--config-dir")
-        config_dir = value();
-      else if (arg == "--out")
-        out_dir = value();
-      else if (arg == "--every")
-      {
-        const std::string v = value();
-        std::size_t used = 0;
-        long n = -1;
-        try
-        {
-          n = std::stol(v, &used);
-        }
-        catch (const std::exception&)
-        {
-        }
-        if (n < 0 || used != v.size())
-          throw std::invalid_argument("--every: expected a count >= 0, got '" + v + "'");
-        options.adjust_every = static_cast<std::size_t>(n);
-      }
-      else if (arg == "--no-progress")
-        options.progress = false;
-      else if (arg == "--no-figures")
-        options.figure_formats = 0;
-      else if (arg == "--slam")
-        slam = true;
-      else if (arg == "--sensor")
-        sensor = value();
-      else if (arg == "--relations")
-        relations = value();
-      else if (arg == "--replay")
-        replay = true;
-      else if (!arg.empty() && arg[0] == '-')
-        throw std::invalid_argument("unknown option " + arg);
-      else if (dataset_path.empty())
-        dataset_path = arg;
-      else
-        throw std::invalid_argument("more than one dataset: " + dataset_path + ", " + arg);
+      usage(std::cout);
+      return 0;
     }
-    if (dataset_path.empty()) throw std::invalid_argument("no dataset given");
   }
   catch (const std::exception& e)
   {
@@ -186,133 +330,18 @@ int main(int argc, char** argv)
     usage(std::cerr);
     return 2;
   }
-
   try
   {
-    const fs::path dir = findConfigDir(config_dir);
-    std::vector<std::string> files;
-    if (dir.empty())
-      std::cerr
-          << "linemap_batch: no config directory found (use --config-dir); running on built-in defaults\n";
-    else
-      for (const char* name : kConfigFiles)
-        if (fs::exists(dir / name))
-          files.push_back((dir / name).string());
-        else
-          std::cerr << "linemap_batch: " << (dir / name).string()
-                    << " not found; its defaults are built in\n";
-    files.insert(files.end(), configs.begin(), configs.end());
-    options.params = loadParameterFiles(files);
-    // The SLAM's parameters apart: its frame names are the nodelet's, not the merger's.
     linemap::ParamSet slam_params;
-    if (slam && !dir.empty() && fs::exists(dir / "slam.yaml"))
-      slam_params = loadParameterFiles({(dir / "slam.yaml").string()});
-    for (const auto& o : overrides)
-    {
-      const std::string key = o.substr(0, o.find('='));
-      if (slam_params.has(key))
-      {
-        applyOverride(slam_params, o);
-        continue;
-      }
-      if (!options.params.has(key))
-        std::cerr << "linemap_batch: warning: --param " << key << " is in none of the parameter files\n";
-      applyOverride(options.params, o);
-    }
-    options.out_dir = out_dir;
-    if (!sensor.empty() && !isWorldFile(dataset_path))
-      throw std::invalid_argument("--sensor goes with a world file (config/worlds/*.yaml), not " +
-                                  dataset_path);
-
-    if (replay)
-    {
-      if (fs::path(dataset_path).extension() != ".bag") throw std::invalid_argument("--replay needs a .bag");
-      ReplayOptions ro;
-      ro.params = options.params;
-      if (!options.mergers.empty()) ro.method = options.mergers.front();
-      const ReplayResult r = replayBag(readBag(dataset_path), ro);
-      fs::create_directories(out_dir);
-      writeReplayJson(r, (fs::path(out_dir) / "replay.json").string());
-      std::cout << std::fixed << std::setprecision(2) << "replay of " << r.scans << " scans, "
-                << r.trajectories << " trajectories: " << r.keyframe_stamps.size() << " keyframes, "
-                << r.map.size() << " map segments, quality " << (r.metrics ? r.metrics->quality.quality : 0.0)
-                << " %, " << r.evaluator_scans << " evaluator scans, " << r.wall_ms << " ms; wrote "
-                << (fs::path(out_dir) / "replay.json").string() << "\n";
-      return 0;
-    }
-    BatchDataset dataset;
-    if (slam)
-    {
-      if (!corrected.empty() || isWorldFile(dataset_path) || fs::path(dataset_path).extension() == ".bag")
-        throw std::invalid_argument("--slam goes with a raw CARMEN log alone, not with --corrected or " +
-                                    dataset_path);
-      const CarmenLog raw = readCarmenLog(dataset_path);
-      Recording recording = fromCarmen(raw, nullptr);
-      const SlamRecordingResult run =
-          runSlam(recording, line_map_merging::LaserSlamParams::fromParams(slam_params),
-                  slam_params.getBool("use_odometry", true));
-      const auto& c = run.counters;
-      std::cout << std::fixed << std::setprecision(1) << "laser SLAM: " << recording.scans.size()
-                << " scans in " << run.cpu_seconds << " s CPU, " << c.keyframes << " keyframes, "
-                << c.loops_accepted << " loop closures (" << c.loops_rejected_score + c.loops_rejected_graph
-                << " rejected), " << c.poor_matches << " poor matches\n";
-      if (!relations.empty())
-      {
-        std::vector<std::pair<double, Pose2>> poses;
-        for (std::size_t i = 0; i < run.scan_poses.size() && i < raw.scans.size(); ++i)
-          poses.push_back({raw.scans[i].timestamp, run.scan_poses[i]});
-        const RelationsError e = relationsError(readRelations(relations), poses);
-        std::cout << std::setprecision(4) << "relations error (" << e.used << " of " << e.relations
-                  << "): translation " << e.translation_mean << " +- " << e.translation_std << " m, rotation "
-                  << std::setprecision(2) << e.rotation_mean * 180.0 / linemap::kPi << " +- "
-                  << e.rotation_std * 180.0 / linemap::kPi << " deg\n";
-      }
-      dataset = datasetFromRecording(withSlamKeyframes(std::move(recording), run), stem(dataset_path),
-                                     "carmen+slam");
-    }
-    else if (!corrected.empty())
-    {
-      if (isWorldFile(dataset_path) || fs::path(dataset_path).extension() == ".bag")
-        throw std::invalid_argument("--corrected goes with a raw CARMEN log, not " + dataset_path);
-      dataset = loadCarmenWithCorrection(dataset_path, corrected);
-    }
-    else if (isWorldFile(dataset_path))
-    {
-      ProgressBar bar("simulate", 0, options.progress);
-      SimulationOptions sim;
-      sim.on_scan = [&bar](std::size_t done, std::size_t) { bar.update(done); };
-      World world = loadWorld(dataset_path);
-      if (!sensor.empty()) world = withSensorProfile(world, sensor);
-      dataset = simulatedDataset(world, sim);
-      bar.finish();
-    }
-    else if (fs::path(dataset_path).extension() == ".bag")
-    {
-      BagContents bag = readBag(dataset_path);
-      const bool trajectory = !bag.recording.keyframes.empty();
-      dataset = datasetFromRecording(std::move(bag.recording), stem(dataset_path),
-                                     trajectory ? "bag+trajectory" : "bag");
-      // A simulated bag carries its ground truth next to it (simulate_world writes OUT.truth.yaml).
-      const std::string truth = truthPathForBag(dataset_path);
-      if (fs::exists(truth)) dataset.truth = readGroundTruth(truth);
-    }
-    else
-      dataset = loadCarmenRegistered(dataset_path);
-
-    const BatchResult result = runBatch(dataset, options);
-    std::cout << result.dataset << " (" << result.kind << "), extractor " << result.extractor << ", "
-              << result.keyframes << " keyframes of " << result.candidate_scans << " candidates\n"
-              << formatTable(result);
-    double slowest_evaluation = 0.0;
-    for (const auto& r : result.mergers) slowest_evaluation = std::max(slowest_evaluation, r.evaluation_ms);
-    std::cout << std::fixed << std::setprecision(1) << "extraction " << result.extraction_ms
-              << " ms; lookup table of " << result.scan_points << " scan points " << result.table_ms
-              << " ms; evaluation of one map <= " << result.table_ms + slowest_evaluation
-              << " ms (table included)\n"
-              << std::setprecision(2) << "originals fit their own points to " << result.original_fit_rms * 1e3
-              << " mm RMS (line position +-" << result.original_line_sigma * 1e3
-              << " mm): the error column's excess comes from the poses and the merging\n";
-    writeReports(result, out_dir);
+    loadParameters(a, slam_params);
+    a.options.out_dir = a.out_dir;
+    if (!a.sensor.empty() && !isWorldFile(a.dataset))
+      throw std::invalid_argument("--sensor goes with a world file (config/worlds/*.yaml), not " + a.dataset);
+    if (a.replay) return runReplay(a);
+    const BatchResult result = runBatch(loadDataset(a, slam_params), a.options);
+    printResult(result);
+    writeReports(result, a.out_dir);
+    const std::string& out_dir = a.out_dir;
     std::cout << "wrote " << (fs::path(out_dir) / "report.json").string() << ", "
               << (fs::path(out_dir) / "report.md").string() << " and the per-merger files under " << out_dir
               << "/<merger>/\n";

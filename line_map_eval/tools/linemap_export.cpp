@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "line_map_eval/map_export.hpp"
+#include "line_map_eval/batch/map_export.hpp"
 
 namespace
 {

@@ -15,12 +15,12 @@
 #include <string>
 #include <vector>
 
-#include "line_map_eval/batch.hpp"
-#include "line_map_eval/carmen_log.hpp"
-#include "line_map_eval/carmen_recording.hpp"
-#include "line_map_eval/localization_recording.hpp"
-#include "line_map_eval/relations.hpp"
-#include "line_map_eval/slam_recording.hpp"
+#include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_recording.hpp"
+#include "line_map_eval/datasets/localization_recording.hpp"
+#include "line_map_eval/datasets/relations.hpp"
+#include "line_map_eval/datasets/slam_recording.hpp"
 
 namespace fs = std::filesystem;
 using namespace line_map_eval;
@@ -101,176 +101,208 @@ void print(const std::string& name, const RelationsError& e, const std::string& 
             << std::setw(8) << e.rotation_mean * deg << " ± " << std::setw(5) << e.rotation_std * deg << "  "
             << extra << std::endl;
 }
-}  // namespace
-
-int main(int argc, char** argv)
+/// The command line.
+struct Arguments
 {
   std::vector<std::string> positional, overrides, trajectories, localize_overrides;
   std::string corrected, config, write, localize, localize_config;
   std::optional<Pose2> initial_pose;
   bool slam = false, slam_no_odom = false, odometry = false;
+};
+
+Pose2 parsePose(const std::string& v)
+{
+  Pose2 p;
+  char c1 = 0, c2 = 0;
+  std::istringstream f(v);
+  if (!(f >> p.x >> c1 >> p.y >> c2 >> p.theta) || c1 != ',' || c2 != ',' || !f.eof())
+    throw std::invalid_argument("--initial-pose expects X,Y,THETA, got '" + v + "'");
+  return p;
+}
+
+/// Parses the command line; false after --help. Throws std::invalid_argument on a bad one.
+bool parseArguments(int argc, char** argv, Arguments& a)
+{
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
     auto value = [&]() -> std::string
     {
-      if (i + 1 >= argc)
-      {
-        std::cerr << "linemap_relations: " << arg << " needs a value\n";
-        std::exit(2);
-      }
+      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
       return argv[++i];
     };
-    if (arg == "--help" || arg == "-h")
+    std::string* text = arg == "--corrected"         ? &a.corrected
+                        : arg == "--config"          ? &a.config
+                        : arg == "--write"           ? &a.write
+                        : arg == "--localize"        ? &a.localize
+                        : arg == "--localize-config" ? &a.localize_config
+                                                     : nullptr;
+    std::vector<std::string>* list = arg == "--trajectory"       ? &a.trajectories
+                                     : arg == "--param"          ? &a.overrides
+                                     : arg == "--localize-param" ? &a.localize_overrides
+                                                                 : nullptr;
+    if (arg == "--help" || arg == "-h") return false;
+    if (text)
+      *text = value();
+    else if (list)
+      list->push_back(value());
+    else if (arg == "--slam")
+      a.slam = true;
+    else if (arg == "--slam-no-odometry")
+      a.slam_no_odom = true;
+    else if (arg == "--odometry")
+      a.odometry = true;
+    else if (arg == "--initial-pose")
+      a.initial_pose = parsePose(value());
+    else if (!arg.empty() && arg[0] == '-')
+      throw std::invalid_argument("unknown option " + arg);
+    else
+      a.positional.push_back(arg);
+  }
+  if (a.positional.size() != 2) throw std::invalid_argument("expected RAW_LOG and RELATIONS");
+  if (!a.slam && !a.slam_no_odom && !a.odometry && a.corrected.empty() && a.trajectories.empty() &&
+      a.localize.empty())
+    a.slam = true;
+  return true;
+}
+
+/// Every scan at its nearest keyframe (in scan order) and the relative odometry from it.
+std::vector<Pose2> correctedPoses(const Recording& recording)
+{
+  std::vector<Pose2> poses(recording.scans.size());
+  const auto& kfs = recording.keyframes;
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < poses.size() && !kfs.empty(); ++i)
+  {
+    while (k + 1 < kfs.size() && kfs[k + 1].scan_index <= i) ++k;
+    std::size_t best = k;
+    if (k + 1 < kfs.size() && kfs[k + 1].scan_index - i < (i > kfs[k].scan_index ? i - kfs[k].scan_index : 0))
+      best = k + 1;
+    const auto& kf = kfs[best];
+    poses[i] = kf.pose * (recording.scans[kf.scan_index].odom.inverse() * recording.scans[i].odom);
+  }
+  return poses;
+}
+
+/// What every trajectory is measured against, and the recording they are made from.
+struct Evaluation
+{
+  const Arguments& args;
+  const CarmenLog& raw;
+  const Recording& recording;
+  const std::vector<Relation>& relations;
+
+  /// Relation timestamps are the raw FLASER timestamps; the recording's stamps are made monotonic.
+  Trajectory byRawStamp(const std::vector<Pose2>& poses) const
+  {
+    Trajectory t;
+    for (std::size_t i = 0; i < poses.size() && i < raw.scans.size(); ++i)
+      t.push_back({raw.scans[i].timestamp, poses[i]});
+    return t;
+  }
+  void report(const std::string& name, const std::vector<Pose2>& poses, const std::string& extra) const
+  {
+    print(name, relationsError(relations, byRawStamp(poses)), extra);
+  }
+};
+
+void reportSlam(const Evaluation& ev)
+{
+  const Arguments& a = ev.args;
+  linemap::ParamSet params = loadParameterFiles(configFiles(a.config, "config/slam.yaml"));
+  for (const auto& o : a.overrides) applyOverride(params, o);
+  const auto slam_params = line_map_merging::LaserSlamParams::fromParams(params);
+  for (const bool with_odom : {true, false})
+  {
+    if ((with_odom && !a.slam) || (!with_odom && !a.slam_no_odom)) continue;
+    const SlamRecordingResult r = runSlam(ev.recording, slam_params, with_odom);
+    std::ostringstream extra;
+    const auto& c = r.counters;
+    extra << std::setprecision(1) << std::fixed << r.cpu_seconds << " s CPU (" << r.seconds
+          << " s wall, optimisation " << c.total_optimization_ms / 1000.0 << " s, loops "
+          << c.total_loop_ms / 1000.0 << " s), " << c.keyframes << " keyframes, " << c.loops_accepted
+          << " closures (" << c.loops_rejected_score << " + " << c.loops_rejected_graph << " rejected), "
+          << c.poor_matches << " poor matches";
+    ev.report(with_odom ? "laser SLAM" : "laser SLAM, no odometry", r.scan_poses, extra.str());
+    if (!a.write.empty()) writeTrajectory(a.write, ev.byRawStamp(r.scan_poses));
+  }
+}
+
+void reportLocalization(const Evaluation& ev, const std::vector<linemap::Segment2>& segments)
+{
+  const Arguments& a = ev.args;
+  linemap::ParamSet loc_params =
+      loadParameterFiles(configFiles(a.localize_config, "config/localization.yaml"));
+  for (const auto& o : a.localize_overrides) applyOverride(loc_params, o);
+  const auto params = line_map_merging::LocalizerParams::fromParams(loc_params);
+  const LocalizationRunResult r = runLocalization(ev.recording, segments, params, a.initial_pose);
+  std::vector<double> ms = r.scan_ms;
+  std::sort(ms.begin(), ms.end());
+  const auto& c = r.counters;
+  std::ostringstream extra;
+  extra << std::setprecision(1) << std::fixed << r.cpu_seconds << " s CPU, " << segments.size()
+        << " map segments, " << std::setprecision(3) << (ms.empty() ? 0.0 : ms[ms.size() / 2])
+        << " ms/scan median, " << c.tracked << " tracked, " << c.predicted << " predicted, " << c.lost
+        << " lost, " << c.replaced << " replaced by a rival";
+  if (!a.initial_pose)
+    extra << (r.recovered_at ? ", global localization at scan " + std::to_string(*r.recovered_at)
+                             : std::string(", global localization failed"));
+  ev.report("localized in the map", r.scan_poses, extra.str());
+  if (!a.write.empty()) writeTrajectory(a.write, ev.byRawStamp(r.scan_poses));
+}
+
+int run(const Arguments& a)
+{
+  // The map first: a bad map file is reported before the log is read.
+  const auto map_segments = a.localize.empty() ? std::vector<linemap::Segment2>()
+                                               : line_map_merging::loadLineMapSegments(a.localize);
+  const CarmenLog raw = readCarmenLog(a.positional[0]);
+  const auto relations = readRelations(a.positional[1]);
+  CarmenLog corrected_log;
+  if (!a.corrected.empty()) corrected_log = readCarmenLog(a.corrected);
+  const Recording recording = fromCarmen(raw, a.corrected.empty() ? nullptr : &corrected_log);
+  const Evaluation ev{a, raw, recording, relations};
+  std::cout << "trajectory                 used/total   trans [m] mean ± std   rot [deg] mean ± std\n";
+  if (a.odometry)
+  {
+    std::vector<Pose2> poses;
+    for (const auto& s : recording.scans) poses.push_back(s.odom);
+    ev.report("raw odometry", poses, "");
+  }
+  if (!a.corrected.empty())
+    ev.report("corrected log", correctedPoses(recording), "(keyframes + relative odometry)");
+  for (const auto& path : a.trajectories)
+    print(fs::path(path).filename().string(), relationsError(relations, readTrajectory(path)), "");
+  if (a.slam || a.slam_no_odom) reportSlam(ev);
+  if (!a.localize.empty()) reportLocalization(ev, map_segments);
+  return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  Arguments a;
+  try
+  {
+    if (!parseArguments(argc, argv, a))
     {
       usage(std::cout);
       return 0;
     }
-    else if (arg == "--slam")
-      slam = true;
-    else if (arg == "--slam-no-odometry")
-      slam_no_odom = true;
-    else if (arg == "--odometry")
-      odometry = true;
-    else if (arg == "--corrected")
-      corrected = value();
-    else if (arg == "--trajectory")
-      trajectories.push_back(value());
-    else if (arg == "--param")
-      overrides.push_back(value());
-    else if (arg == "--config")
-      config = value();
-    else if (arg == "--write")
-      write = value();
-    else if (arg == "--localize")
-      localize = value();
-    else if (arg == "--localize-param")
-      localize_overrides.push_back(value());
-    else if (arg == "--localize-config")
-      localize_config = value();
-    else if (arg == "--initial-pose")
-    {
-      const std::string v = value();
-      Pose2 p;
-      char c1 = 0, c2 = 0;
-      std::istringstream f(v);
-      if (!(f >> p.x >> c1 >> p.y >> c2 >> p.theta) || c1 != ',' || c2 != ',' || !f.eof())
-      {
-        std::cerr << "linemap_relations: --initial-pose expects X,Y,THETA, got '" << v << "'\n";
-        return 2;
-      }
-      initial_pose = p;
-    }
-    else if (!arg.empty() && arg[0] == '-')
-    {
-      std::cerr << "linemap_relations: unknown option " << arg << "\n";
-      usage(std::cerr);
-      return 2;
-    }
-    else
-      positional.push_back(arg);
   }
-  if (positional.size() != 2)
+  catch (const std::exception& e)
   {
+    std::cerr << "linemap_relations: " << e.what() << "\n";
     usage(std::cerr);
     return 2;
   }
-  if (!slam && !slam_no_odom && !odometry && corrected.empty() && trajectories.empty() && localize.empty())
-    slam = true;
   try
   {
-    // The map first: a bad map file is reported before the log is read.
-    const auto map_segments =
-        localize.empty() ? std::vector<linemap::Segment2>() : line_map_merging::loadLineMapSegments(localize);
-    const CarmenLog raw = readCarmenLog(positional[0]);
-    const auto relations = readRelations(positional[1]);
-    CarmenLog corrected_log;
-    if (!corrected.empty()) corrected_log = readCarmenLog(corrected);
-    const Recording recording = fromCarmen(raw, corrected.empty() ? nullptr : &corrected_log);
-    // Relation timestamps are the raw FLASER timestamps; the recording's stamps are made monotonic.
-    auto byRawStamp = [&](const std::vector<Pose2>& poses)
-    {
-      Trajectory t;
-      for (std::size_t i = 0; i < poses.size() && i < raw.scans.size(); ++i)
-        t.push_back({raw.scans[i].timestamp, poses[i]});
-      return t;
-    };
-    std::cout << "trajectory                 used/total   trans [m] mean ± std   rot [deg] mean ± std\n";
-    if (odometry)
-    {
-      std::vector<Pose2> poses;
-      for (const auto& s : recording.scans) poses.push_back(s.odom);
-      print("raw odometry", relationsError(relations, byRawStamp(poses)), "");
-    }
-    if (!corrected.empty())
-    {
-      // Every scan takes its nearest keyframe (in scan order) and the relative odometry from it.
-      std::vector<Pose2> poses(recording.scans.size());
-      const auto& kfs = recording.keyframes;
-      std::size_t k = 0;
-      for (std::size_t i = 0; i < poses.size() && !kfs.empty(); ++i)
-      {
-        while (k + 1 < kfs.size() && kfs[k + 1].scan_index <= i) ++k;
-        std::size_t best = k;
-        if (k + 1 < kfs.size() &&
-            kfs[k + 1].scan_index - i < (i > kfs[k].scan_index ? i - kfs[k].scan_index : 0))
-          best = k + 1;
-        const auto& kf = kfs[best];
-        poses[i] = kf.pose * (recording.scans[kf.scan_index].odom.inverse() * recording.scans[i].odom);
-      }
-      print("corrected log", relationsError(relations, byRawStamp(poses)), "(keyframes + relative odometry)");
-    }
-    for (const auto& path : trajectories)
-      print(fs::path(path).filename().string(), relationsError(relations, readTrajectory(path)), "");
-    if (slam || slam_no_odom)
-    {
-      linemap::ParamSet params = loadParameterFiles(configFiles(config, "config/slam.yaml"));
-      for (const auto& o : overrides) applyOverride(params, o);
-      const auto slam_params = line_map_merging::LaserSlamParams::fromParams(params);
-      for (int pass = 0; pass < 2; ++pass)
-      {
-        const bool with_odom = pass == 0;
-        if ((with_odom && !slam) || (!with_odom && !slam_no_odom)) continue;
-        const SlamRecordingResult r = runSlam(recording, slam_params, with_odom);
-        std::ostringstream extra;
-        const auto& c = r.counters;
-        extra << std::setprecision(1) << std::fixed << r.cpu_seconds << " s CPU (" << r.seconds
-              << " s wall, optimisation " << c.total_optimization_ms / 1000.0 << " s, loops "
-              << c.total_loop_ms / 1000.0 << " s), " << c.keyframes << " keyframes, " << c.loops_accepted
-              << " closures (" << c.loops_rejected_score << " + " << c.loops_rejected_graph << " rejected), "
-              << c.poor_matches << " poor matches";
-        print(with_odom ? "laser SLAM" : "laser SLAM, no odometry",
-              relationsError(relations, byRawStamp(r.scan_poses)), extra.str());
-        if (!write.empty()) writeTrajectory(write, byRawStamp(r.scan_poses));
-      }
-    }
-    if (!localize.empty())
-    {
-      linemap::ParamSet loc_params =
-          loadParameterFiles(configFiles(localize_config, "config/localization.yaml"));
-      for (const auto& o : localize_overrides) applyOverride(loc_params, o);
-      const auto params = line_map_merging::LocalizerParams::fromParams(loc_params);
-      const auto& segments = map_segments;
-      const LocalizationRunResult r = runLocalization(recording, segments, params, initial_pose);
-      std::vector<double> ms = r.scan_ms;
-      std::sort(ms.begin(), ms.end());
-      const auto& c = r.counters;
-      std::ostringstream extra;
-      extra << std::setprecision(1) << std::fixed << r.cpu_seconds << " s CPU, " << segments.size()
-            << " map segments, " << std::setprecision(3) << (ms.empty() ? 0.0 : ms[ms.size() / 2])
-            << " ms/scan median, " << c.tracked << " tracked, " << c.predicted << " predicted, " << c.lost
-            << " lost, " << c.replaced << " replaced by a rival";
-      if (!initial_pose)
-        extra << (r.recovered_at ? ", global localization at scan " + std::to_string(*r.recovered_at)
-                                 : std::string(", global localization failed"));
-      print("localized in the map", relationsError(relations, byRawStamp(r.scan_poses)), extra.str());
-      if (!write.empty()) writeTrajectory(write, byRawStamp(r.scan_poses));
-    }
+    return run(a);
   }
   catch (const std::exception& e)
   {
     std::cerr << "linemap_relations: " << e.what() << "\n";
     return 1;
   }
-  return 0;
 }

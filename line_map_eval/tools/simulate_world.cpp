@@ -13,11 +13,11 @@
 #include <sstream>
 #include <string>
 
-#include "line_map_eval/bag_writer.hpp"
-#include "line_map_eval/ground_truth.hpp"
-#include "line_map_eval/progress.hpp"
-#include "line_map_eval/simulator.hpp"
-#include "line_map_eval/world.hpp"
+#include "line_map_eval/batch/progress.hpp"
+#include "line_map_eval/datasets/bag_writer.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/simulation/ground_truth.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
 
 namespace
 {

@@ -1,4 +1,4 @@
-#include "line_map_eval/bag_reader.hpp"
+#include "line_map_eval/datasets/bag_reader.hpp"
 
 #include <nav_msgs/Path.h>
 #include <rosbag/bag.h>

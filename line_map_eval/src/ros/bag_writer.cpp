@@ -1,4 +1,4 @@
-#include "line_map_eval/bag_writer.hpp"
+#include "line_map_eval/datasets/bag_writer.hpp"
 
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Path.h>
@@ -11,7 +11,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "line_map_eval/progress.hpp"
+#include "line_map_eval/batch/progress.hpp"
 
 namespace line_map_eval
 {

@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "line_map_eval/map_evaluator.hpp"
+#include "line_map_eval/online/map_evaluator.hpp"
 
 namespace line_map_eval
 {

@@ -1,8 +1,10 @@
 #!/usr/bin/python3
-"""Rostest checker (test/parity_loop.test, test/parity_intel.test): the nodelets (linemap.launch)
-and `linemap_batch BAG --replay` (the same OnlineMapper and OnlineEvaluator, fed in bag order) make
-the same map of the same bag with periodic loop-closure trajectories: the same keyframes (stamps),
-the same map (segment count equal, every endpoint within 1 mm) and quality within 0.1 point.
+"""Rostest checker (test/parity_loop.test, test/parity_intel.test): the nodelets (linemap.launch),
+`linemap_batch BAG --replay` (the same OnlineMapper and OnlineEvaluator, fed in bag order) and
+`linemap_batch BAG` by default (its online mergers driven through the same OnlineMapper, online_drive.hpp)
+make the same map of the same bag with periodic loop-closure trajectories: the same keyframes (stamps),
+the same map (segment count and ids equal, every endpoint within 1 mm) and, between the nodelets and
+the replay (the same evaluator), quality within 0.1 point.
 
 The checker plays the bag itself, message by message in bag order (/clock, /tf, /scan), so the order
 the nodelets see is the bag's: before it publishes a trajectory it waits until the merger and the
@@ -163,6 +165,24 @@ class Driver:
         self.wait_scans_done("the end of the bag")
 
 
+def shown_map(saved):
+    """(sorted keyframe stamps, sorted (id, endpoints) of the segments shown) of a saved map file. The
+    file holds every map segment; those withheld by the single-view rule are not on line_map."""
+    shown = [s for s in saved["segments"] if not s.get("withheld", False)]
+    return sorted(k[1] for k in saved["keyframes"]), sorted((s["id"], s["segment"]) for s in shown)
+
+
+def batch_map(bag, limit):
+    """linemap_batch BAG (the default mode) with cae: (keyframe stamps, shown segments) of its map file."""
+    out = tempfile.mkdtemp(prefix="parity_batch_")
+    rc, log = lt.run(["rosrun", "line_map_eval", "linemap_batch", bag, "--merger", "cae", "--out", out,
+                      "--no-figures", "--no-progress"], limit)
+    if rc != 0:
+        raise AssertionError("linemap_batch failed:\n" + log)
+    with open(os.path.join(out, "cae", "map.yaml")) as f:
+        return shown_map(yaml.safe_load(f))
+
+
 def saved_map(path):
     from line_map_msgs.srv import SaveMap
     rospy.wait_for_service("/line_map_merging/save_map", timeout=60.0)
@@ -196,34 +216,41 @@ class CheckParity(unittest.TestCase):
         lt.wait_until(lambda: driver.maps.messages, "a line_map", lambda: "none", limit)
         last = driver.maps.messages[-1][1]
         lt.wait_for_quality_of(driver.qualities, last, "the map_quality of the last line_map", limit)
-        saved = saved_map(os.path.join(out, "nodelets_map.yaml"))
-        # The file holds every map segment; those withheld by the single-view rule are not on line_map.
-        shown = [s for s in saved["segments"] if not s.get("withheld", False)]
-        self.assertEqual(len(shown), len(last.segments), "the saved map is the last line_map")
+        stamps, segments = shown_map(saved_map(os.path.join(out, "nodelets_map.yaml")))
+        self.assertEqual(len(segments), len(last.segments), "the saved map is the last line_map")
         quality = lt.evaluate().quality
-        stamps = sorted(k[1] for k in saved["keyframes"])
-        segments = sorted((s["id"], s["segment"]) for s in shown)
+        t0 = time.time()
+        batch_stamps, batch_segments = batch_map(bag, limit)
+        batch_s = time.time() - t0
         print("parity %s (%d scans, %d trajectories): replay %d keyframes, %d segments, %.2f %% (%.1f s); "
-              "nodelets %d keyframes, %d segments, %.2f %% (%.1f s driven)" % (
+              "nodelets %d keyframes, %d segments, %.2f %% (%.1f s driven); batch %d keyframes, %d segments "
+              "(%.1f s)" % (
                   dataset, n_scans, driver.trajectories, len(replay["keyframe_stamps"]), len(replay["segments"]),
-                  replay["quality"], replay_s, len(stamps), len(segments), quality, nodelet_s))
+                  replay["quality"], replay_s, len(stamps), len(segments), quality, nodelet_s, len(batch_stamps),
+                  len(batch_segments), batch_s))
         self.assertEqual(driver.trajectories, replay["trajectories"])
         # A segment set the nodelet dropped (no transform in time) would show as a missing keyframe below.
         self.assertEqual(driver.diag.counter(MERGING, "dropped scans"), 0, "the merger dropped segment sets")
         self.assertGreaterEqual(replay["quality"], band["min_quality_pct"])
         replay_stamps = sorted(replay["keyframe_stamps"])
-        self.assertEqual(len(stamps), len(replay_stamps), "keyframe count")
-        for a, b in zip(stamps, replay_stamps):
-            self.assertAlmostEqual(a, b, delta=1e-6, msg="keyframe stamps differ")
-        self.assertEqual(len(segments), len(replay["segments"]), "map segment count")
         replay_segments = sorted((s[0], s[1:]) for s in replay["segments"])
+        self.assert_same_map("nodelets", stamps, segments, replay_stamps, replay_segments, dataset)
+        self.assert_same_map("batch", batch_stamps, batch_segments, replay_stamps, replay_segments, dataset)
+        self.assertLessEqual(abs(quality - replay["quality"]), 0.1, "quality differs by more than 0.1 point")
+
+    def assert_same_map(self, who, stamps, segments, replay_stamps, replay_segments, dataset):
+        """`who`'s keyframes and map against the replay's: the same stamps, ids, endpoints within 1 mm."""
+        self.assertEqual(len(stamps), len(replay_stamps), who + ": keyframe count")
+        for a, b in zip(stamps, replay_stamps):
+            self.assertAlmostEqual(a, b, delta=1e-6, msg=who + ": keyframe stamps differ")
+        self.assertEqual(len(segments), len(replay_segments), who + ": map segment count")
         worst = 0.0
         for (ia, a), (ib, b) in zip(segments, replay_segments):
-            self.assertEqual(ia, ib, "map segment ids differ")
+            self.assertEqual(ia, ib, who + ": map segment ids differ")
             worst = max(worst, max(abs(x - y) for x, y in zip(a, b)))
-        print("parity %s: largest endpoint coordinate difference %.3g m" % (dataset, worst))
-        self.assertLessEqual(worst, 1e-3, "an endpoint differs by more than 1 mm")
-        self.assertLessEqual(abs(quality - replay["quality"]), 0.1, "quality differs by more than 0.1 point")
+        print("parity %s, %s against the replay: largest endpoint coordinate difference %.3g m" % (
+            dataset, who, worst))
+        self.assertLessEqual(worst, 1e-3, who + ": an endpoint differs by more than 1 mm")
 
 
 if __name__ == "__main__":

@@ -81,6 +81,9 @@ class Merger
   virtual ~Merger() = default;
   /// The factory name ("cae", ...).
   virtual const char* name() const = 0;
+  /// True for a merger that merges keyframe by keyframe as they come, its map ready after each (it is
+  /// driven through OnlineMapper); false for one that computes the map from every keyframe at once.
+  virtual bool isOnline() const { return true; }
 
   /// Merges the keyframe's segments into the map. Throws std::invalid_argument naming the field for
   /// a duplicate index or a non-finite pose (the map is then unchanged); bad segments are skipped

@@ -22,6 +22,7 @@ void validateKeyframe(const Keyframe& keyframe);
 class OfflineMerger : public Merger
 {
  public:
+  bool isOnline() const override { return false; }
   AddResult addKeyframe(const Keyframe& keyframe) override;
   /// Replaces the poses; the map is recomputed from the stored segments on the next map().
   AdjustResult adjust(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses) override;

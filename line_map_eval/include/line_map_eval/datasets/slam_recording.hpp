@@ -1,0 +1,34 @@
+// Running the laser SLAM of line_map_merging (laser_slam.hpp) over a whole recording (ROS-free):
+// the trajectory source of `linemap_batch --slam` and `linemap_relations --slam`.
+#pragma once
+
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "line_map_eval/datasets/recording.hpp"
+#include "line_map_merging/slam/laser_slam.hpp"
+
+namespace line_map_eval
+{
+struct SlamRecordingResult
+{
+  /// Optimised base pose of every scan of the recording, in scan order.
+  std::vector<Pose2> scan_poses;
+  /// The keyframes: index into Recording::scans and optimised base pose.
+  std::vector<CorrectedKeyframe> keyframes;
+  line_map_merging::SlamCounters counters;
+  double seconds = 0.0;      ///< front and back end, the whole recording (wall time)
+  double cpu_seconds = 0.0;  ///< the same in CPU time of this thread
+};
+
+/// Feeds every scan (valid beams under its own geometry, in the base frame by the recording's mounting) with
+/// its odometry
+/// (`use_odometry` false: none, the laser-only case) to a LaserSlam.
+SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::LaserSlamParams& params,
+                            bool use_odometry = true);
+
+/// The recording with the SLAM keyframes as its corrected keyframes (a loop-closure dataset).
+Recording withSlamKeyframes(Recording recording, const SlamRecordingResult& slam);
+
+}  // namespace line_map_eval

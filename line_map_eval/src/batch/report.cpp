@@ -1,0 +1,453 @@
+// Console table, JSON (yaml-cpp's emitter in JSON-compatible flow style) and Markdown reports.
+#include "line_map_eval/batch/report.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+namespace line_map_eval
+{
+namespace
+{
+constexpr double kMm = 1000.0;
+
+std::string fixed(double value, int decimals)
+{
+  if (!std::isfinite(value)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", decimals, value);
+  return buf;
+}
+
+struct Column
+{
+  std::string header;
+  bool left = false;
+};
+
+/// The full table of report.md.
+std::vector<Column> columns()
+{
+  return {{"merger", true},
+          {"scans"},
+          {"orig segs"},
+          {"orig min mm"},
+          {"orig max mm"},
+          {"orig mean mm"},
+          {"map segs"},
+          {"map min mm"},
+          {"map max mm"},
+          {"map mean mm"},
+          {"quality %"},
+          {"error mm"},
+          {"unassigned"},
+          {"point cov %"},
+          {"length cov %"},
+          {"structure cov %"},
+          {"unmapped structure m"},
+          {"redundant pairs"},
+          {"redundant overlap m"},
+          {"crossing pairs"},
+          {"frame ms"},
+          {"total ms"}};
+}
+
+std::vector<std::string> row(const MergerRun& r)
+{
+  return {r.name,
+          std::to_string(r.scans),
+          std::to_string(r.original_segments),
+          fixed(r.originals.shortest * kMm, 1),
+          fixed(r.originals.longest * kMm, 1),
+          fixed(r.originals.mean * kMm, 1),
+          std::to_string(r.map_segments),
+          fixed(r.map.shortest * kMm, 1),
+          fixed(r.map.longest * kMm, 1),
+          fixed(r.map.mean * kMm, 1),
+          fixed(r.quality.quality, 2),
+          fixed(r.error.mean_error * kMm, 2),
+          std::to_string(r.error.unassigned),
+          fixed(r.point_coverage.fraction() * 100.0, 2),
+          fixed(r.length_coverage.fraction() * 100.0, 2),
+          fixed(r.structure_coverage.fraction() * 100.0, 2),
+          fixed(r.structure_coverage.unmapped_length, 2),
+          std::to_string(r.redundancy.pairs),
+          fixed(r.redundancy.overlap_length, 2),
+          std::to_string(r.crossing_pairs.size()),
+          fixed(r.per_frame_ms, 3),
+          fixed(r.total_ms, 1)};
+}
+
+/// The terminal table: what decides between maps, within 80 columns (two header lines, columns one
+/// space apart, coverages to 0.1 %).
+std::vector<std::pair<Column, std::string>> compactColumns()
+{
+  return {{{"merger", true}, ""}, {{"map"}, "segs"},      {{"qual."}, "%"},    {{"error"}, "mm"},
+          {{"unass."}, "orig."},  {{"point"}, "cov %"},   {{"len."}, "cov %"}, {{"struct"}, "cov %"},
+          {{"unmap."}, "m"},      {{"redund."}, "pairs"}, {{"cross"}, "pairs"}};
+}
+
+std::vector<std::string> compactRow(const MergerRun& r)
+{
+  return {r.name,
+          std::to_string(r.map_segments),
+          fixed(r.quality.quality, 2),
+          fixed(r.error.mean_error * kMm, 2),
+          std::to_string(r.error.unassigned),
+          fixed(r.point_coverage.fraction() * 100.0, 1),
+          fixed(r.length_coverage.fraction() * 100.0, 1),
+          fixed(r.structure_coverage.fraction() * 100.0, 1),
+          fixed(r.structure_coverage.unmapped_length, 1),
+          std::to_string(r.redundancy.pairs),
+          std::to_string(r.crossing_pairs.size())};
+}
+
+/// Rounds for the JSON output so that the files stay readable; keeps null for non-finite values.
+void number(YAML::Emitter& out, double value, int decimals = 3)
+{
+  if (!std::isfinite(value))
+  {
+    out << YAML::Null;
+    return;
+  }
+  const double scale = std::pow(10.0, decimals);
+  out << std::round(value * scale) / scale;
+}
+
+void key(YAML::Emitter& out, const char* k)
+{
+  out << YAML::Key << k << YAML::Value;
+}
+
+void emitRun(YAML::Emitter& out, const MergerRun& r)
+{
+  out << YAML::BeginMap;
+  key(out, "scans");
+  out << r.scans;
+  key(out, "original_segments");
+  out << r.original_segments;
+  key(out, "original_shortest_mm");
+  number(out, r.originals.shortest * kMm);
+  key(out, "original_longest_mm");
+  number(out, r.originals.longest * kMm);
+  key(out, "original_mean_length_mm");
+  number(out, r.originals.mean * kMm);
+  key(out, "map_segments");
+  out << r.map_segments;
+  key(out, "shortest_mm");
+  number(out, r.map.shortest * kMm);
+  key(out, "longest_mm");
+  number(out, r.map.longest * kMm);
+  key(out, "mean_length_mm");
+  number(out, r.map.mean * kMm);
+  key(out, "quality_pct");
+  number(out, r.quality.quality);
+  key(out, "error_mm");
+  number(out, r.error.mean_error * kMm);
+  key(out, "max_error_mm");
+  number(out, r.error.max_error * kMm);
+  key(out, "error_assignment");
+  out << r.error_assignment;
+  key(out, "assigned_originals");
+  out << r.error.assigned;
+  key(out, "unassigned_originals");
+  out << r.error.unassigned;
+  key(out, "scan_points");
+  out << r.point_coverage.points;
+  key(out, "covered_scan_points");
+  out << r.point_coverage.covered;
+  key(out, "point_coverage_pct");
+  number(out, r.point_coverage.fraction() * 100.0);
+  key(out, "original_length_m");
+  number(out, r.length_coverage.total);
+  key(out, "covered_original_length_m");
+  number(out, r.length_coverage.covered);
+  key(out, "length_coverage_pct");
+  number(out, r.length_coverage.fraction() * 100.0);
+  key(out, "redundant_pairs");
+  out << r.redundancy.pairs;
+  key(out, "redundant_overlap_m");
+  number(out, r.redundancy.overlap_length);
+  key(out, "structure_points");
+  out << r.structure_coverage.points;
+  key(out, "covered_structure_points");
+  out << r.structure_coverage.covered;
+  key(out, "structure_coverage_pct");
+  number(out, r.structure_coverage.fraction() * 100.0);
+  key(out, "structure_length_m");
+  number(out, r.structure_coverage.length);
+  key(out, "unmapped_structure_length_m");
+  number(out, r.structure_coverage.unmapped_length);
+  key(out, "crossing_pairs");
+  out << r.crossing_pairs.size();
+  key(out, "per_frame_ms");
+  number(out, r.per_frame_ms, 4);
+  key(out, "total_ms");
+  number(out, r.total_ms);
+  key(out, "adjust_ms");
+  number(out, r.adjust_ms);
+  key(out, "trajectories");
+  out << r.trajectories;
+  key(out, "adjustments");
+  out << r.adjustments;
+  key(out, "rebuilds");
+  out << r.rebuilds;
+  key(out, "evaluation_ms");
+  number(out, r.evaluation_ms);
+  key(out, "online");
+  out << r.online;
+  key(out, "provenance");
+  out << r.provenance;
+  key(out, "quality_before_adjust_pct");
+  number(out, r.quality_before_adjust ? *r.quality_before_adjust : std::nan(""));
+  if (r.ground_truth)
+  {
+    const GroundTruthResult& g = *r.ground_truth;
+    key(out, "ground_truth");
+    out << YAML::BeginMap;
+    key(out, "coverage_pct");
+    number(out, g.coverage * 100.0);
+    key(out, "undetected_walls");
+    out << g.undetected_walls;
+    key(out, "max_endpoint_error_mm");
+    number(out, g.max_endpoint_error * kMm);
+    key(out, "mean_endpoint_error_mm");
+    number(out, g.mean_endpoint_error * kMm);
+    key(out, "unmapped_ends");
+    out << g.unmapped_ends;
+    key(out, "unseen_faces");
+    out << g.unseen_walls;
+    key(out, "mean_vertex_error_mm");
+    number(out, g.mean_vertex_error * kMm);
+    key(out, "missed_corners");
+    out << g.missed_corners;
+    key(out, "corners");
+    out << g.corners.size();
+    key(out, "walls");
+    out << g.walls.size();
+    out << YAML::EndMap;
+  }
+  key(out, "files");
+  out << YAML::BeginSeq;
+  for (const auto& f : r.files) out << f;
+  out << YAML::EndSeq;
+  out << YAML::EndMap;
+}
+
+void writeFile(const std::filesystem::path& path, const std::string& text)
+{
+  std::ofstream out(path);
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error(path.string() + ": cannot write the report");
+}
+
+}  // namespace
+
+std::string formatTable(const BatchResult& result)
+{
+  std::vector<Column> cols;
+  std::vector<std::vector<std::string>> cells(2);
+  for (const auto& [c, second] : compactColumns())
+  {
+    cols.push_back(c);
+    cells[0].push_back(c.header);
+    cells[1].push_back(second);
+  }
+  for (const auto& r : result.mergers) cells.push_back(compactRow(r));
+  std::vector<std::size_t> width(cols.size(), 0);
+  for (const auto& line : cells)
+    for (std::size_t i = 0; i < line.size(); ++i) width[i] = std::max(width[i], line[i].size());
+  std::ostringstream out;
+  for (const auto& line : cells)
+  {
+    for (std::size_t i = 0; i < line.size(); ++i)
+    {
+      const std::string pad(width[i] - line[i].size(), ' ');
+      out << (i ? " " : "") << (cols[i].left ? line[i] + pad : pad + line[i]);
+    }
+    out << '\n';
+  }
+  return out.str();
+}
+
+std::string toJson(const BatchResult& result)
+{
+  YAML::Emitter out;
+  out.SetMapFormat(YAML::Flow);
+  out.SetSeqFormat(YAML::Flow);
+  out.SetStringFormat(YAML::DoubleQuoted);
+  out.SetBoolFormat(YAML::TrueFalseBool);
+  out.SetBoolFormat(YAML::LowerCase);
+  out.SetNullFormat(YAML::LowerNull);
+  out.SetDoublePrecision(12);
+  out << YAML::BeginMap;
+  key(out, "dataset");
+  out << result.dataset;
+  key(out, "kind");
+  out << result.kind;
+  key(out, "extractor");
+  out << result.extractor;
+  key(out, "loop_closure");
+  out << result.loop_closure;
+  key(out, "adjust_every");
+  out << result.adjust_every;
+  key(out, "candidate_scans");
+  out << result.candidate_scans;
+  key(out, "scans");
+  out << result.keyframes;
+  key(out, "original_segments");
+  out << result.originals.count;
+  key(out, "original_shortest_mm");
+  number(out, result.originals.shortest * kMm);
+  key(out, "original_longest_mm");
+  number(out, result.originals.longest * kMm);
+  key(out, "original_mean_length_mm");
+  number(out, result.originals.mean * kMm);
+  key(out, "original_fit_rms_mm");
+  number(out, result.original_fit_rms * kMm);
+  key(out, "original_line_sigma_mm");
+  number(out, result.original_line_sigma * kMm);
+  key(out, "scan_points");
+  out << result.scan_points;
+  key(out, "extraction_ms");
+  number(out, result.extraction_ms);
+  key(out, "table_ms");
+  number(out, result.table_ms);
+  key(out, "structure_ms");
+  number(out, result.structure_ms);
+  // The whole evaluation of one map: the shared table and structure classification plus that map's
+  // metrics.
+  key(out, "map_evaluation_ms");
+  out << YAML::BeginMap;
+  for (const auto& r : result.mergers)
+  {
+    out << YAML::Key << r.name << YAML::Value;
+    number(out, result.table_ms + result.structure_ms + r.evaluation_ms);
+  }
+  out << YAML::EndMap;
+  key(out, "parameters");
+  out << YAML::BeginMap;
+  for (const auto& [k, v] : result.parameters.values())
+  {
+    out << YAML::Key << k << YAML::Value << v;
+  }
+  out << YAML::EndMap;
+  key(out, "mergers");
+  out << YAML::BeginMap;
+  for (const auto& r : result.mergers)
+  {
+    out << YAML::Key << r.name << YAML::Value;
+    emitRun(out, r);
+  }
+  out << YAML::EndMap;
+  out << YAML::EndMap;
+  if (!out.good()) throw std::runtime_error(std::string("report.json: ") + out.GetLastError());
+  return std::string(out.c_str()) + "\n";
+}
+
+std::string toMarkdown(const BatchResult& result)
+{
+  std::ostringstream md;
+  md << "# Line map comparison: " << result.dataset << "\n\n";
+  md << "- dataset kind: " << result.kind
+     << (result.loop_closure
+             ? " (online mergers run through the online mapper as in the nodelets: on odometry until the "
+               "first of " +
+                   std::to_string(result.trajectories) +
+                   " trajectories, then on its nodes; offline mergers get the final poses)"
+             : " (the poses are final for every merger)")
+     << "\n";
+  md << "- extractor: " << result.extractor << "; " << result.keyframes
+     << " keyframes chosen by the online path of " << result.candidate_scans << " candidates; extraction "
+     << fixed(result.extraction_ms, 1) << " ms\n";
+  md << "- accuracy at the source: the originals fit their own points with an RMS residual of "
+     << fixed(result.original_fit_rms * kMm, 2) << " mm on average (line position standard error "
+     << fixed(result.original_line_sigma * kMm, 2)
+     << " mm); the error column measures them against their map segment, so what it adds beyond these "
+        "comes from registration (the poses) and merging\n";
+  md << "- lookup table: " << result.scan_points << " registered scan points under the final poses, built in "
+     << fixed(result.table_ms, 1) << " ms\n";
+  if (!result.mergers.empty())
+  {
+    const StructureCoverage& s = result.mergers.front().structure_coverage;
+    md << "- straight structure: " << s.points << " of the registered points (" << fixed(s.length, 1)
+       << " m), classified in " << fixed(result.structure_ms, 1) << " ms\n";
+  }
+  md << "\n";
+
+  const auto cols = columns();
+  md << "|";
+  for (const auto& c : cols) md << " " << c.header << " |";
+  md << "\n|";
+  for (const auto& c : cols) md << (c.left ? "---|" : "---:|");
+  md << "\n";
+  for (const auto& r : result.mergers)
+  {
+    md << "|";
+    for (const auto& cell : row(r)) md << " " << cell << " |";
+    md << "\n";
+  }
+  md << "\nOriginal segments and their lengths are those of Table I of the CAE-RLSM paper, map segments "
+        "those of Table III. Quality is the correlation quality against the lookup table of the registered "
+        "scans; error the mean distance of the originals' midpoints to their map segment's line, over the "
+        "originals assigned to one (unassigned: the others). Point coverage is the share of the registered "
+        "scan points within one lookup-table sigma of a map segment; length coverage the share of the "
+        "originals' length lying within d_max and theta_max of a map segment. Structure coverage is the "
+        "share of the registered points on straight structure (thin, straight, continuous bands of points: "
+        "walls, not clutter) within that same radius of a map segment; unmapped structure the length of "
+        "the straight structure left uncovered. Redundant pairs are pairs of map segments meeting the "
+        "fusion conditions with each other (overlap: their summed overlap along the line); crossing pairs "
+        "are map segments crossing in an X, both running on past the crossing by more than the "
+        "point-coverage radius. Per-frame runtime is the median addKeyframe time of online mergers; total "
+        "runtime covers every addKeyframe, adjust and the final map.\n\n";
+  md << "## Notes per merger\n\n";
+  for (const auto& r : result.mergers)
+  {
+    md << "- **" << r.name << "** (" << (r.online ? "online" : "offline") << "): error from "
+       << r.error_assignment << " (" << r.error.assigned << " originals assigned, " << r.error.unassigned
+       << " without a map segment; max " << fixed(r.error.max_error * kMm, 1) << " mm); evaluation "
+       << fixed(r.evaluation_ms, 1) << " ms";
+    if (r.adjustments) md << "; " << r.adjustments << " adjustments, " << fixed(r.adjust_ms, 1) << " ms";
+    if (r.rebuilds) md << "; rebuilt from the nodes of the first trajectory";
+    if (r.quality_before_adjust)
+      md << "; quality before the last trajectory " << fixed(*r.quality_before_adjust, 2) << " %";
+    if (r.ground_truth)
+    {
+      const auto& g = *r.ground_truth;
+      md << "; ground truth over the " << g.walls.size() << " seen faces (" << g.unseen_walls
+         << " never seen, not scored): coverage " << fixed(g.coverage * 100.0, 1) << " %, "
+         << g.undetected_walls << " undetected, endpoint error mean " << fixed(g.mean_endpoint_error * kMm, 1)
+         << " / max " << fixed(g.max_endpoint_error * kMm, 1) << " mm, " << g.unmapped_ends
+         << " seen ends no segment reaches, mean vertex error " << fixed(g.mean_vertex_error * kMm, 1)
+         << " mm, " << g.missed_corners << " of " << g.corners.size() << " corners missed";
+    }
+    md << "\n";
+    for (const auto& f : r.files) md << "  - `" << f << "`\n";
+    // The map figure inline, relative to report.md (which sits in the output directory).
+    for (const auto& f : r.files)
+      if (std::filesystem::path(f).filename() == "map.png")
+        md << "\n  ![" << r.name << "](" << r.name << "/map.png)\n";
+  }
+  md << "\n## Parameters\n\n";
+  for (const auto& [k, v] : result.parameters.values()) md << "- `" << k << "`: `" << v << "`\n";
+  return md.str();
+}
+
+void writeReports(const BatchResult& result, const std::string& dir)
+{
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir + ": cannot create the directory: " + ec.message());
+  writeFile(std::filesystem::path(dir) / "report.json", toJson(result));
+  writeFile(std::filesystem::path(dir) / "report.md", toMarkdown(result));
+}
+
+}  // namespace line_map_eval

@@ -1,0 +1,60 @@
+#include "line_map_eval/datasets/slam_recording.hpp"
+
+#include <time.h>
+
+#include <chrono>
+#include <cmath>
+
+namespace line_map_eval
+{
+SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::LaserSlamParams& params,
+                            bool use_odometry)
+{
+  SlamRecordingResult result;
+  const auto start = std::chrono::steady_clock::now();
+  auto cpu = []
+  {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+  };
+  const double cpu_start = cpu();
+  line_map_merging::LaserSlam slam(params);
+  std::vector<std::size_t> accepted;  // recording index of each scan the SLAM accepted
+  for (std::size_t i = 0; i < recording.scans.size(); ++i)
+  {
+    const RecordedScan& s = recording.scans[i];
+    const ScanGeometry& g = recording.geometryOf(s);  // a scan's own where the sensor changes it
+    line_map_merging::SlamScan scan;
+    scan.stamp = s.stamp;
+    if (use_odometry) scan.odom = s.odom;
+    scan.points.reserve(s.ranges.size());
+    for (std::size_t b = 0; b < s.ranges.size(); ++b)
+    {
+      const double r = s.ranges[b];
+      if (!(r >= g.range_min && r <= g.range_max) || r <= 0.0) continue;
+      const double a = g.angle_min + static_cast<double>(b) * g.angle_increment;
+      scan.points.push_back(recording.base_to_laser.apply({r * std::cos(a), r * std::sin(a)}));
+    }
+    if (slam.addScan(scan) != line_map_merging::SlamOutcome::kRejected) accepted.push_back(i);
+  }
+  result.cpu_seconds = cpu() - cpu_start;
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto poses = slam.scanPoses();
+  result.scan_poses.assign(recording.scans.size(), Pose2());
+  for (std::size_t k = 0; k < poses.size() && k < accepted.size(); ++k)
+    result.scan_poses[accepted[k]] = poses[k].second;
+  for (std::size_t k = 0; k < slam.keyframes().size(); ++k)
+    result.keyframes.push_back({accepted[slam.keyframes()[k].scan], slam.graph().node(k)});
+  result.counters = slam.counters();
+  return result;
+}
+
+Recording withSlamKeyframes(Recording recording, const SlamRecordingResult& slam)
+{
+  recording.keyframes = slam.keyframes;
+  recording.source += " + laser SLAM";
+  return recording;
+}
+
+}  // namespace line_map_eval

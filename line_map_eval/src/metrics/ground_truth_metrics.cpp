@@ -1,0 +1,359 @@
+// Ground-truth metrics of a line map over the seen parts of the true faces.
+#include "line_map_eval/metrics/ground_truth_metrics.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace line_map_eval
+{
+using linemap::Segment2;
+using linemap::Vec2;
+
+namespace
+{
+/// Heading difference of two undirected lines, in [0, pi/2].
+double undirectedAngle(const Segment2& a, const Segment2& b)
+{
+  const double d = std::abs(linemap::normalizeAngle(a.heading() - b.heading()));
+  return std::min(d, linemap::kPi - d);
+}
+
+double headingDifference(const Segment2& a, const Segment2& b, bool directed)
+{
+  return directed ? std::abs(linemap::normalizeAngle(a.heading() - b.heading())) : undirectedAngle(a, b);
+}
+
+/// Whether map segment m lies along the face: headings within the angle, an overlap of positive
+/// length along the face, and within association_distance of the face's line over that overlap.
+/// (Not by the midpoint alone: a segment running on over two collinear faces belongs to both.)
+bool associated(const Segment2& m, const Segment2& face, const GroundTruthParams& params)
+{
+  if (headingDifference(m, face, params.directed) > params.association_angle) return false;
+  const double length = face.length();
+  const Vec2 u = (face.end - face.start) / length, n(-u.y(), u.x());
+  const double a = u.dot(m.start - face.start), b = u.dot(m.end - face.start);
+  const double lo = std::max(std::min(a, b), 0.0), hi = std::min(std::max(a, b), length);
+  if (!(hi > lo)) return false;
+  const double da = n.dot(m.start - face.start), db = n.dot(m.end - face.start);
+  const auto offset = [&](double t) { return da + (db - da) * (t - a) / (b - a); };
+  return std::abs(offset(lo)) <= params.association_distance &&
+         std::abs(offset(hi)) <= params.association_distance;
+}
+
+void requirePositive(double v, const char* key)
+{
+  if (!(v > 0.0) || !std::isfinite(v))
+    throw linemap::ParameterError(std::string("parameter '") + key + "' must be positive, got " +
+                                  std::to_string(v));
+}
+
+void checkFinite(const std::vector<Segment2>& segments, const char* what)
+{
+  for (std::size_t i = 0; i < segments.size(); ++i)
+    if (!segments[i].start.allFinite() || !segments[i].end.allFinite())
+      throw std::invalid_argument(std::string("ground truth metrics: ") + what + " " + std::to_string(i) +
+                                  " has non-finite coordinates");
+}
+
+/// A true corner and the face ends that meet there (end 0: a face's start, 1: its end).
+struct Corner
+{
+  Vec2 point = Vec2::Zero();
+  struct Meeting
+  {
+    std::size_t face_a, end_a, face_b, end_b;
+  };
+  std::vector<Meeting> meetings;
+};
+
+std::vector<Corner> cornersOf(const std::vector<Segment2>& walls, const GroundTruthParams& params)
+{
+  std::vector<Corner> corners;
+  for (std::size_t i = 0; i < walls.size(); ++i)
+    for (std::size_t j = i + 1; j < walls.size(); ++j)
+    {
+      if (undirectedAngle(walls[i], walls[j]) < params.corner_min_angle) continue;
+      for (std::size_t ea = 0; ea < 2; ++ea)
+        for (std::size_t eb = 0; eb < 2; ++eb)
+        {
+          const Vec2& a = ea == 0 ? walls[i].start : walls[i].end;
+          const Vec2& b = eb == 0 ? walls[j].start : walls[j].end;
+          if ((a - b).norm() > params.corner_tolerance) continue;
+          const Vec2 c = 0.5 * (a + b);
+          auto known =
+              std::find_if(corners.begin(), corners.end(),
+                           [&](const Corner& k) { return (k.point - c).norm() <= params.corner_tolerance; });
+          if (known == corners.end()) known = corners.insert(corners.end(), Corner{c, {}});
+          known->meetings.push_back({i, ea, j, eb});
+        }
+    }
+  return corners;
+}
+}  // namespace
+
+GroundTruthParams GroundTruthParams::fromParams(const linemap::ParamSet& params)
+{
+  constexpr double deg = linemap::kPi / 180.0;
+  GroundTruthParams p;
+  p.coverage_tolerance = params.getDouble("eval/gt_coverage_tolerance", p.coverage_tolerance);
+  p.sample_spacing = params.getDouble("eval/gt_sample_spacing", p.sample_spacing);
+  p.association_angle = deg * params.getDouble("eval/gt_association_angle_deg", p.association_angle / deg);
+  p.association_distance = params.getDouble("eval/gt_association_distance", p.association_distance);
+  p.directed = params.getBool("eval/gt_directed", p.directed);
+  p.min_seen_length = params.getDouble("eval/gt_min_seen_length", p.min_seen_length);
+  const int beams = params.getInt("eval/gt_min_seen_beams", static_cast<int>(p.min_seen_beams));
+  if (beams < 0) throw linemap::ParameterError("parameter 'eval/gt_min_seen_beams' must be >= 0");
+  p.min_seen_beams = static_cast<std::size_t>(beams);
+  p.corner_tolerance = params.getDouble("eval/gt_corner_tolerance", p.corner_tolerance);
+  p.corner_min_angle = deg * params.getDouble("eval/gt_corner_min_angle_deg", p.corner_min_angle / deg);
+  p.vertex_radius = params.getDouble("eval/gt_vertex_radius", p.vertex_radius);
+  p.validate();
+  return p;
+}
+
+void GroundTruthParams::validate() const
+{
+  requirePositive(coverage_tolerance, "eval/gt_coverage_tolerance");
+  requirePositive(sample_spacing, "eval/gt_sample_spacing");
+  requirePositive(association_distance, "eval/gt_association_distance");
+  requirePositive(corner_tolerance, "eval/gt_corner_tolerance");
+  requirePositive(vertex_radius, "eval/gt_vertex_radius");
+  const double max_angle = directed ? linemap::kPi : 0.5 * linemap::kPi;
+  if (!(association_angle >= 0.0) || association_angle > max_angle)
+    throw linemap::ParameterError(std::string("parameter 'eval/gt_association_angle_deg' must be in [0, ") +
+                                  (directed ? "180" : "90") + "]");
+  if (!(corner_min_angle >= 0.0) || corner_min_angle > 0.5 * linemap::kPi)
+    throw linemap::ParameterError("parameter 'eval/gt_corner_min_angle_deg' must be in [0, 90]");
+  if (!(min_seen_length >= 0.0) || !std::isfinite(min_seen_length))
+    throw linemap::ParameterError("parameter 'eval/gt_min_seen_length' must be >= 0, got " +
+                                  std::to_string(min_seen_length));
+}
+
+SeenParts seenParts(const GroundTruth& truth, double min_piece_length, std::size_t min_piece_beams)
+{
+  SeenParts seen(truth.walls.size());
+  std::vector<std::pair<double, double>> interval;
+  for (std::size_t k = 0; k < truth.scans.size(); ++k)
+  {
+    const auto& visible = truth.scans[k].visible;
+    interval.clear();
+    for (const VisibleWall& v : visible)
+    {
+      if (v.wall >= truth.walls.size())
+        throw std::invalid_argument("ground truth: scans[" + std::to_string(k) + "] sees wall " +
+                                    std::to_string(v.wall) + " of " + std::to_string(truth.walls.size()));
+      const Segment2& face = truth.walls[v.wall];
+      const double length = face.length();
+      const Vec2 u = (face.end - face.start) / length;
+      double a = u.dot(v.segment.start - face.start), b = u.dot(v.segment.end - face.start);
+      if (a > b) std::swap(a, b);
+      interval.emplace_back(std::clamp(a, 0.0, length), std::clamp(b, 0.0, length));
+    }
+    // A sight (a piece, or the pieces of a curve seen together) is long and dense enough as a whole.
+    for (const auto& sight : sights(truth.walls, visible, truth.curves))
+    {
+      double length = 0.0;
+      std::size_t beams = 0;
+      for (const std::size_t i : sight)
+      {
+        length += interval[i].second - interval[i].first;
+        beams += visible[i].beams;
+      }
+      if (length < min_piece_length || beams < min_piece_beams) continue;
+      for (const std::size_t i : sight)
+        if (interval[i].second > interval[i].first) seen[visible[i].wall].push_back(interval[i]);
+    }
+  }
+  for (auto& parts : seen)
+  {
+    std::sort(parts.begin(), parts.end());
+    std::size_t n = 0;
+    for (const auto& p : parts)
+      if (n > 0 && p.first <= parts[n - 1].second)
+        parts[n - 1].second = std::max(parts[n - 1].second, p.second);
+      else
+        parts[n++] = p;
+    parts.resize(n);
+  }
+  return seen;
+}
+
+std::vector<Vec2> findCorners(const std::vector<Segment2>& walls, const GroundTruthParams& params)
+{
+  std::vector<Vec2> out;
+  for (const Corner& c : cornersOf(walls, params)) out.push_back(c.point);
+  return out;
+}
+
+GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls, const SeenParts& seen,
+                                             const std::vector<Segment2>& map,
+                                             const GroundTruthParams& params,
+                                             const std::vector<std::vector<std::size_t>>& curves)
+{
+  params.validate();
+  checkFinite(walls, "face");
+  checkFinite(map, "map segment");
+  if (seen.size() != walls.size())
+    throw std::invalid_argument("ground truth metrics: seen parts for " + std::to_string(seen.size()) +
+                                " faces, but there are " + std::to_string(walls.size()));
+  GroundTruthResult r;
+  double covered_length = 0.0, seen_total = 0.0, endpoint_sum = 0.0, vertex_sum = 0.0;
+  std::size_t endpoint_count = 0;
+  std::vector<std::vector<std::size_t>> assoc(walls.size());
+  // seen_end[face][0 / 1]: the face's start / end was seen.
+  std::vector<std::array<bool, 2>> seen_end(walls.size(), {false, false});
+  // joint[face][end]: where consecutive chords of a curve meet: no end of a wall.
+  std::vector<std::array<bool, 2>> joint(walls.size(), {false, false});
+  for (const auto& curve : curves)
+    for (std::size_t k = 0; k < curve.size(); ++k)
+    {
+      if (curve[k] >= walls.size())
+        throw std::invalid_argument("ground truth metrics: a curve lists face " + std::to_string(curve[k]) +
+                                    " of " + std::to_string(walls.size()));
+      const std::size_t a = curve[k], b = curve[(k + 1) % curve.size()];
+      if (a == b || b >= walls.size()) continue;  // one face; b out of range is reported at its turn
+      for (std::size_t ea = 0; ea < 2; ++ea)
+        for (std::size_t eb = 0; eb < 2; ++eb)
+          if (((ea ? walls[a].end : walls[a].start) - (eb ? walls[b].end : walls[b].start)).norm() <=
+              params.corner_tolerance)
+            joint[a][ea] = joint[b][eb] = true;
+    }
+  for (std::size_t w = 0; w < walls.size(); ++w)
+  {
+    const Segment2& wall = walls[w];
+    const double length = wall.length();
+    if (!(length > 0.0))
+      throw std::invalid_argument("ground truth metrics: face " + std::to_string(w) + " has zero length");
+    if (seen[w].empty())
+    {
+      ++r.unseen_walls;
+      continue;
+    }
+    WallScore score;
+    score.face = w;
+    score.length = length;
+    for (std::size_t m = 0; m < map.size(); ++m)
+      if (associated(map[m], wall, params)) assoc[w].push_back(m);
+    score.associated = assoc[w].size();
+
+    std::size_t samples = 0, covered = 0;
+    const Vec2 u = (wall.end - wall.start) / length;
+    for (const auto& [from, to] : seen[w])
+    {
+      score.seen_length += to - from;
+      const std::size_t steps = static_cast<std::size_t>(std::ceil((to - from) / params.sample_spacing));
+      for (std::size_t k = 0; k <= steps; ++k)
+      {
+        const double t =
+            steps == 0 ? from : from + (to - from) * static_cast<double>(k) / static_cast<double>(steps);
+        const Vec2 p = wall.start + t * u;
+        ++samples;
+        for (const std::size_t m : assoc[w])
+          if (linemap::distanceToSegment(p, map[m].start, map[m].end) <= params.coverage_tolerance)
+          {
+            ++covered;
+            break;
+          }
+      }
+    }
+    score.coverage = static_cast<double>(covered) / static_cast<double>(samples);
+
+    seen_end[w] = {!joint[w][0] && seen[w].front().first <= params.coverage_tolerance,
+                   !joint[w][1] && seen[w].back().second >= length - params.coverage_tolerance};
+    score.seen_endpoints = std::size_t(seen_end[w][0]) + std::size_t(seen_end[w][1]);
+    if (assoc[w].empty())
+    {
+      score.endpoint_error = std::numeric_limits<double>::infinity();
+      ++r.undetected_walls;
+    }
+    else
+      for (std::size_t e = 0; e < 2; ++e)
+      {
+        if (!seen_end[w][e]) continue;
+        const Vec2& end = e == 0 ? wall.start : wall.end;
+        double nearest = std::numeric_limits<double>::infinity(), reach = nearest;
+        for (const std::size_t m : assoc[w])
+        {
+          nearest = std::min({nearest, (map[m].start - end).norm(), (map[m].end - end).norm()});
+          reach = std::min(reach, linemap::distanceToSegment(end, map[m].start, map[m].end));
+        }
+        if (reach > params.vertex_radius)
+        {
+          ++r.unmapped_ends;
+          continue;
+        }
+        ++score.mapped_endpoints;
+        score.endpoint_error = std::max(score.endpoint_error, nearest);
+        r.max_endpoint_error = std::max(r.max_endpoint_error, nearest);
+        endpoint_sum += nearest;
+        ++endpoint_count;
+      }
+    covered_length += score.coverage * score.seen_length;
+    seen_total += score.seen_length;
+    r.walls.push_back(score);
+  }
+  if (seen_total > 0.0) r.coverage = covered_length / seen_total;
+  if (endpoint_count > 0) r.mean_endpoint_error = endpoint_sum / static_cast<double>(endpoint_count);
+
+  std::size_t corners_with_endpoints = 0;
+  std::vector<std::size_t> faces;
+  for (const Corner& c : cornersOf(walls, params))
+  {
+    faces.clear();
+    for (const Corner::Meeting& m : c.meetings)
+      if (seen_end[m.face_a][m.end_a] && seen_end[m.face_b][m.end_b])
+        for (const std::size_t f : {m.face_a, m.face_b})
+          if (std::find(faces.begin(), faces.end(), f) == faces.end()) faces.push_back(f);
+    if (faces.empty()) continue;  // not seen
+    CornerScore cs;
+    cs.corner = c.point;
+    // Each map endpoint once, however many of the corner's faces its segment is associated with.
+    std::vector<std::size_t> segments;
+    for (const std::size_t f : faces) segments.insert(segments.end(), assoc[f].begin(), assoc[f].end());
+    std::sort(segments.begin(), segments.end());
+    segments.erase(std::unique(segments.begin(), segments.end()), segments.end());
+    for (const std::size_t m : segments)
+      for (const Vec2& e : {map[m].start, map[m].end})
+      {
+        const double d = (e - c.point).norm();
+        if (d > params.vertex_radius) continue;
+        cs.vertex_error += d;
+        ++cs.endpoints;
+      }
+    if (cs.endpoints == 0)
+      ++r.missed_corners;
+    else
+    {
+      vertex_sum += cs.vertex_error;
+      ++corners_with_endpoints;
+    }
+    r.corners.push_back(cs);
+  }
+  if (corners_with_endpoints > 0)
+    r.mean_vertex_error = vertex_sum / static_cast<double>(corners_with_endpoints);
+  return r;
+}
+
+GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth, const std::vector<Segment2>& map,
+                                             const GroundTruthParams& params)
+{
+  params.validate();
+  return evaluateAgainstGroundTruth(truth.walls,
+                                    seenParts(truth, params.min_seen_length, params.min_seen_beams), map,
+                                    params, truth.curves);
+}
+
+GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
+                                             const std::vector<Segment2>& map,
+                                             const GroundTruthParams& params)
+{
+  SeenParts all(walls.size());
+  for (std::size_t w = 0; w < walls.size(); ++w) all[w].emplace_back(0.0, walls[w].length());
+  return evaluateAgainstGroundTruth(walls, all, map, params);
+}
+
+}  // namespace line_map_eval
