@@ -168,7 +168,8 @@ void HoughExtractor::extractRange(const PreparedScan& scan, PointRange range, Ex
     remaining_.resize(kept);
   }
   // Leave the accumulator all zero for the next call: withdraw the remaining votes, or
-  // clear the whole span when that is cheaper (a sequential clear is ~16x faster per cell).
+  // clear the whole span when that is cheaper (a sequential clear costs a small fraction of a
+  // withdrawn vote per cell: the factor below).
   if (remaining_.size() * static_cast<std::size_t>(angle_bins_) * 16 < cells)
     for (int idx : remaining_) vote(scan.points[idx], -1);
   else

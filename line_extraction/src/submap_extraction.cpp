@@ -44,6 +44,20 @@ SubmapExtractor::SubmapExtractor(const SubmapParams& params, const SensorModel& 
 {
 }
 
+std::size_t SubmapExtractor::appendTo(const PreparedScan& scan, ExtractionResult& result,
+                                      const Pose2& laser_pose)
+{
+  const std::vector<Segment>& found = update(scan, result, laser_pose);
+  result.segments.insert(result.segments.end(), found.begin(), found.end());
+  return found.size();
+}
+
+void SubmapExtractor::observeStamp(std::uint64_t stamp_ns)
+{
+  if (stamp_ns < last_stamp_ns_) reset();
+  last_stamp_ns_ = stamp_ns;
+}
+
 void SubmapExtractor::reset()
 {
   scans_.clear();

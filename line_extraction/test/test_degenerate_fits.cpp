@@ -1,7 +1,6 @@
 // No extractor emits a segment shorter than the pipeline's minimum by default, and a cluster whose
 // points all lie within the range noise of one spot yields no segment at all, whatever min_length
-// says: such a fit has no direction (split_merge emitted start = end for 26 points on a small
-// object 0.3 m away, and 59 segments shorter than 5 cm in one bag).
+// says: such a fit has no direction (split_merge once emitted start = end for a small object).
 #include <gtest/gtest.h>
 
 #include <cmath>

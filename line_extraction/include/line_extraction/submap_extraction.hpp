@@ -65,6 +65,15 @@ class SubmapExtractor
   const std::vector<Segment>& update(const PreparedScan& scan, const ExtractionResult& extracted,
                                      const Pose2& laser_pose);
 
+  /// update() for a live scan: appends the submap segments to `result`, which is what the
+  /// per-scan extractor made of `scan` (their points are in no scan, so they carry no member
+  /// indices). Returns how many were appended.
+  std::size_t appendTo(const PreparedScan& scan, ExtractionResult& result, const Pose2& laser_pose);
+
+  /// A live scan's stamp [ns], offered before anything else is done with the scan: the window is
+  /// forgotten when it lies before the previous one (the clock jumped back: a bag looped).
+  void observeStamp(std::uint64_t stamp_ns);
+
   /// Forgets the window (a time jump, a new session).
   void reset();
 
@@ -127,6 +136,7 @@ class SubmapExtractor
   std::vector<FoundLine> pending_;  ///< found when the last scan entered, in the fixed frame
   std::vector<Segment> output_;
   std::size_t lines_found_ = 0;
+  std::uint64_t last_stamp_ns_ = 0;
   // Hash grid over the window points, cell = seed_radius.
   std::vector<std::int64_t> cell_keys_;
   std::vector<std::uint32_t> cell_order_;
