@@ -21,14 +21,7 @@ const std::vector<std::string> kAlgorithms = {"srg",         "split_merge",     
 
 ScanInput input(const std::vector<float>& ranges, double angle_min, double increment)
 {
-  ScanInput scan;
-  scan.ranges = ranges.data();
-  scan.count = ranges.size();
-  scan.angle_min = angle_min;
-  scan.angle_increment = increment;
-  scan.range_min = 0.05;
-  scan.range_max = 20.0;
-  return scan;
+  return line_extraction_test::scanOf(ranges, angle_min, increment);
 }
 
 /// Deterministic noise in [-amplitude, amplitude].

@@ -116,7 +116,15 @@ class SubmapExtractor
   void dropOldScans();
   void buildGrid();
   void findLines(std::size_t first_new);
+  /// A line from an unused window point, its points marked used; false when none passes.
   bool grow(std::size_t seed, FoundLine& line);
+  /// The line through the seed and a neighbour that holds most of the seed's neighbours.
+  bool seedLine(std::size_t seed, LineNormal& best) const;
+  /// The contiguous run of band points through the seed, on its observers' side, refitted twice.
+  bool growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const;
+  /// Whether the run is a wall (support, extent, fit, no bend, no clutter beside, not seen
+  /// through); fills the line's extent and sigma.
+  bool acceptRun(const std::vector<Candidate>& run, const LineNormal& fit_line, FoundLine& line) const;
   /// Whether the residuals of `run` bend along the line (a chord of a curved wall).
   bool curved(const std::vector<Candidate>& run, const LineNormal& line, double t0, double t1,
               double sigma) const;
