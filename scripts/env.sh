@@ -62,12 +62,13 @@ _linemap_progress() {
   case "$1" in
     build) grep -o '^\[ *[0-9]*%\]' "$2" 2>/dev/null | tail -n 1 | tr -d '[] ' | sed 's/$/ /' ;;
     tests)
-      # One make target per gtest, rostest and launch check: _run_tests_<pkg>_<kind>_<name>;
-      # LINEMAP_PROGRESS_KINDS (e.g. "gtest") counts only those kinds.
-      local leaf="_run_tests_[A-Za-z0-9_]*_(${LINEMAP_PROGRESS_KINDS:-gtest|rostest|roslaunch-check})_"
+      # One make target per gtest, rostest and launch check: _run_tests_<pkg>_<kind>_<name>.
+      local leaf='_run_tests_[A-Za-z0-9_]*_(gtest|rostest|roslaunch-check)_'
       printf '%s of %s tests ' "$(grep -cE "Built target ${leaf}" "$2" 2>/dev/null || true)" \
         "$(find "$BUILD_DIR/build" -maxdepth 3 -type d -path '*/CMakeFiles/_run_tests_*' 2>/dev/null | grep -cE "/${leaf}" || true)"
       ;;
+    # scripts/check.sh: one "gtest: <pkg>/<name>" line per test started, LINEMAP_GTESTS in all.
+    gtests) printf '%s of %s tests ' "$(grep -c '^gtest: ' "$2" 2>/dev/null || true)" "${LINEMAP_GTESTS:-?}" ;;
   esac
 }
 
