@@ -1,4 +1,5 @@
-# linemap: the two commands are `make demo` and `make test`; everything else is a helper.
+# linemap: the two commands are `make demo` and `make test` (the whole suite, what CI runs); `make check`
+# is the fast tier (the unit tests alone); everything else is a helper.
 SHELL := /bin/bash
 export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 BUILD_DIR ?= .build
@@ -7,7 +8,7 @@ export BUILD_DIR
 SANITIZE ?= 0
 export SANITIZE
 
-.PHONY: all setup build test demo format clean fuzz
+.PHONY: all setup build test check demo format clean fuzz
 all: build
 
 setup:
@@ -19,6 +20,10 @@ build: setup
 test:
 	@LINEMAP_QUIET=1 bash scripts/setup.sh
 	@bash scripts/test.sh
+
+check:
+	@LINEMAP_QUIET=1 bash scripts/setup.sh
+	@bash scripts/check.sh
 
 demo:
 	@LINEMAP_QUIET=1 bash scripts/setup.sh

@@ -2,10 +2,7 @@
 # Builds the catkin workspace (the repository root is the source space) into $BUILD_DIR.
 # PACKAGES="a;b" restricts the build to those packages (catkin whitelist).
 set -euo pipefail
-# SANITIZE=1: ASan+UBSan build in its own directory (.build-sanitize unless BUILD_DIR is set elsewhere).
-if [ "${SANITIZE:-0}" = 1 ]; then
-  case "${BUILD_DIR:-.build}" in .build | */.build) export BUILD_DIR=.build-sanitize ;; esac
-fi
+# SANITIZE=1: ASan+UBSan build in its own directory (env.sh).
 source "$(dirname "$0")/env.sh"
 cd "$LINEMAP_ROOT"
 mkdir -p "$BUILD_DIR"

@@ -2,6 +2,15 @@
 # The Debian system python must come first: a pyenv python3 lacks catkin_pkg.
 export PATH="/usr/bin:/bin:/usr/sbin:/sbin:${PATH}"
 LINEMAP_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# SANITIZE=1 (`make test SANITIZE=1`, `make check SANITIZE=1`): the ASan+UBSan build and its tests, in a
+# directory of their own (.build-sanitize unless BUILD_DIR is set elsewhere).
+if [ "${SANITIZE:-0}" = 1 ]; then
+  case "${BUILD_DIR:-.build}" in .build | */.build) export BUILD_DIR=.build-sanitize ;; esac
+  # Nodelets load into the uninstrumented nodelet manager: the ASan runtime then comes late (link order check
+  # off); ROS and Python leak at exit by design, so leak checking stays off.
+  export ASAN_OPTIONS="halt_on_error=1:print_stacktrace=1:detect_leaks=0:verify_asan_link_order=0${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
+  export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
+fi
 BUILD_DIR="${BUILD_DIR:-${LINEMAP_ROOT}/.build}"
 case "$BUILD_DIR" in /*) ;; *) BUILD_DIR="${LINEMAP_ROOT}/${BUILD_DIR}" ;; esac
 export LINEMAP_ROOT BUILD_DIR
@@ -58,6 +67,8 @@ _linemap_progress() {
       printf '%s of %s tests ' "$(grep -cE "Built target ${leaf}" "$2" 2>/dev/null || true)" \
         "$(find "$BUILD_DIR/build" -maxdepth 3 -type d -path '*/CMakeFiles/_run_tests_*' 2>/dev/null | grep -cE "/${leaf}" || true)"
       ;;
+    # scripts/check.sh: one "gtest: <pkg>/<name>" line per test started, LINEMAP_GTESTS in all.
+    gtests) printf '%s of %s tests ' "$(grep -c '^gtest: ' "$2" 2>/dev/null || true)" "${LINEMAP_GTESTS:-?}" ;;
   esac
 }
 

@@ -1,13 +1,7 @@
 #!/usr/bin/env bash
-# Builds and runs every gtest and rostest, then prints `N passed, N failed[, N skipped]`.
+# `make test`, the whole suite and what CI runs: builds everything, runs every gtest, rostest, launch check
+# and the install check, replays and briefly runs the fuzzers, then prints `N passed, N failed[, N skipped]`.
 set -euo pipefail
-if [ "${SANITIZE:-0}" = 1 ]; then
-  case "${BUILD_DIR:-.build}" in .build | */.build) export BUILD_DIR=.build-sanitize ;; esac
-  # Nodelets load into the uninstrumented nodelet manager: the ASan runtime then comes late (link order check off);
-  # ROS and Python leak at exit by design, so leak checking stays off.
-  export ASAN_OPTIONS="halt_on_error=1:print_stacktrace=1:detect_leaks=0:verify_asan_link_order=0${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
-  export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
-fi
 source "$(dirname "$0")/env.sh"
 # The build's and the tests' output go to logs in $BUILD_DIR (build.log, test.log, fuzz.log); one line
 # per step, the failures and the summary at the end. LINEMAP_QUIET=0 shows everything as it runs.

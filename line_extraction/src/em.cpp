@@ -115,9 +115,17 @@ class EmExtractor : public Extractor
       log_likelihood_ = fullEm(scan);
     }
 
-    // Hard assignment to the most responsible component; runs of each line become segments.
-    assignment_.assign(n, -1);
-    for (int i = 0; i < n; ++i)
+    // Runs of each line become segments.
+    assignHard(scan);
+    emitAssignedLines(scan, begin_, n, assignment_, lines_.size(), runs_, members_, out);
+  }
+
+ private:
+  /// Hard assignment of each point to the most responsible component (-1: the outliers).
+  void assignHard(const PreparedScan& scan)
+  {
+    assignment_.assign(n_, -1);
+    for (int i = 0; i < n_; ++i)
     {
       double best = outlier_weight_ * outlier_density_;
       for (std::size_t k = 0; k < lines_.size(); ++k)
@@ -131,18 +139,8 @@ class EmExtractor : public Extractor
         }
       }
     }
-    const std::size_t first_segment = out.segments.size();
-    for (std::size_t k = 0; k < lines_.size(); ++k)
-    {
-      members_.clear();
-      for (int i = 0; i < n; ++i)
-        if (assignment_[i] == static_cast<int>(k)) members_.push_back(begin_ + i);
-      emitInlierRuns(scan, members_.data(), static_cast<int>(members_.size()), runs_, out);
-    }
-    sortSegmentsByFirstPoint(out, first_segment);
   }
 
- private:
   /// The line's noise is c.sigma at the base range noise and grows with the point's noise scale.
   static double density(const Component& c, const Vec2& p, double scale)
   {

@@ -70,7 +70,35 @@ void HoughExtractor::extractRange(const PreparedScan& scan, PointRange range, Ex
   // Votes are 16 bit: a cell can hold every point of any laser scan (< 65536 beams).
   if (range.size() > std::numeric_limits<std::uint16_t>::max())
     range.end = range.begin + std::numeric_limits<std::uint16_t>::max();
+  const std::size_t cells = prepareAccumulator(scan, range);
 
+  const std::size_t first_segment = out.segments.size();
+  remaining_.clear();
+  candidates_.clear();
+  for (int i = range.begin; i < range.end; ++i)
+  {
+    remaining_.push_back(i);
+    vote(scan.points[i], +1);
+  }
+  while (static_cast<int>(remaining_.size()) >= min_votes_)
+  {
+    int best_votes = 0;
+    const int best_cell = strongestCell(best_votes);
+    if (best_votes < min_votes_) break;
+    takeLine(scan, best_cell, best_votes, out);
+  }
+  // Leave the accumulator all zero for the next call: withdraw the remaining votes, or
+  // clear the whole span when that is cheaper (a sequential clear costs a small fraction of a
+  // withdrawn vote per cell: the factor below).
+  if (remaining_.size() * static_cast<std::size_t>(angle_bins_) * 16 < cells)
+    for (int idx : remaining_) vote(scan.points[idx], -1);
+  else
+    std::fill_n(acc_.get(), cells, std::uint16_t{0});
+  sortSegmentsByFirstPoint(out, first_segment);
+}
+
+std::size_t HoughExtractor::prepareAccumulator(const PreparedScan& scan, PointRange range)
+{
   // The accumulator only spans the radii these points can have.
   double max_norm = 0.0;
   for (int i = range.begin; i < range.end; ++i) max_norm = std::max(max_norm, scan.points[i].norm());
@@ -87,93 +115,82 @@ void HoughExtractor::extractRange(const PreparedScan& scan, PointRange range, Ex
     if (!acc_) throw std::bad_alloc();
     acc_cells_ = cells;
   }
+  return cells;
+}
 
-  const std::size_t first_segment = out.segments.size();
-  remaining_.clear();
-  candidates_.clear();
-  for (int i = range.begin; i < range.end; ++i)
+int HoughExtractor::strongestCell(int& best_votes)
+{
+  // Strongest cell among the candidates; those fallen below min_votes are dropped for good.
+  best_votes = 0;
+  int best_cell = 0;
+  std::size_t kept_candidates = 0;
+  for (int c : candidates_)
   {
-    remaining_.push_back(i);
-    vote(scan.points[i], +1);
-  }
-
-  while (static_cast<int>(remaining_.size()) >= min_votes_)
-  {
-    // Strongest cell among the candidates; those fallen below min_votes are dropped for good.
-    int best_votes = 0, best_cell = 0;
-    std::size_t kept_candidates = 0;
-    for (int c : candidates_)
+    const int v = acc_[c];
+    if (v < min_votes_) continue;
+    candidates_[kept_candidates++] = c;
+    if (v > best_votes || (v == best_votes && c < best_cell))
     {
-      const int v = acc_[c];
-      if (v < min_votes_) continue;
-      candidates_[kept_candidates++] = c;
-      if (v > best_votes || (v == best_votes && c < best_cell))
-      {
-        best_votes = v;
-        best_cell = c;
-      }
+      best_votes = v;
+      best_cell = c;
     }
-    candidates_.resize(kept_candidates);
-    if (best_votes < min_votes_) break;
+  }
+  candidates_.resize(kept_candidates);
+  return best_cell;
+}
 
-    const double theta = (best_cell % angle_bins_) * angle_resolution_;
-    const double rho = (best_cell / angle_bins_) * radius_resolution_ - max_radius_;
-    Peak peak;
-    peak.votes = best_votes;
-    peak.radius = std::abs(rho);
-    peak.angle = linemap::normalizeAngle(rho < 0.0 ? theta + linemap::kPi : theta);
-    peaks_.push_back(peak);
+void HoughExtractor::takeLine(const PreparedScan& scan, int cell, int votes, ExtractionResult& out)
+{
+  const double theta = (cell % angle_bins_) * angle_resolution_;
+  const double rho = (cell / angle_bins_) * radius_resolution_ - max_radius_;
+  Peak peak;
+  peak.votes = votes;
+  peak.radius = std::abs(rho);
+  peak.angle = linemap::normalizeAngle(rho < 0.0 ? theta + linemap::kPi : theta);
+  peaks_.push_back(peak);
 
-    // Inliers of the cell's line, TLS refit, inliers of the refitted line.
-    Vec2 normal(std::cos(theta), std::sin(theta));
-    double offset_line = rho;
-    LineSums sums;
-    taken_.assign(remaining_.size(), 0);
+  // Inliers of the cell's line, TLS refit, inliers of the refitted line.
+  Vec2 normal(std::cos(theta), std::sin(theta));
+  double offset_line = rho;
+  LineSums sums;
+  taken_.assign(remaining_.size(), 0);
+  for (std::size_t k = 0; k < remaining_.size(); ++k)
+  {
+    const Vec2& p = scan.points[remaining_[k]];
+    if (std::abs(normal.dot(p) - offset_line) <= scan.tolerance(remaining_[k], inlier_distance_))
+    {
+      sums.add(p);
+      taken_[k] = 1;
+    }
+  }
+  const LineFit fit = fitLine(sums, runs_.range_sigma);
+  inliers_.clear();
+  if (fit.valid)
+  {
+    normal = Vec2(std::cos(fit.angle), std::sin(fit.angle));
+    offset_line = fit.radius;
     for (std::size_t k = 0; k < remaining_.size(); ++k)
     {
-      const Vec2& p = scan.points[remaining_[k]];
-      if (std::abs(normal.dot(p) - offset_line) <= scan.tolerance(remaining_[k], inlier_distance_))
+      if (std::abs(normal.dot(scan.points[remaining_[k]]) - offset_line) <=
+          scan.tolerance(remaining_[k], inlier_distance_))
       {
-        sums.add(p);
+        inliers_.push_back(remaining_[k]);
         taken_[k] = 1;
       }
     }
-    const LineFit fit = fitLine(sums, runs_.range_sigma);
-    inliers_.clear();
-    if (fit.valid)
-    {
-      normal = Vec2(std::cos(fit.angle), std::sin(fit.angle));
-      offset_line = fit.radius;
-      for (std::size_t k = 0; k < remaining_.size(); ++k)
-      {
-        if (std::abs(normal.dot(scan.points[remaining_[k]]) - offset_line) <=
-            scan.tolerance(remaining_[k], inlier_distance_))
-        {
-          inliers_.push_back(remaining_[k]);
-          taken_[k] = 1;
-        }
-      }
-    }
-    emitInlierRuns(scan, inliers_.data(), static_cast<int>(inliers_.size()), runs_, out);
-
-    // Withdraw the votes of every point taken (the cell's own voters at least, so the loop progresses).
-    std::size_t kept = 0;
-    for (std::size_t k = 0; k < remaining_.size(); ++k)
-    {
-      if (taken_[k])
-        vote(scan.points[remaining_[k]], -1);
-      else
-        remaining_[kept++] = remaining_[k];
-    }
-    remaining_.resize(kept);
   }
-  // Leave the accumulator all zero for the next call: withdraw the remaining votes, or
-  // clear the whole span when that is cheaper (a sequential clear is ~16x faster per cell).
-  if (remaining_.size() * static_cast<std::size_t>(angle_bins_) * 16 < cells)
-    for (int idx : remaining_) vote(scan.points[idx], -1);
-  else
-    std::fill_n(acc_.get(), cells, std::uint16_t{0});
-  sortSegmentsByFirstPoint(out, first_segment);
+  emitInlierRuns(scan, inliers_.data(), static_cast<int>(inliers_.size()), runs_, out);
+
+  // Withdraw the votes of every point taken (the cell's own voters at least, so the loop progresses).
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < remaining_.size(); ++k)
+  {
+    if (taken_[k])
+      vote(scan.points[remaining_[k]], -1);
+    else
+      remaining_[kept++] = remaining_[k];
+  }
+  remaining_.resize(kept);
 }
 
 namespace

@@ -12,7 +12,6 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <chrono>
-#include <cmath>
 #include <memory>
 #include <mutex>
 #include <pluginlib/class_list_macros.hpp>
@@ -22,28 +21,19 @@
 #include "line_extraction/ros/param_loader.hpp"
 #include "line_extraction/ros/transport.hpp"
 #include "line_extraction/ros/wall_diagnostics.hpp"
+#include "line_extraction/scan_geometry_monitor.hpp"
+#include "line_extraction/small_helpers.hpp"
 #include "line_extraction/submap_extraction.hpp"
 
 namespace line_extraction
 {
 namespace
 {
-std_msgs::ColorRGBA color(float r, float g, float b)
-{
-  std_msgs::ColorRGBA c;
-  c.r = r;
-  c.g = g;
-  c.b = b;
-  c.a = 1.0f;
-  return c;
-}
-
 geometry_msgs::Point point(const Vec2& p)
 {
   geometry_msgs::Point q;
   q.x = p.x();
   q.y = p.y();
-  q.z = 0.0;
   return q;
 }
 }  // namespace
@@ -71,7 +61,7 @@ class LineExtractionRos
     segments_pub_ = nh.advertise<line_map_msgs::LineSegmentArray>("line_segments", 100);
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_segments_markers", 1);
     // Room for bursts (a bag played fast, worker threads busy with a lookup table or an autosave):
-    // with 10, a bag at 40x real time lost scans here, unseen by any counter. Extraction takes
+    // a short queue lost scans of a bag played fast here, unseen by any counter. Extraction takes
     // microseconds, so a long queue adds no latency in steady state.
     scan_sub_ = nh.subscribe("scan", 100, &LineExtractionRos::scanCallback, this, linemap_ros::noDelay());
     diagnostics_ = std::make_unique<linemap_ros::WallDiagnostics>(nh, private_nh, "line extraction", this,
@@ -89,20 +79,11 @@ class LineExtractionRos
     std::lock_guard<std::mutex> lock(mutex_);
     ++scans_;
     checkGeometry(*msg);
-    ScanInput scan;
-    scan.ranges = msg->ranges.data();
-    scan.count = msg->ranges.size();
-    scan.angle_min = msg->angle_min;
-    scan.angle_increment = msg->angle_increment;
-    scan.range_min = msg->range_min;
-    scan.range_max = msg->range_max;
-    scan.intensities = msg->intensities.data();
-    scan.intensity_count = msg->intensities.size();
     const ExtractionResult* result = nullptr;
     const auto t0 = std::chrono::steady_clock::now();
     try
     {
-      result = &extractor_->extract(scan);
+      result = &extractor_->extract(scanInputOf(*msg));
     }
     catch (const ScanError& e)
     {
@@ -111,19 +92,17 @@ class LineExtractionRos
                         msg->header.frame_id.c_str(), rejected_scans_, e.what());
       return;
     }
-    last_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    last_ms_ = linemap::millisecondsSince(t0);
     if (submap_->params().enabled) addSubmapSegments(*msg);
     segments_ += result->segments.size();
     if (want_segments) publishSegments(msg->header, *result);
     if (want_markers) publishMarkers(msg->header, *result);
   }
 
-  /// Appends the submap's segments to the extractor's result (their points are in no scan, so
-  /// they carry no member indices).
+  /// Appends the submap's segments to the extractor's result, the laser posed by tf in the odometry frame.
   void addSubmapSegments(const sensor_msgs::LaserScan& msg)
   {
-    if (msg.header.stamp < last_stamp_) submap_->reset();  // the clock jumped back (a bag looped)
-    last_stamp_ = msg.header.stamp;
+    submap_->observeStamp(msg.header.stamp.toNSec());
     geometry_msgs::TransformStamped odom_laser;
     try
     {
@@ -139,43 +118,22 @@ class LineExtractionRos
     }
     const auto& t = odom_laser.transform;
     const Pose2 laser(t.translation.x, t.translation.y, tf2::getYaw(t.rotation));
-    ExtractionResult& result = extractor_->mutableResult();
-    for (const Segment& seg : submap_->update(extractor_->preparedScan(), result, laser))
-    {
-      result.segments.push_back(seg);
-      ++submap_segments_;
-    }
+    submap_segments_ += submap_->appendTo(extractor_->preparedScan(), extractor_->mutableResult(), laser);
   }
 
-  /// Counts what the core does not judge: angle_max disagreeing with angle_min + (n - 1) *
-  /// angle_increment (the beams are placed by angle_min and angle_increment, as REP-117 readers
-  /// do; drivers writing n * increment are tolerated), and changes of the beam geometry.
   void checkGeometry(const sensor_msgs::LaserScan& msg)
   {
     const std::size_t n = msg.ranges.size();
-    if (n > 1 && std::isfinite(msg.angle_increment) && msg.angle_increment > 0.0f)
-    {
-      const double expected = msg.angle_min + static_cast<double>(n - 1) * msg.angle_increment;
-      if (!(std::abs(msg.angle_max - expected) <= 1.01 * msg.angle_increment))
-      {
-        ++inconsistent_angle_max_;
-        ROS_WARN_THROTTLE(5.0,
-                          "line_extraction: scan from frame '%s': angle_max %.6f differs from angle_min + "
-                          "(n - 1) * angle_increment = %.6f; beams placed by angle_min and angle_increment",
-                          msg.header.frame_id.c_str(), msg.angle_max, expected);
-      }
-    }
-    if (scans_ > 1 &&
-        (msg.angle_min != last_angle_min_ || msg.angle_increment != last_increment_ || n != last_count_))
-    {
-      ++geometry_changes_;
+    const auto found = geometry_.observe(msg.angle_min, msg.angle_max, msg.angle_increment, n);
+    if (found.inconsistent_angle_max)
+      ROS_WARN_THROTTLE(5.0,
+                        "line_extraction: scan from frame '%s': angle_max %.6f differs from angle_min + "
+                        "(n - 1) * angle_increment = %.6f; beams placed by angle_min and angle_increment",
+                        msg.header.frame_id.c_str(), msg.angle_max, found.expected_angle_max);
+    if (found.changed)
       ROS_INFO_THROTTLE(5.0,
                         "line_extraction: the scan geometry changed (%zu beams from %.4f rad by %.6f rad)", n,
                         msg.angle_min, msg.angle_increment);
-    }
-    last_angle_min_ = msg.angle_min;
-    last_increment_ = msg.angle_increment;
-    last_count_ = n;
   }
 
   void produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& stat)
@@ -187,8 +145,8 @@ class LineExtractionRos
     stat.add("algorithm", extractor_->params().algorithm);
     stat.add("scans", scans_);
     stat.add("rejected scans", rejected_scans_);
-    stat.add("inconsistent angle_max", inconsistent_angle_max_);
-    stat.add("geometry changes", geometry_changes_);
+    stat.add("inconsistent angle_max", geometry_.inconsistentAngleMax());
+    stat.add("geometry changes", geometry_.changes());
     stat.add("segments", segments_);
     if (submap_->params().enabled)
     {
@@ -217,32 +175,31 @@ class LineExtractionRos
     segments_pub_.publish(out);
   }
 
+  /// Lines, start points red, end points green; an empty marker is deleted rather than sent without points.
   void publishMarkers(const std_msgs::Header& header, const ExtractionResult& result)
   {
+    using visualization_msgs::Marker;
     visualization_msgs::MarkerArrayPtr out(new visualization_msgs::MarkerArray);
     const char* ns[3] = {"lines", "start_points", "end_points"};
-    const int type[3] = {visualization_msgs::Marker::LINE_LIST, visualization_msgs::Marker::POINTS,
-                         visualization_msgs::Marker::POINTS};
-    const std_msgs::ColorRGBA colors[3] = {color(0.2f, 0.4f, 1.0f), color(1.0f, 0.0f, 0.0f),
-                                           color(0.0f, 1.0f, 0.0f)};
+    const float rgb[3][3] = {{0.2f, 0.4f, 1.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}};
     for (int k = 0; k < 3; ++k)
     {
-      visualization_msgs::Marker m;
+      Marker m;
       m.header = header;
       m.ns = ns[k];
-      m.id = 0;
-      m.type = type[k];
-      // An empty marker is deleted rather than sent without points.
-      m.action =
-          result.segments.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
+      m.type = k == 0 ? Marker::LINE_LIST : Marker::POINTS;
+      m.action = result.segments.empty() ? Marker::DELETE : Marker::ADD;
       m.pose.orientation.w = 1.0;
       m.scale.x = k == 0 ? 0.03 : 0.08;
       m.scale.y = 0.08;
-      m.color = colors[k];
+      m.color.r = rgb[k][0];
+      m.color.g = rgb[k][1];
+      m.color.b = rgb[k][2];
+      m.color.a = 1.0f;
       for (const Segment& s : result.segments)
       {
-        if (k == 0 || k == 1) m.points.push_back(point(s.start));
-        if (k == 0 || k == 2) m.points.push_back(point(s.end));
+        if (k != 2) m.points.push_back(point(s.start));
+        if (k != 1) m.points.push_back(point(s.end));
       }
       out->markers.push_back(m);
     }
@@ -256,16 +213,13 @@ class LineExtractionRos
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::string odom_frame_;
   double tf_timeout_ = 0.1;
-  ros::Time last_stamp_;
   std::size_t submap_segments_ = 0, submap_skipped_ = 0;
   ros::Publisher segments_pub_, markers_pub_;
   ros::Subscriber scan_sub_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
-  std::size_t scans_ = 0, rejected_scans_ = 0, inconsistent_angle_max_ = 0, geometry_changes_ = 0,
-              segments_ = 0;
+  ScanGeometryMonitor geometry_;
+  std::size_t scans_ = 0, rejected_scans_ = 0, segments_ = 0;
   double last_ms_ = 0.0;
-  float last_angle_min_ = 0.0f, last_increment_ = 0.0f;
-  std::size_t last_count_ = 0;
 };
 
 class LineExtractionNodelet : public nodelet::Nodelet

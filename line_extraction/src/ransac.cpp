@@ -51,6 +51,21 @@ int emitInlierRuns(const PreparedScan& scan, const int* members, int count, cons
   return emitted;
 }
 
+void emitAssignedLines(const PreparedScan& scan, int begin, int n, const std::vector<int>& assignment,
+                       std::size_t line_count, const RunSettings& settings, std::vector<int>& members,
+                       ExtractionResult& out)
+{
+  const std::size_t first_segment = out.segments.size();
+  for (std::size_t k = 0; k < line_count; ++k)
+  {
+    members.clear();
+    for (int i = 0; i < n; ++i)
+      if (assignment[i] == static_cast<int>(k)) members.push_back(begin + i);
+    emitInlierRuns(scan, members.data(), static_cast<int>(members.size()), settings, out);
+  }
+  sortSegmentsByFirstPoint(out, first_segment);
+}
+
 void sortSegmentsByFirstPoint(ExtractionResult& out, std::size_t first)
 {
   std::sort(out.segments.begin() + first, out.segments.end(),

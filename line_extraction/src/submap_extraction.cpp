@@ -44,6 +44,20 @@ SubmapExtractor::SubmapExtractor(const SubmapParams& params, const SensorModel& 
 {
 }
 
+std::size_t SubmapExtractor::appendTo(const PreparedScan& scan, ExtractionResult& result,
+                                      const Pose2& laser_pose)
+{
+  const std::vector<Segment>& found = update(scan, result, laser_pose);
+  result.segments.insert(result.segments.end(), found.begin(), found.end());
+  return found.size();
+}
+
+void SubmapExtractor::observeStamp(std::uint64_t stamp_ns)
+{
+  if (stamp_ns < last_stamp_ns_) reset();
+  last_stamp_ns_ = stamp_ns;
+}
+
 void SubmapExtractor::reset()
 {
   scans_.clear();
@@ -163,13 +177,32 @@ void SubmapExtractor::findLines(std::size_t first_new)
 
 bool SubmapExtractor::grow(std::size_t seed, FoundLine& line)
 {
+  // Seen from the seed's side (its scan's laser).
+  const WindowScan* seed_scan = scanById(points_[seed].scan);
+  if (seed_scan == nullptr) return false;
+  LineNormal fit_line;
+  std::vector<Candidate> run;
+  if (!seedLine(seed, fit_line) || !growRun(seed, fit_line, run) || !acceptRun(run, fit_line, line))
+    return false;
+
+  // Accepted: the endpoints with the observers on the left.
+  const Vec2 observer = seed_scan->laser.translation();
+  const Vec2 d = line.end - line.start;
+  if (Vec2(-d.y(), d.x()).dot(observer - line.start) < 0.0) std::swap(line.start, line.end);
+  line.members.reserve(run.size());
+  for (const Candidate& c : run)
+  {
+    points_[c.index].used = true;
+    line.members.push_back(points_[c.index].p);
+  }
+  return true;
+}
+
+bool SubmapExtractor::seedLine(std::size_t seed, LineNormal& best) const
+{
   const WindowPoint& s = points_[seed];
   const double radius = params_.seed_radius;
-  const double band_k = params_.band_sigmas;
-
-  // Unused neighbours of the seed, seen from the seed's side (its scan's laser).
-  const WindowScan* seed_scan = scanById(s.scan);
-  if (seed_scan == nullptr) return false;
+  // Unused neighbours of the seed.
   std::vector<std::uint32_t> near;
   const std::int64_t cx = static_cast<std::int64_t>(std::floor(s.p.x() / radius));
   const std::int64_t cy = static_cast<std::int64_t>(std::floor(s.p.y() / radius));
@@ -187,7 +220,6 @@ bool SubmapExtractor::grow(std::size_t seed, FoundLine& line)
   if (static_cast<int>(near.size()) < 3) return false;
 
   // The line through the seed and one neighbour that holds the most neighbours in its band.
-  LineNormal best;
   int best_count = 0;
   const std::size_t stride = std::max<std::size_t>(1, near.size() / 48);
   for (std::size_t a = 0; a < near.size(); a += stride)
@@ -201,15 +233,18 @@ bool SubmapExtractor::grow(std::size_t seed, FoundLine& line)
     h.radius = h.nx * s.p.x() + h.ny * s.p.y();
     int count = 0;
     for (std::uint32_t j : near)
-      if (h.distance(points_[j].p) <= band_k * points_[j].sigma) ++count;
+      if (h.distance(points_[j].p) <= params_.band_sigmas * points_[j].sigma) ++count;
     if (count > best_count)
     {
       best_count = count;
       best = h;
     }
   }
-  if (best_count < 3) return false;
+  return best_count >= 3;
+}
 
+bool SubmapExtractor::growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const
+{
   // Grow along the whole window twice: collect the band's points on the seed's side, keep the
   // contiguous run through the seed, refit.
   const auto observer_side = [&](const LineNormal& l, std::uint32_t scan_id)
@@ -217,17 +252,15 @@ bool SubmapExtractor::grow(std::size_t seed, FoundLine& line)
     const WindowScan* ws = scanById(scan_id);
     return ws != nullptr && l.signedDistance(ws->laser.translation()) > 0.0 ? 1 : -1;
   };
-  std::vector<Candidate> run;
-  LineNormal fit_line = best;
   for (int pass = 0; pass < 2; ++pass)
   {
-    const int side = observer_side(fit_line, s.scan);
+    const int side = observer_side(fit_line, points_[seed].scan);
     const Vec2 dir(-fit_line.ny, fit_line.nx);
     std::vector<Candidate> band;
     for (std::size_t j = 0; j < points_.size(); ++j)
     {
       const WindowPoint& w = points_[j];
-      if (w.used || fit_line.distance(w.p) > band_k * w.sigma) continue;
+      if (w.used || fit_line.distance(w.p) > params_.band_sigmas * w.sigma) continue;
       if (observer_side(fit_line, w.scan) != side) continue;
       band.push_back({static_cast<std::uint32_t>(j), dir.dot(w.p)});
     }
@@ -251,8 +284,14 @@ bool SubmapExtractor::grow(std::size_t seed, FoundLine& line)
     for (const Candidate& c : run) sums.add(points_[c.index].p);
     if (!fitNormal(sums, fit_line)) return false;
   }
+  return true;
+}
 
+bool SubmapExtractor::acceptRun(const std::vector<Candidate>& run, const LineNormal& fit_line,
+                                FoundLine& line) const
+{
   // Support, extent, fit and the absence of clutter beside it.
+  const double band_k = params_.band_sigmas;
   if (static_cast<int>(run.size()) < params_.min_points) return false;
   std::unordered_set<std::uint32_t> scans;
   double sigma_sum = 0.0, squares = 0.0;
@@ -294,20 +333,8 @@ bool SubmapExtractor::grow(std::size_t seed, FoundLine& line)
   const Vec2 foot = Vec2(fit_line.nx, fit_line.ny) * fit_line.radius;
   line.start = foot + dir * t0;
   line.end = foot + dir * t1;
-  if (seenThrough(line.start, line.end, band_k * sigma)) return false;
-
-  // Accepted: the endpoints with the observers on the left.
-  const Vec2 observer = seed_scan->laser.translation();
-  const Vec2 d = line.end - line.start;
-  if (Vec2(-d.y(), d.x()).dot(observer - line.start) < 0.0) std::swap(line.start, line.end);
   line.sigma = sigma;
-  line.members.reserve(run.size());
-  for (const Candidate& c : run)
-  {
-    points_[c.index].used = true;
-    line.members.push_back(points_[c.index].p);
-  }
-  return true;
+  return !seenThrough(line.start, line.end, band_k * sigma);
 }
 
 bool SubmapExtractor::curved(const std::vector<Candidate>& run, const LineNormal& line, double t0, double t1,

@@ -101,15 +101,7 @@ class WsacGeExtractor : public Extractor
       }
     }
 
-    const std::size_t first_segment = out.segments.size();
-    for (std::size_t k = 0; k < lines_.size(); ++k)
-    {
-      members_.clear();
-      for (int i = 0; i < n_; ++i)
-        if (assignment_[i] == static_cast<int>(k)) members_.push_back(begin_ + i);
-      emitInlierRuns(scan, members_.data(), static_cast<int>(members_.size()), runs_, out);
-    }
-    sortSegmentsByFirstPoint(out, first_segment);
+    emitAssignedLines(scan, begin_, n_, assignment_, lines_.size(), runs_, members_, out);
   }
 
  private:

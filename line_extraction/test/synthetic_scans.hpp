@@ -7,8 +7,35 @@
 #include <random>
 #include <vector>
 
+#include "line_extraction/preprocess.hpp"
+#include "line_extraction/types.hpp"
+
 namespace line_extraction_test
 {
+/// A scan over `ranges` (which must outlive it): beam i at angle_min + i * increment.
+inline line_extraction::ScanInput scanOf(const std::vector<float>& ranges, double angle_min, double increment,
+                                         double range_min = 0.05, double range_max = 20.0)
+{
+  line_extraction::ScanInput s;
+  s.ranges = ranges.data();
+  s.count = ranges.size();
+  s.angle_min = angle_min;
+  s.angle_increment = increment;
+  s.range_min = range_min;
+  s.range_max = range_max;
+  return s;
+}
+
+/// The preprocessed points of `ranges` (range limits 0.01 to 100 m).
+inline line_extraction::PreparedScan prepared(const std::vector<float>& ranges, double angle_min,
+                                              double increment)
+{
+  line_extraction::Preprocessor pre;
+  line_extraction::PreparedScan out;
+  pre.prepare(scanOf(ranges, angle_min, increment, 0.01, 100.0), out);
+  return out;
+}
+
 /// Ranges of a laser at (cx, cy) with heading `yaw` inside the square room
 /// |x| <= half_size, |y| <= half_size, each beam hitting the nearest wall;
 /// Gaussian range noise `sigma` (0 = exact) drawn from `seed`.

@@ -64,13 +64,7 @@ TEST_P(SquareRoom, FindsTheFourWalls)
                  std::to_string(pose.yaw));
     const std::vector<float> ranges =
         line_extraction_test::squareRoomRanges(h, pose.x, pose.y, pose.yaw, beams, -kPi, inc);
-    ScanInput scan;
-    scan.ranges = ranges.data();
-    scan.count = ranges.size();
-    scan.angle_min = -kPi;
-    scan.angle_increment = inc;
-    scan.range_min = 0.05;
-    scan.range_max = 20.0;
+    const ScanInput scan = line_extraction_test::scanOf(ranges, -kPi, inc);
     const ExtractionResult& result = extractor.extract(scan);
     const std::vector<Wall> walls = wallsInLaserFrame(h, pose);
     std::vector<double> covered(walls.size(), 0.0);
@@ -172,13 +166,7 @@ TEST_P(Orientation, FreeSideOnTheLeft)
     {
       const std::vector<float> ranges =
           line_extraction_test::squareRoomRanges(h, pose.x, pose.y, pose.yaw, beams, angle_min, inc);
-      ScanInput scan;
-      scan.ranges = ranges.data();
-      scan.count = ranges.size();
-      scan.angle_min = angle_min;
-      scan.angle_increment = inc;
-      scan.range_min = 0.05;
-      scan.range_max = 20.0;
+      const ScanInput scan = line_extraction_test::scanOf(ranges, angle_min, inc);
       for (const Segment& s : extractor.extract(scan).segments)
       {
         const double heading = std::atan2(s.end.y() - s.start.y(), s.end.x() - s.start.x());

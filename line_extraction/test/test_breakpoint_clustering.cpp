@@ -6,6 +6,7 @@
 
 #include "line_extraction/breakpoint_clustering.hpp"
 #include "line_extraction/preprocess.hpp"
+#include "synthetic_scans.hpp"
 
 using namespace line_extraction;
 using linemap::kPi;
@@ -14,17 +15,7 @@ namespace
 {
 PreparedScan prepare(const std::vector<float>& r, double angle_min, double inc)
 {
-  ScanInput s;
-  s.ranges = r.data();
-  s.count = r.size();
-  s.angle_min = angle_min;
-  s.angle_increment = inc;
-  s.range_min = 0.01;
-  s.range_max = 100.0;
-  Preprocessor pre;
-  PreparedScan out;
-  pre.prepare(s, out);
-  return out;
+  return line_extraction_test::prepared(r, angle_min, inc);
 }
 }  // namespace
 

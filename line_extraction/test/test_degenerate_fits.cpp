@@ -1,7 +1,6 @@
 // No extractor emits a segment shorter than the pipeline's minimum by default, and a cluster whose
 // points all lie within the range noise of one spot yields no segment at all, whatever min_length
-// says: such a fit has no direction (split_merge emitted start = end for 26 points on a small
-// object 0.3 m away, and 59 segments shorter than 5 cm in one bag).
+// says: such a fit has no direction (split_merge once emitted start = end for a small object).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -22,14 +21,7 @@ const std::vector<std::string> kAlgorithms = {"srg",         "split_merge",     
 
 ScanInput input(const std::vector<float>& ranges, double angle_min, double increment)
 {
-  ScanInput scan;
-  scan.ranges = ranges.data();
-  scan.count = ranges.size();
-  scan.angle_min = angle_min;
-  scan.angle_increment = increment;
-  scan.range_min = 0.05;
-  scan.range_max = 20.0;
-  return scan;
+  return line_extraction_test::scanOf(ranges, angle_min, increment);
 }
 
 /// Deterministic noise in [-amplitude, amplitude].

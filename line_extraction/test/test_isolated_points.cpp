@@ -17,17 +17,7 @@ namespace
 {
 PreparedScan prepare(const std::vector<float>& r)
 {
-  ScanInput s;
-  s.ranges = r.data();
-  s.count = r.size();
-  s.angle_min = 0.0;
-  s.angle_increment = kPi / 180;
-  s.range_min = 0.01;
-  s.range_max = 100.0;
-  Preprocessor pre;
-  PreparedScan out;
-  pre.prepare(s, out);
-  return out;
+  return line_extraction_test::prepared(r, 0.0, kPi / 180);
 }
 }  // namespace
 
@@ -69,13 +59,7 @@ TEST(IsolatedPoints, PipelineKeepsAWallWholeDespiteSpuriousReturns)
   const double inc = 2 * kPi / 360;
   std::vector<float> r = line_extraction_test::squareRoomRanges(3.0, 0.4, -0.3, 0.2, 360, -kPi, inc);
   for (int i = 7; i < 360; i += 15) r[i] = 0.3f;
-  ScanInput s;
-  s.ranges = r.data();
-  s.count = r.size();
-  s.angle_min = -kPi;
-  s.angle_increment = inc;
-  s.range_min = 0.05;
-  s.range_max = 20.0;
+  const ScanInput s = line_extraction_test::scanOf(r, -kPi, inc);
   for (const char* name : {"srg", "split_merge", "iepf", "smsm", "incremental", "line_regression"})
   {
     SCOPED_TRACE(name);

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "line_extraction/preprocess.hpp"
+#include "synthetic_scans.hpp"
 
 using namespace line_extraction;
 using linemap::kPi;
@@ -14,14 +15,7 @@ namespace
 {
 ScanInput scanOf(const std::vector<float>& r, double angle_min, double inc)
 {
-  ScanInput s;
-  s.ranges = r.data();
-  s.count = r.size();
-  s.angle_min = angle_min;
-  s.angle_increment = inc;
-  s.range_min = 0.1;
-  s.range_max = 10.0;
-  return s;
+  return line_extraction_test::scanOf(r, angle_min, inc, 0.1, 10.0);
 }
 
 std::string errorOf(const ScanInput& s)

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "line_extraction/line_extractor.hpp"
+#include "synthetic_scans.hpp"
 
 using namespace line_extraction;
 using linemap::kPi;
@@ -34,14 +35,7 @@ std::vector<float> wallRanges(double angle_min, double increment, int beams, dou
 const ExtractionResult& extractSrg(LineExtractor& extractor, const std::vector<float>& ranges,
                                    double angle_min, double increment)
 {
-  ScanInput in;
-  in.ranges = ranges.data();
-  in.count = ranges.size();
-  in.angle_min = angle_min;
-  in.angle_increment = increment;
-  in.range_min = 0.05;
-  in.range_max = 30.0;
-  return extractor.extract(in);
+  return extractor.extract(line_extraction_test::scanOf(ranges, angle_min, increment, 0.05, 30.0));
 }
 
 TEST(SeededRegionGrowing, DroppedReadingsWiderThanMaxGapSplitTheWall)

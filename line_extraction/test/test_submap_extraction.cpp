@@ -210,5 +210,41 @@ TEST(SubmapExtraction, BadParametersAreNamed)
   EXPECT_THROW(SubmapParams::fromParams(band), linemap::ParameterError);
 }
 
+// The live path of the nodelet: appendTo() adds exactly what update() returns to the scan's result,
+// and a stamp before the previous one (a bag looping) empties the window, a later one does not.
+TEST(SubmapExtraction, AppendToAddsTheSubmapSegmentsAndAStampGoingBackForgetsTheWindow)
+{
+  const std::vector<Segment2> world = {{Vec2(15.0, 0.3), Vec2(15.0, -0.3)},
+                                       {Vec2(25.0, 20.0), Vec2(25.0, -20.0)}};
+  const linemap::ParamSet params = defaults();
+  LineExtractor live(params), reference(params);
+  SubmapExtractor appending(SubmapParams::fromParams(params), live.params().sensor);
+  SubmapExtractor updating(SubmapParams::fromParams(params), reference.params().sensor);
+  std::mt19937 rng(7);
+  std::size_t appended = 0;
+  for (int k = 0; k <= 20; ++k)
+  {
+    const Pose2 laser(0.0, -2.0 + 0.2 * k, 0.0);
+    const std::vector<float> ranges = castScan(world, laser, live.params().sensor, rng);
+    live.extract(input(ranges));
+    const std::size_t per_scan = live.lastResult().segments.size();
+    appending.observeStamp(1000000000ull * (k + 1));
+    const std::size_t added = appending.appendTo(live.preparedScan(), live.mutableResult(), laser);
+    const auto& expected = updating.update(reference.preparedScan(), reference.extract(input(ranges)), laser);
+    ASSERT_EQ(added, expected.size());
+    ASSERT_EQ(live.lastResult().segments.size(), per_scan + added);
+    for (std::size_t i = 0; i < added; ++i)
+      EXPECT_LT((live.lastResult().segments[per_scan + i].start - expected[i].start).norm(), 1e-12);
+    appended += added;
+  }
+  EXPECT_GT(appended, 0u);  // the pillar face of FindsAFaceNoSingleScanResolves
+  ASSERT_GT(appending.windowPoints(), 0u);
+  const std::size_t held = appending.windowPoints();
+  appending.observeStamp(1000000000ull * 22);
+  EXPECT_EQ(appending.windowPoints(), held);
+  appending.observeStamp(1000000000ull * 22 - 1);
+  EXPECT_EQ(appending.windowPoints(), 0u);
+}
+
 }  // namespace
 }  // namespace line_extraction

@@ -38,6 +38,12 @@ class HoughExtractor : public Extractor
 
  private:
   void vote(const Vec2& p, int delta);
+  /// Sizes the accumulator for the radii of `range`'s points; returns its cells in use.
+  std::size_t prepareAccumulator(const PreparedScan& scan, PointRange range);
+  /// The strongest candidate cell and its votes (0 when none is left at min_votes).
+  int strongestCell(int& best_votes);
+  /// Records the cell's peak, emits the segments of its refitted line, withdraws their votes.
+  void takeLine(const PreparedScan& scan, int cell, int votes, ExtractionResult& out);
 
   RunSettings runs_;
   double radius_resolution_;

@@ -32,6 +32,13 @@ RunSettings readRunSettings(const linemap::ParamSet& params, const std::string& 
 int emitInlierRuns(const PreparedScan& scan, const int* members, int count, const RunSettings& settings,
                    ExtractionResult& out);
 
+/// Emits the inlier runs of each of `line_count` lines, point begin + i belonging to line
+/// assignment[i] (-1: none) for i < n, and orders the new segments in scan order. `members` is
+/// scratch space kept by the caller so that no call allocates once warmed up.
+void emitAssignedLines(const PreparedScan& scan, int begin, int n, const std::vector<int>& assignment,
+                       std::size_t line_count, const RunSettings& settings, std::vector<int>& members,
+                       ExtractionResult& out);
+
 /// Orders out.segments[first..] by their first point, i.e. in scan order (lines are
 /// found strongest first; the collinear merge expects neighbours next to each other).
 void sortSegmentsByFirstPoint(ExtractionResult& out, std::size_t first);

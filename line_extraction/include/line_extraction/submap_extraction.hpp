@@ -65,6 +65,15 @@ class SubmapExtractor
   const std::vector<Segment>& update(const PreparedScan& scan, const ExtractionResult& extracted,
                                      const Pose2& laser_pose);
 
+  /// update() for a live scan: appends the submap segments to `result`, which is what the
+  /// per-scan extractor made of `scan` (their points are in no scan, so they carry no member
+  /// indices). Returns how many were appended.
+  std::size_t appendTo(const PreparedScan& scan, ExtractionResult& result, const Pose2& laser_pose);
+
+  /// A live scan's stamp [ns], offered before anything else is done with the scan: the window is
+  /// forgotten when it lies before the previous one (the clock jumped back: a bag looped).
+  void observeStamp(std::uint64_t stamp_ns);
+
   /// Forgets the window (a time jump, a new session).
   void reset();
 
@@ -107,7 +116,15 @@ class SubmapExtractor
   void dropOldScans();
   void buildGrid();
   void findLines(std::size_t first_new);
+  /// A line from an unused window point, its points marked used; false when none passes.
   bool grow(std::size_t seed, FoundLine& line);
+  /// The line through the seed and a neighbour that holds most of the seed's neighbours.
+  bool seedLine(std::size_t seed, LineNormal& best) const;
+  /// The contiguous run of band points through the seed, on its observers' side, refitted twice.
+  bool growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const;
+  /// Whether the run is a wall (support, extent, fit, no bend, no clutter beside, not seen
+  /// through); fills the line's extent and sigma.
+  bool acceptRun(const std::vector<Candidate>& run, const LineNormal& fit_line, FoundLine& line) const;
   /// Whether the residuals of `run` bend along the line (a chord of a curved wall).
   bool curved(const std::vector<Candidate>& run, const LineNormal& line, double t0, double t1,
               double sigma) const;
@@ -127,6 +144,7 @@ class SubmapExtractor
   std::vector<FoundLine> pending_;  ///< found when the last scan entered, in the fixed frame
   std::vector<Segment> output_;
   std::size_t lines_found_ = 0;
+  std::uint64_t last_stamp_ns_ = 0;
   // Hash grid over the window points, cell = seed_radius.
   std::vector<std::int64_t> cell_keys_;
   std::vector<std::uint32_t> cell_order_;

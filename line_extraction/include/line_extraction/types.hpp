@@ -27,6 +27,23 @@ struct ScanInput
   std::size_t intensity_count = 0;
 };
 
+/// The ScanInput of a message with sensor_msgs/LaserScan's fields, pointing into it (a template, so
+/// that the core needs no ROS).
+template <class LaserScan>
+ScanInput scanInputOf(const LaserScan& msg)
+{
+  ScanInput scan;
+  scan.ranges = msg.ranges.data();
+  scan.count = msg.ranges.size();
+  scan.angle_min = msg.angle_min;
+  scan.angle_increment = msg.angle_increment;
+  scan.range_min = msg.range_min;
+  scan.range_max = msg.range_max;
+  scan.intensities = msg.intensities.data();
+  scan.intensity_count = msg.intensities.size();
+  return scan;
+}
+
 /// The valid points of one scan, in beam order, in the laser frame.
 /// Filled by Preprocessor; buffers keep their capacity between scans.
 struct PreparedScan

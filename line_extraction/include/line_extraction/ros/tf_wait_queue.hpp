@@ -46,9 +46,9 @@ class TfWaitQueue
 
   /// `capacity`: the oldest held message is dropped beyond it. `max_wait`: a message held longer on
   /// both clocks, ROS time since its receipt and wall time since it was added, is dropped; zero waits
-  /// without a limit. ROS time alone would give a tf publisher (a SLAM optimising) 25 ms of wall time at
-  /// a bag's rate 20 (the Intel demo dropped 818 scans so, 95.6 -> 88.9 %); wall time alone would drop
-  /// what waits while the bag is paused. A message stamped before the buffer's data for its chain is
+  /// without a limit. ROS time alone would give a tf publisher (a SLAM optimising) only a few
+  /// milliseconds of wall time when a bag plays fast, and scans were dropped so; wall time alone would
+  /// drop what waits while the bag is paused. A message stamped before the buffer's data for its chain is
   /// dropped too: it never fits (extrapolatesIntoThePast).
   TfWaitQueue(tf2::BufferCore& tf, std::string target_frame, std::size_t capacity, ros::Duration max_wait,
               ros::NodeHandle& nh, Ready ready, Failed failed)

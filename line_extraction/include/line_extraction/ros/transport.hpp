@@ -7,8 +7,8 @@ namespace linemap_ros
 {
 /// TCP_NODELAY on the publisher's socket. With roscpp's default, Nagle's algorithm holds a small
 /// message until the previous one is acknowledged, and the receiver delays its acknowledgement by
-/// up to 40 ms: at 40x real time the soak's scan -> line_map p99 was 44 ms, almost all of it spent
-/// in sockets (rosbag play -> extractor, rosbag play -> tf listener). Messages are sent as they come.
+/// up to 40 ms, which became most of the pipeline's latency (rosbag play -> extractor, rosbag play ->
+/// tf listener). Messages are sent as they come.
 inline ros::TransportHints noDelay()
 {
   return ros::TransportHints().tcpNoDelay();
