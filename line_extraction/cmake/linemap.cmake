@@ -36,14 +36,14 @@ function(linemap_core_library name)
   set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
 endfunction()
 
-# The core libraries of the given packages, without the ROS libraries they also export: targets of this
-# build (catkin_make builds every package in one CMake project) or the libraries' paths (catkin build
+# The core libraries of the given packages (the libraries each exports under its own name, <pkg>_*),
+# without the ROS libraries they also export: targets of this build (catkin_make builds every package in one CMake project) or the libraries' paths (catkin build
 # gives each package a build of its own).
 function(linemap_core_libraries out)
   set(cores "")
   foreach(pkg ${ARGN})
     set(libs ${${pkg}_LIBRARIES})
-    list(FILTER libs INCLUDE REGEX "${pkg}_core")
+    list(FILTER libs INCLUDE REGEX "(^|/)(lib)?${pkg}_[^/]*$")
     list(APPEND cores ${libs})
   endforeach()
   list(REMOVE_DUPLICATES cores)

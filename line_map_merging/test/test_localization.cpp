@@ -212,6 +212,29 @@ TEST(LineMapLocalizer, TracksFromTheInitialPose)
   EXPECT_EQ(localizer.counters().lost, 0u);
 }
 
+// A map that grows (the merger's topic) replaces the old one in the same frame: the track goes on in
+// it, and a localizer that has no pose yet still has none.
+TEST(LineMapLocalizer, NewMapKeepsTheTrack)
+{
+  const Drive drive{lRoom()};
+  const std::vector<Segment2> room = lRoom();
+  const std::vector<Segment2> first_half(room.begin(), room.begin() + room.size() / 2 + 1);
+  LineMapLocalizer localizer(first_half);
+  localizer.setPose({1.55, 2.05, 2 * kDeg});
+  for (int i = 0; i < 10; ++i) localizer.addScan(drive.scan(i));
+  localizer.setMap(lRoom());
+  EXPECT_EQ(localizer.index().segments().size(), lRoom().size());
+  for (int i = 10; i < 40; ++i)
+  {
+    const auto r = localizer.addScan(drive.scan(i));
+    EXPECT_EQ(r.outcome, LocalizerOutcome::kTracked) << i;
+    EXPECT_LT(std::hypot(r.pose.x - drive.truth(i).x, r.pose.y - drive.truth(i).y), 0.01) << i;
+  }
+  LineMapLocalizer unposed(first_half);
+  unposed.setMap(lRoom());
+  EXPECT_FALSE(unposed.addScan(drive.scan(0)).localized);
+}
+
 TEST(LineMapLocalizer, GlobalLocalizationWithoutAnInitialPose)
 {
   const Drive drive{lRoom()};

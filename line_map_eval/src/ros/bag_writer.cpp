@@ -11,36 +11,13 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "line_extraction/ros/message_conversions.hpp"
 #include "line_map_eval/batch/progress.hpp"
 
 namespace line_map_eval
 {
 namespace
 {
-geometry_msgs::Pose toPoseMsg(const Pose2& p)
-{
-  geometry_msgs::Pose m;
-  m.position.x = p.x;
-  m.position.y = p.y;
-  m.orientation.z = std::sin(0.5 * p.theta);
-  m.orientation.w = std::cos(0.5 * p.theta);
-  return m;
-}
-
-geometry_msgs::TransformStamped toTransform(const std::string& parent, const std::string& child,
-                                            const ros::Time& stamp, const Pose2& p)
-{
-  geometry_msgs::TransformStamped t;
-  t.header.frame_id = parent;
-  t.header.stamp = stamp;
-  t.child_frame_id = child;
-  t.transform.translation.x = p.x;
-  t.transform.translation.y = p.y;
-  t.transform.rotation.z = std::sin(0.5 * p.theta);
-  t.transform.rotation.w = std::cos(0.5 * p.theta);
-  return t;
-}
-
 rosbag::CompressionType compressionFromName(const std::string& name)
 {
   if (name == "none") return rosbag::compression::Uncompressed;
@@ -107,7 +84,7 @@ void writeBag(const Recording& rec, const std::string& path, const BagWriterOpti
     const ros::Time t0(rec.scans.front().stamp);
     tf2_msgs::TFMessage static_tf;
     static_tf.transforms.push_back(
-        toTransform(options.base_frame, options.laser_frame, t0, rec.base_to_laser));
+        linemap_ros::toTransform(rec.base_to_laser, options.base_frame, options.laser_frame, t0));
     // Marked latched like tf2_ros::StaticTransformBroadcaster, so `rosbag play` re-latches it.
     auto header = boost::make_shared<ros::M_string>();
     (*header)["callerid"] = "/carmen_to_bag";
@@ -140,7 +117,7 @@ void writeBag(const Recording& rec, const std::string& path, const BagWriterOpti
         geometry_msgs::PoseStamped pose;
         pose.header.frame_id = options.map_frame;
         pose.header.stamp = stamp;
-        pose.pose = toPoseMsg(kf.pose);
+        pose.pose = linemap_ros::toPoseMsg(kf.pose);
         path_msg.poses.push_back(pose);
         ++next_keyframe;
         emit = next_keyframe % options.trajectory_every == 0 || next_keyframe == rec.keyframes.size();
@@ -150,9 +127,11 @@ void writeBag(const Recording& rec, const std::string& path, const BagWriterOpti
       }
 
       tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(toTransform(options.odom_frame, options.base_frame, stamp, s.odom));
+      tf.transforms.push_back(
+          linemap_ros::toTransform(s.odom, options.odom_frame, options.base_frame, stamp));
       if (with_trajectory)
-        tf.transforms.push_back(toTransform(options.map_frame, options.odom_frame, stamp, map_to_odom));
+        tf.transforms.push_back(
+            linemap_ros::toTransform(map_to_odom, options.map_frame, options.odom_frame, stamp));
       bag.write("/tf", stamp, tf);
 
       // Each scan's own geometry: some sensors change start angle and beam count between scans.

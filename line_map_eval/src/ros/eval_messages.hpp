@@ -19,30 +19,6 @@
 
 namespace line_map_eval
 {
-inline linemap::Pose2 toPose2(const geometry_msgs::Transform& t)
-{
-  return {t.translation.x, t.translation.y, tf2::getYaw(t.rotation)};
-}
-
-inline std::vector<linemap::Segment2> toSegments(const line_map_msgs::LineMap& map)
-{
-  std::vector<linemap::Segment2> out;
-  out.reserve(map.segments.size());
-  for (const auto& s : map.segments)
-    out.emplace_back(linemap::Vec2(s.segment.start.x, s.segment.start.y),
-                     linemap::Vec2(s.segment.end.x, s.segment.end.y));
-  return out;
-}
-
-inline std::vector<linemap::Segment2> toSegments(const line_map_msgs::LineSegmentArray& msg)
-{
-  std::vector<linemap::Segment2> out;
-  out.reserve(msg.segments.size());
-  for (const auto& s : msg.segments)
-    out.emplace_back(linemap::Vec2(s.start.x, s.start.y), linemap::Vec2(s.end.x, s.end.y));
-  return out;
-}
-
 /// The laser poses of a trajectory of base poses (`mount`: base -> laser); a pose with a zero or
 /// non-finite quaternion gets a non-finite heading (counted and skipped by the core).
 inline std::vector<std::pair<double, linemap::Pose2>> toLaserPoses(const nav_msgs::Path& path,

@@ -15,6 +15,7 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "eval_messages.hpp"
+#include "line_extraction/ros/message_conversions.hpp"
 #include "line_extraction/ros/param_loader.hpp"
 #include "line_extraction/ros/tf_wait_queue.hpp"
 #include "line_extraction/ros/transport.hpp"
@@ -85,16 +86,11 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   std::optional<linemap::Pose2> lookup(const std::string& target, const std::string& frame,
                                        const ros::Time& stamp)
   {
-    if (target == frame) return linemap::Pose2();
-    try
-    {
-      return toPose2(tf_->lookupTransform(target, frame, stamp).transform);
-    }
-    catch (const tf2::TransformException& e)
-    {
-      if (target == map_frame_) NODELET_WARN_THROTTLE(10.0, "line_map_eval: %s", e.what());
-      return std::nullopt;
-    }
+    const auto pose = linemap_ros::lookupPose(*tf_, target, frame, stamp);
+    if (!pose && target == map_frame_)
+      NODELET_WARN_THROTTLE(10.0, "line_map_eval: no valid tf %s -> %s at %.3f", target.c_str(),
+                            frame.c_str(), stamp.toSec());
+    return pose;
   }
 
   /// In arrival order, before the tf wait: time jumping back (rosbag play --loop) clears the tf
@@ -143,7 +139,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     linemap::Pose2 laser;
     std::optional<linemap::Pose2> odom;
     if (!pose(msg->header, laser, odom)) return;
-    std::vector<linemap::Segment2> segments = toSegments(*msg);
+    std::vector<linemap::Segment2> segments = linemap_ros::toSegments(*msg);
     std::lock_guard<std::mutex> lock(mutex_);
     core_->addSegments(msg->header.stamp.toSec(), std::move(segments), laser, odom);
   }
@@ -165,7 +161,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   void onMap(const line_map_msgs::LineMap::ConstPtr& map)
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    core_->setMap(toSegments(*map), map->header.stamp.toSec());
+    core_->setMap(linemap_ros::toSegments(*map), map->header.stamp.toSec());
     publish(false);
   }
 
@@ -178,7 +174,8 @@ class LineMapEvalNodelet : public nodelet::Nodelet
       res.message = "no line_map received yet";
       return true;
     }
-    const std::vector<linemap::Segment2> map = req.use_given_map ? toSegments(req.map) : core_->map();
+    const std::vector<linemap::Segment2> map =
+        req.use_given_map ? linemap_ros::toSegments(req.map) : core_->map();
     try
     {
       res.quality = toMessage(core_->evaluate(map), map_frame_,

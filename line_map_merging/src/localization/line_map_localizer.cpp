@@ -112,6 +112,15 @@ LineMapLocalizer::LineMapLocalizer(const std::vector<linemap::Segment2>& segment
 {
 }
 
+void LineMapLocalizer::setMap(const std::vector<linemap::Segment2>& segments)
+{
+  index_ = LocalizationSegmentIndex(segments, params_.index_cell, params_.match.max_distance);
+  global_ = LocalizationGlobalSearch(index_.segments(), params_.global);
+  // The track, or the search, goes on in the new map: a map that grows (the merger's topic) keeps
+  // its frame.
+  hypotheses_.clear();
+}
+
 void LineMapLocalizer::setPose(const Pose2& pose)
 {
   if (!finitePose(pose)) return;

@@ -11,7 +11,6 @@
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <std_srvs/Empty.h>
-#include <tf2/utils.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
@@ -22,6 +21,7 @@
 #include <optional>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "line_extraction/ros/message_conversions.hpp"
 #include "line_extraction/ros/param_loader.hpp"
 #include "line_extraction/ros/tf_wait_queue.hpp"
 #include "line_extraction/ros/transport.hpp"
@@ -31,23 +31,6 @@
 
 namespace line_map_merging
 {
-namespace
-{
-geometry_msgs::TransformStamped toTransform(const linemap::Pose2& p, const std::string& parent,
-                                            const std::string& child, const ros::Time& stamp)
-{
-  geometry_msgs::TransformStamped t;
-  t.header.stamp = stamp;
-  t.header.frame_id = parent;
-  t.child_frame_id = child;
-  t.transform.translation.x = p.x;
-  t.transform.translation.y = p.y;
-  t.transform.rotation.z = std::sin(0.5 * p.theta);
-  t.transform.rotation.w = std::cos(0.5 * p.theta);
-  return t;
-}
-}  // namespace
-
 class LocalizationNodelet : public nodelet::Nodelet
 {
  private:
@@ -117,33 +100,31 @@ class LocalizationNodelet : public nodelet::Nodelet
 
   void setMap(const std::vector<linemap::Segment2>& segments)
   {
-    std::optional<linemap::Pose2> keep;
-    if (localizer_ && localizer_->localized()) keep = pose_;
+    if (localizer_) return localizer_->setMap(segments);
     localizer_ = std::make_unique<LineMapLocalizer>(segments, params_);
-    if (keep)
-      localizer_->setPose(*keep);
-    else if (pending_initial_)
-      localizer_->setPose(*pending_initial_);
+    if (pending_initial_) localizer_->setPose(*pending_initial_);
   }
 
   void onMap(const line_map_msgs::LineMap::ConstPtr& msg)
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    std::vector<linemap::Segment2> segments;
-    for (const auto& s : msg->segments)
-      segments.push_back({{s.segment.start.x, s.segment.start.y}, {s.segment.end.x, s.segment.end.y}});
-    setMap(segments);
+    setMap(linemap_ros::toSegments(*msg));
   }
 
   void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg)
   {
     std::lock_guard<std::mutex> lock(mutex_);
     const auto& p = msg->pose.pose;
-    const linemap::Pose2 pose(p.position.x, p.position.y, tf2::getYaw(p.orientation));
-    NODELET_INFO("localization: initial pose (%.2f, %.2f, %.1f deg)", pose.x, pose.y,
-                 pose.theta * 180.0 / M_PI);
-    pending_initial_ = pose;
-    if (localizer_) localizer_->setPose(pose);
+    const auto given = linemap_ros::toPose2(p.position.x, p.position.y, p.orientation);
+    if (!given)
+    {
+      NODELET_WARN("localization: initialpose ignored: its orientation is not a unit quaternion");
+      return;
+    }
+    NODELET_INFO("localization: initial pose (%.2f, %.2f, %.1f deg)", given->x, given->y,
+                 given->theta * 180.0 / M_PI);
+    pending_initial_ = given;
+    if (localizer_) localizer_->setPose(*given);
   }
 
   bool onGlobal(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
@@ -178,8 +159,8 @@ class LocalizationNodelet : public nodelet::Nodelet
     if (!localizer_) return;
     const ros::Time stamp = msg.header.stamp;
     const std::string laser_frame = linemap_ros::stripLeadingSlash(msg.header.frame_id);
-    std::optional<linemap::Pose2> mount =
-        base_frame_ == laser_frame ? linemap::Pose2() : lookup(base_frame_, laser_frame, stamp);
+    // The transforms now in the buffer (the wait queue has waited for them), if any.
+    const auto mount = linemap_ros::lookupPose(*buffer_, base_frame_, laser_frame, stamp);
     if (!mount)
     {
       ++dropped_;
@@ -190,7 +171,7 @@ class LocalizationNodelet : public nodelet::Nodelet
     LocalizerScan scan;
     scan.stamp = stamp.toSec();
     scan.sensor = mount->translation();
-    if (odometry) scan.odom = lookup(odom_frame_, base_frame_, stamp);
+    if (odometry) scan.odom = linemap_ros::lookupPose(*buffer_, odom_frame_, base_frame_, stamp);
     if (!scan.odom)
     {
       ++no_odometry_;
@@ -205,12 +186,12 @@ class LocalizationNodelet : public nodelet::Nodelet
     if (r.outcome == LocalizerOutcome::kRecovered)
       NODELET_INFO("localization: global localization found (%.2f, %.2f, %.1f deg)", r.pose.x, r.pose.y,
                    r.pose.theta * 180.0 / M_PI);
-    pose_ = r.pose;
     if (!r.localized) return;  // a hypothesis is not published as the pose
     pending_initial_.reset();
     // map -> odom from the pose and the odometry at the same stamp; without odometry it is kept.
     if (scan.odom) map_odom_ = r.pose * scan.odom->inverse();
-    if (map_odom_) broadcaster_.sendTransform(toTransform(*map_odom_, map_frame_, odom_frame_, stamp));
+    if (map_odom_)
+      broadcaster_.sendTransform(linemap_ros::toTransform(*map_odom_, map_frame_, odom_frame_, stamp));
     publishPose(r, stamp);
   }
 
@@ -219,29 +200,11 @@ class LocalizationNodelet : public nodelet::Nodelet
     geometry_msgs::PoseWithCovarianceStamped out;
     out.header.stamp = stamp;
     out.header.frame_id = map_frame_;
-    out.pose.pose.position.x = r.pose.x;
-    out.pose.pose.position.y = r.pose.y;
-    out.pose.pose.orientation.z = std::sin(0.5 * r.pose.theta);
-    out.pose.pose.orientation.w = std::cos(0.5 * r.pose.theta);
+    out.pose.pose = linemap_ros::toPoseMsg(r.pose);
     const int idx[3] = {0, 1, 5};  // the covariance is 6x6 row-major over (x, y, z, roll, pitch, yaw)
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) out.pose.covariance[idx[i] * 6 + idx[j]] = r.covariance(i, j);
     pose_pub_.publish(out);
-  }
-
-  /// The transform now in the buffer (the wait queue has waited for it), if any.
-  std::optional<linemap::Pose2> lookup(const std::string& target, const std::string& source,
-                                       const ros::Time& stamp)
-  {
-    try
-    {
-      const auto t = buffer_->lookupTransform(target, source, stamp).transform;
-      return linemap::Pose2(t.translation.x, t.translation.y, tf2::getYaw(t.rotation));
-    }
-    catch (const tf2::TransformException&)
-    {
-      return std::nullopt;
-    }
   }
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
@@ -276,7 +239,6 @@ class LocalizationNodelet : public nodelet::Nodelet
   std::string map_frame_, odom_frame_, base_frame_, map_error_;
   double tf_timeout_ = 0.1;
   linemap::TimeJumpDetector time_jumps_;
-  linemap::Pose2 pose_;
   std::optional<linemap::Pose2> map_odom_, pending_initial_;
   std::size_t dropped_ = 0, no_odometry_ = 0;
 };

@@ -23,43 +23,16 @@
 
 namespace line_map_merging
 {
-/// The 2D pose of a position and quaternion, or nothing when the quaternion is not normalised or
-/// the position is not finite.
-inline std::optional<linemap::Pose2> toPose2(double x, double y, const geometry_msgs::Quaternion& q)
-{
-  const double n = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-  if (!std::isfinite(n) || std::abs(n - 1.0) > 1e-3 || !std::isfinite(x) || !std::isfinite(y))
-    return std::nullopt;
-  return linemap::Pose2(x, y, std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)));
-}
-
 /// The nodes of a trajectory (base poses in the map frame); `bad` counts the poses skipped.
 inline std::vector<std::pair<double, linemap::Pose2>> toNodes(const nav_msgs::Path& path, std::size_t& bad)
 {
   std::vector<std::pair<double, linemap::Pose2>> nodes;
   nodes.reserve(path.poses.size());
   for (const auto& p : path.poses)
-    if (const auto pose = toPose2(p.pose.position.x, p.pose.position.y, p.pose.orientation))
+    if (const auto pose = linemap_ros::toPose2(p.pose.position.x, p.pose.position.y, p.pose.orientation))
       nodes.emplace_back(p.header.stamp.toSec(), *pose);
   bad = path.poses.size() - nodes.size();
   return nodes;
-}
-
-/// The pose of `frame` in `target` at `stamp` (identity for the same frame: the map frame may be
-/// unknown to tf), or nothing when tf has none or it is not a valid 2D pose.
-inline std::optional<linemap::Pose2> lookupPose(const tf2_ros::Buffer& tf, const std::string& target,
-                                                const std::string& frame, const ros::Time& stamp)
-{
-  if (target == frame) return linemap::Pose2();
-  try
-  {
-    const auto t = tf.lookupTransform(target, frame, stamp).transform;
-    return toPose2(t.translation.x, t.translation.y, t.rotation);
-  }
-  catch (const tf2::TransformException&)
-  {
-    return std::nullopt;
-  }
 }
 
 /// A segment set with its poses from tf at its stamp: the laser in `map` (nothing without a valid
@@ -73,13 +46,14 @@ inline std::optional<StampedScan> toStampedScan(const tf2_ros::Buffer& tf,
 {
   StampedScan scan;
   scan.stamp = msg.header.stamp.toSec();
-  const auto laser = lookupPose(tf, map, frame, msg.header.stamp);
+  const auto laser = linemap_ros::lookupPose(tf, map, frame, msg.header.stamp);
   if (!laser) return std::nullopt;
   scan.laser = *laser;
-  const auto mount = base.empty() ? linemap::Pose2() : lookupPose(tf, base, frame, msg.header.stamp);
+  const auto mount =
+      base.empty() ? linemap::Pose2() : linemap_ros::lookupPose(tf, base, frame, msg.header.stamp);
   mount_found = mount.has_value();
   scan.mount = mount.value_or(linemap::Pose2());
-  if (!odom.empty() && odom != map) scan.odom = lookupPose(tf, odom, frame, msg.header.stamp);
+  if (!odom.empty() && odom != map) scan.odom = linemap_ros::lookupPose(tf, odom, frame, msg.header.stamp);
   scan.segments = linemap_ros::toSegments(msg);
   return scan;
 }

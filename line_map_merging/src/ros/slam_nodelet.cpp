@@ -27,15 +27,6 @@
 
 namespace line_map_merging
 {
-namespace
-{
-linemap::Pose2 toPose(const geometry_msgs::Transform& t)
-{
-  return {t.translation.x, t.translation.y, tf2::getYaw(t.rotation)};
-}
-
-}  // namespace
-
 class SlamNodelet : public nodelet::Nodelet
 {
  public:
@@ -146,7 +137,8 @@ class SlamNodelet : public nodelet::Nodelet
   {
     try
     {
-      return toPose(buffer_->lookupTransform(target, source, stamp).transform);
+      const auto t = buffer_->lookupTransform(target, source, stamp).transform;
+      return linemap_ros::toPose2(t.translation.x, t.translation.y, t.rotation);
     }
     catch (const tf2::TransformException& e)
     {
@@ -176,10 +168,7 @@ class SlamNodelet : public nodelet::Nodelet
       geometry_msgs::PoseStamped ps;
       ps.header.stamp.fromSec(t);
       ps.header.frame_id = map_frame_;
-      ps.pose.position.x = p.x;
-      ps.pose.position.y = p.y;
-      ps.pose.orientation.z = std::sin(0.5 * p.theta);
-      ps.pose.orientation.w = std::cos(0.5 * p.theta);
+      ps.pose = linemap_ros::toPoseMsg(p);
       path.poses.push_back(ps);
     }
     path_pub_.publish(path);

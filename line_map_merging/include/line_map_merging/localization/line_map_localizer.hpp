@@ -125,6 +125,9 @@ class LineMapLocalizer
   bool localized() const { return tracking_; }
   const LocalizerCounters& counters() const { return counters_; }
   const LocalizerParams& params() const { return params_; }
+  /// A new map in the same frame (a map that grew or was saved again): the pose, the track or the
+  /// global search go on in it.
+  void setMap(const std::vector<linemap::Segment2>& segments);
   const LocalizationSegmentIndex& index() const { return index_; }
   std::size_t hypothesisCount() const { return hypotheses_.size(); }
   std::vector<std::pair<std::string, std::string>> diagnostics() const;
