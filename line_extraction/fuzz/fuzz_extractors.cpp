@@ -12,7 +12,7 @@
 
 #include "line_extraction/extractor.hpp"
 #include "line_extraction/line_extractor.hpp"
-#include "line_extraction/params.hpp"
+#include "linemap/params.hpp"
 
 namespace
 {

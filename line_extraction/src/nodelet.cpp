@@ -18,12 +18,12 @@
 #include <string>
 
 #include "line_extraction/line_extractor.hpp"
-#include "line_extraction/ros/param_loader.hpp"
-#include "line_extraction/ros/transport.hpp"
-#include "line_extraction/ros/wall_diagnostics.hpp"
 #include "line_extraction/scan_geometry_monitor.hpp"
-#include "line_extraction/small_helpers.hpp"
 #include "line_extraction/submap_extraction.hpp"
+#include "linemap/small_helpers.hpp"
+#include "linemap_ros/param_loader.hpp"
+#include "linemap_ros/transport.hpp"
+#include "linemap_ros/wall_diagnostics.hpp"
 
 namespace line_extraction
 {

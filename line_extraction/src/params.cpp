@@ -1,4 +1,4 @@
-#include "line_extraction/params.hpp"
+#include "linemap/params.hpp"
 
 #include <cerrno>
 #include <cmath>

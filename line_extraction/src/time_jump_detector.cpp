@@ -1,4 +1,4 @@
-#include "line_extraction/time_jump_detector.hpp"
+#include "linemap/time_jump_detector.hpp"
 
 #include <algorithm>
 #include <cstdio>

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
 #include "line_extraction/line_extractor.hpp"
+#include "linemap/geometry.hpp"
 #include "synthetic_scans.hpp"
 
 namespace line_extraction_test

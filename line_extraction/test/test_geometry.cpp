@@ -1,8 +1,8 @@
 // Shared geometry and parameter parsing, checked against hand-computed values.
 #include <gtest/gtest.h>
 
-#include "line_extraction/geometry.hpp"
-#include "line_extraction/params.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
 
 using namespace linemap;
 

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "line_extraction/small_helpers.hpp"
-#include "line_extraction/time_jump_detector.hpp"
+#include "linemap/small_helpers.hpp"
+#include "linemap/time_jump_detector.hpp"
 
 using linemap::TimeJumpDetector;
 

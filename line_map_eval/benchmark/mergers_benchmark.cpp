@@ -19,11 +19,11 @@
 #include <vector>
 
 #include "line_extraction/line_extractor.hpp"
-#include "line_extraction/small_helpers.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_eval/datasets/world.hpp"
 #include "line_map_eval/simulation/simulator.hpp"
 #include "line_map_merging/mergers/merger.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace
 {

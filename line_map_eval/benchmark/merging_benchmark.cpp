@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "line_extraction/line_extractor.hpp"
-#include "line_extraction/small_helpers.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace
 {

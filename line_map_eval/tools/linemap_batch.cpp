@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/small_helpers.hpp"
 #include "line_map_eval/batch/batch.hpp"
 #include "line_map_eval/batch/progress.hpp"
 #include "line_map_eval/batch/report.hpp"
@@ -24,6 +23,7 @@
 #include "line_map_eval/online/bag_replay.hpp"
 #include "line_map_eval/simulation/ground_truth.hpp"
 #include "line_map_merging/mergers/merger.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace fs = std::filesystem;
 using namespace line_map_eval;

@@ -3,7 +3,7 @@
 
 #include <gtest/gtest.h>
 
-#include "line_extraction/geometry.hpp"
+#include "linemap/geometry.hpp"
 
 /// s runs from a to b, each coordinate within tol.
 inline void expectSegment(const linemap::Segment2& s, const linemap::Vec2& a, const linemap::Vec2& b,

@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
+#include "linemap/geometry.hpp"
 
 namespace slam_world
 {

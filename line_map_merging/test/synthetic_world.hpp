@@ -6,8 +6,8 @@
 #include <random>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
 #include "line_map_merging/mergers/merger.hpp"
+#include "linemap/geometry.hpp"
 
 namespace synthetic
 {

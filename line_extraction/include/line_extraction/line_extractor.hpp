@@ -8,9 +8,9 @@
 #include "line_extraction/breakpoint_clustering.hpp"
 #include "line_extraction/collinear_merge.hpp"
 #include "line_extraction/extractor.hpp"
-#include "line_extraction/params.hpp"
 #include "line_extraction/preprocess.hpp"
 #include "line_extraction/sensor_model.hpp"
+#include "linemap/params.hpp"
 
 namespace line_extraction
 {

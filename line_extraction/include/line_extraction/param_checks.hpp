@@ -4,7 +4,7 @@
 #include <cmath>
 #include <string>
 
-#include "line_extraction/params.hpp"
+#include "linemap/params.hpp"
 
 namespace line_extraction
 {

@@ -10,7 +10,7 @@
 
 #include "line_extraction/extractor.hpp"
 #include "line_extraction/line_fit.hpp"
-#include "line_extraction/params.hpp"
+#include "linemap/params.hpp"
 
 namespace line_extraction
 {

@@ -6,8 +6,8 @@
 
 #include <cmath>
 
-#include "line_extraction/params.hpp"
 #include "line_extraction/types.hpp"
+#include "linemap/params.hpp"
 
 namespace line_extraction
 {

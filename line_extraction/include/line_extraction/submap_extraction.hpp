@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "line_extraction/line_fit.hpp"
-#include "line_extraction/params.hpp"
 #include "line_extraction/sensor_model.hpp"
 #include "line_extraction/types.hpp"
+#include "linemap/params.hpp"
 
 namespace line_extraction
 {

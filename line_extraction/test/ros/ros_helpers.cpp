@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/ros/tf_wait_queue.hpp"
+#include "linemap_ros/tf_wait_queue.hpp"
 
 namespace
 {

@@ -14,7 +14,6 @@
 #include <utility>
 
 #include "line_extraction/line_extractor.hpp"
-#include "line_extraction/small_helpers.hpp"
 #include "line_extraction/submap_extraction.hpp"
 #include "line_map_eval/batch/figures.hpp"
 #include "line_map_eval/batch/progress.hpp"
@@ -27,6 +26,7 @@
 #include "line_map_merging/mergers/merger.hpp"
 #include "line_map_merging/mergers/offline_merger.hpp"
 #include "line_map_merging/online/online_mapper.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace line_map_eval
 {

@@ -20,7 +20,7 @@
 #include <string_view>
 #include <unordered_map>
 
-#include "line_extraction/small_helpers.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace line_map_eval
 {

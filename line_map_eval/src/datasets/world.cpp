@@ -9,7 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "line_extraction/small_helpers.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace line_map_eval
 {

@@ -7,9 +7,9 @@
 #include <stdexcept>
 
 #include "line_extraction/line_extractor.hpp"
-#include "line_extraction/small_helpers.hpp"
 #include "line_extraction/submap_extraction.hpp"
 #include "line_map_eval/online/online_evaluator.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace line_map_eval
 {

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "line_extraction/small_helpers.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace line_map_eval
 {

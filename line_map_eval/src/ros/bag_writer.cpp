@@ -11,8 +11,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "line_extraction/ros/message_conversions.hpp"
 #include "line_map_eval/batch/progress.hpp"
+#include "linemap_ros/message_conversions.hpp"
 
 namespace line_map_eval
 {

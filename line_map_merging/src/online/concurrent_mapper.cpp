@@ -4,7 +4,7 @@
 #include <chrono>
 #include <sstream>
 
-#include "line_extraction/small_helpers.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace line_map_merging
 {

@@ -21,13 +21,13 @@
 #include <optional>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "line_extraction/ros/message_conversions.hpp"
-#include "line_extraction/ros/param_loader.hpp"
-#include "line_extraction/ros/tf_wait_queue.hpp"
-#include "line_extraction/ros/transport.hpp"
-#include "line_extraction/ros/wall_diagnostics.hpp"
 #include "line_map_merging/localization/line_map_localizer.hpp"
 #include "line_map_merging/mergers/merger.hpp"
+#include "linemap_ros/message_conversions.hpp"
+#include "linemap_ros/param_loader.hpp"
+#include "linemap_ros/tf_wait_queue.hpp"
+#include "linemap_ros/transport.hpp"
+#include "linemap_ros/wall_diagnostics.hpp"
 
 namespace line_map_merging
 {

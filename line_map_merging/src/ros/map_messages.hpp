@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/ros/message_conversions.hpp"
 #include "line_map_merging/map/occupancy_grid.hpp"
 #include "line_map_merging/mergers/merger.hpp"
 #include "line_map_merging/online/online_mapper.hpp"
+#include "linemap_ros/message_conversions.hpp"
 
 namespace line_map_merging
 {

@@ -16,13 +16,13 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <string>
 
-#include "line_extraction/ros/param_loader.hpp"
-#include "line_extraction/ros/tf_wait_queue.hpp"
-#include "line_extraction/ros/transport.hpp"
-#include "line_extraction/ros/wall_diagnostics.hpp"
-#include "line_extraction/small_helpers.hpp"
 #include "line_map_merging/map/map_grid.hpp"
 #include "line_map_merging/online/concurrent_mapper.hpp"
+#include "linemap/small_helpers.hpp"
+#include "linemap_ros/param_loader.hpp"
+#include "linemap_ros/tf_wait_queue.hpp"
+#include "linemap_ros/transport.hpp"
+#include "linemap_ros/wall_diagnostics.hpp"
 #include "map_messages.hpp"
 
 namespace line_map_merging

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "line_extraction/small_helpers.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace line_map_merging
 {

@@ -12,7 +12,6 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/params.hpp"
 #include "line_map_eval/datasets/recording.hpp"
 #include "line_map_eval/metrics/error_metric.hpp"
 #include "line_map_eval/metrics/ground_truth_metrics.hpp"
@@ -22,6 +21,7 @@
 #include "line_map_eval/online/online_drive.hpp"
 #include "line_map_eval/simulation/ground_truth.hpp"
 #include "line_map_eval/simulation/simulator.hpp"
+#include "linemap/params.hpp"
 
 namespace line_map_eval
 {

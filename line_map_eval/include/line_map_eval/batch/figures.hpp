@@ -7,8 +7,8 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
 #include "line_map_eval/metrics/lookup_table.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_eval
 {

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
 #include "line_extraction/types.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_eval
 {

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_eval
 {

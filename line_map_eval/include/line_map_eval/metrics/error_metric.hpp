@@ -5,8 +5,8 @@
 #include <cstddef>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
 #include "line_map_merging/mergers/fusion.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_eval
 {

@@ -8,9 +8,9 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
-#include "line_extraction/params.hpp"
 #include "line_map_eval/simulation/ground_truth.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
 
 namespace line_map_eval
 {

@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_eval
 {

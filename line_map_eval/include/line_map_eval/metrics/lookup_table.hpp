@@ -7,10 +7,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
-#include "line_extraction/params.hpp"
 #include "line_map_eval/datasets/recording.hpp"
 #include "line_map_eval/metrics/bresenham.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
 
 namespace line_map_eval
 {

@@ -4,8 +4,6 @@
 
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
-#include "line_extraction/params.hpp"
 #include "line_map_eval/metrics/error_metric.hpp"
 #include "line_map_eval/metrics/length_coverage.hpp"
 #include "line_map_eval/metrics/lookup_table.hpp"
@@ -16,6 +14,8 @@
 #include "line_map_eval/metrics/structure_coverage.hpp"
 #include "line_map_merging/mergers/crossing_pairs.hpp"
 #include "line_map_merging/mergers/fusion.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
 
 namespace line_map_eval
 {

@@ -5,9 +5,9 @@
 #include <cstddef>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
-#include "line_extraction/params.hpp"
 #include "line_map_eval/metrics/lookup_table.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
 
 namespace line_map_eval
 {

@@ -6,8 +6,8 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
 #include "line_map_merging/mergers/fusion.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_eval
 {

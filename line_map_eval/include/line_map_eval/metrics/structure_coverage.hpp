@@ -30,10 +30,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
-#include "line_extraction/params.hpp"
 #include "line_map_eval/metrics/length_coverage.hpp"
 #include "line_map_eval/metrics/point_coverage.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
 
 namespace line_map_eval
 {

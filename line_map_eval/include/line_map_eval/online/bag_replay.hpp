@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/params.hpp"
 #include "line_map_eval/datasets/bag_reader.hpp"
 #include "line_map_eval/online/map_evaluator.hpp"
 #include "line_map_merging/online/online_mapper.hpp"
+#include "linemap/params.hpp"
 
 namespace line_map_eval
 {

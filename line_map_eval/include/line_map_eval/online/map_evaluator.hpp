@@ -9,8 +9,6 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
-#include "line_extraction/params.hpp"
 #include "line_map_eval/metrics/error_metric.hpp"
 #include "line_map_eval/metrics/lookup_table.hpp"
 #include "line_map_eval/metrics/map_metrics.hpp"
@@ -20,6 +18,8 @@
 #include "line_map_merging/online/keyframe_gate.hpp"
 #include "line_map_merging/online/node_keyframes.hpp"
 #include "line_map_merging/online/trajectory_anchor.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
 
 namespace line_map_eval
 {

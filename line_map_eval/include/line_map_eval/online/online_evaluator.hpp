@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/time_jump_detector.hpp"
 #include "line_map_eval/online/map_evaluator.hpp"
+#include "linemap/time_jump_detector.hpp"
 
 namespace line_map_eval
 {

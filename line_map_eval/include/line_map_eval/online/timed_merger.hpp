@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/small_helpers.hpp"
 #include "line_map_merging/mergers/merger.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace line_map_eval
 {

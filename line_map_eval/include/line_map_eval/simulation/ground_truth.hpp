@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
 #include "line_map_eval/simulation/wall_faces.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_eval
 {

@@ -18,12 +18,12 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
-#include "line_extraction/params.hpp"
-#include "line_extraction/time_jump_detector.hpp"
 #include "line_extraction/types.hpp"
 #include "line_map_merging/localization/localization_global_search.hpp"
 #include "line_map_merging/localization/localization_segment_matcher.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
+#include "linemap/time_jump_detector.hpp"
 
 namespace line_map_merging
 {

@@ -10,9 +10,9 @@
 #include <cstddef>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
 #include "line_map_merging/slam/likelihood_grid.hpp"
 #include "line_map_merging/slam/scan_matcher.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_merging
 {

@@ -11,7 +11,7 @@
 #include <optional>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_merging
 {

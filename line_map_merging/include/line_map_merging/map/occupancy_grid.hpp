@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
 #include "line_map_merging/mergers/merger.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_merging
 {

@@ -19,13 +19,13 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
-#include "line_extraction/params.hpp"
-#include "line_extraction/time_jump_detector.hpp"
 #include "line_map_merging/mergers/merger.hpp"
 #include "line_map_merging/online/keyframe_gate.hpp"
 #include "line_map_merging/online/node_keyframes.hpp"
 #include "line_map_merging/online/trajectory_anchor.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
+#include "linemap/time_jump_detector.hpp"
 
 namespace line_map_merging
 {

@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_merging
 {

@@ -17,12 +17,12 @@
 #include <utility>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
-#include "line_extraction/params.hpp"
-#include "line_extraction/time_jump_detector.hpp"
 #include "line_map_merging/slam/likelihood_grid.hpp"
 #include "line_map_merging/slam/pose_graph.hpp"
 #include "line_map_merging/slam/scan_matcher.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
+#include "linemap/time_jump_detector.hpp"
 
 namespace line_map_merging
 {

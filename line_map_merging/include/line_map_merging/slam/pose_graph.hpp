@@ -9,7 +9,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_merging
 {

@@ -11,8 +11,8 @@
 #include <cstddef>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
 #include "line_map_merging/slam/likelihood_grid.hpp"
+#include "linemap/geometry.hpp"
 
 namespace line_map_merging
 {

@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/ros/param_loader.hpp"
-#include "line_extraction/ros/transport.hpp"
+#include "linemap_ros/param_loader.hpp"
+#include "linemap_ros/transport.hpp"
 
 namespace linemap_ros
 {

@@ -10,7 +10,7 @@
 #include <string>
 #include <tuple>
 
-#include "line_extraction/params.hpp"
+#include "linemap/params.hpp"
 
 namespace linemap_ros
 {

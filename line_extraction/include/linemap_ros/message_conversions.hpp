@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/geometry.hpp"
+#include "linemap/geometry.hpp"
 
 namespace linemap_ros
 {
