@@ -214,3 +214,34 @@ TEST(ConcurrentMapper, ResetWaitsForTheAdjustmentAndAutosaveStaysDue)
   EXPECT_EQ(live.mapper().merger().keyframeCount(), 0u);
   EXPECT_EQ(live.mapper().counters().adjustments, 2u);
 }
+
+// The map services: a save answers with the count of the newest (adjusted) map, a failed load
+// names the file and keeps the map, a good load brings the saved map back.
+TEST(ConcurrentMapper, SaveAndLoadAnswerAndAFailedLoadKeepsTheMap)
+{
+  Drive run;
+  ConcurrentMapper live(cae(KeyframeSource::kTf), true);
+  for (int i = 0; i < kScans; ++i) live.addScan(run.scan(i));
+  live.addTrajectory(run.nodes());
+  const std::string path = ::testing::TempDir() + "concurrent_mapper_map.yaml";
+  const MapCommandAnswer saved = live.saveMap(path);
+  ASSERT_TRUE(saved.success) << saved.message;
+  EXPECT_FALSE(live.adjusting());  // saved after the adjustment, not under it
+  const std::size_t segments = live.mapper().merger().segmentCount();
+  ASSERT_GT(segments, 0u);
+  EXPECT_EQ(saved.message, "saved " + std::to_string(segments) + " segments to " + path);
+
+  const std::string missing = ::testing::TempDir() + "no_such_map.yaml";
+  const MapCommandAnswer failed = live.loadMap(missing);
+  EXPECT_FALSE(failed.success);
+  EXPECT_NE(failed.message.find("no_such_map.yaml"), std::string::npos) << failed.message;
+  EXPECT_EQ(live.mapper().merger().segmentCount(), segments);
+
+  live.reset();
+  ASSERT_EQ(live.mapper().merger().segmentCount(), 0u);
+  const MapCommandAnswer loaded = live.loadMap(path);
+  ASSERT_TRUE(loaded.success) << loaded.message;
+  EXPECT_EQ(live.mapper().merger().segmentCount(), segments);
+  EXPECT_EQ(loaded.message.rfind("loaded " + std::to_string(segments) + " segments, ", 0), 0u)
+      << loaded.message;
+}

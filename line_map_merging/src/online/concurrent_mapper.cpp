@@ -205,6 +205,43 @@ void ConcurrentMapper::load(const std::string& path)
   live_->load(path);
 }
 
+namespace
+{
+/// `action`'s error, if it throws one.
+template <class Action>
+std::string attemptAll(Action&& action)
+{
+  try
+  {
+    action();
+    return "";
+  }
+  catch (const std::exception& e)
+  {
+    return e.what();
+  }
+}
+
+MapCommandAnswer answerOf(const std::string& error, const std::string& done)
+{
+  return {error.empty(), error.empty() ? done : error};
+}
+}  // namespace
+
+MapCommandAnswer ConcurrentMapper::saveMap(const std::string& path)
+{
+  finish();
+  const std::string error = attemptAll([&] { live_->merger().save(path); });
+  return answerOf(error, "saved " + std::to_string(live_->merger().segmentCount()) + " segments to " + path);
+}
+
+MapCommandAnswer ConcurrentMapper::loadMap(const std::string& path)
+{
+  const std::string error = attemptAll([&] { load(path); });
+  return answerOf(error, "loaded " + std::to_string(live_->merger().segmentCount()) + " segments, " +
+                             std::to_string(live_->merger().keyframeCount()) + " keyframes from " + path);
+}
+
 std::string ConcurrentMapper::autosave(const std::string& path, double now, bool wait)
 {
   if (wait) finish();  // the last save: the newest map

@@ -18,14 +18,21 @@
 
 #include "line_map_merging/map/occupancy_grid.hpp"
 #include "line_map_merging/mergers/merger.hpp"
+#include "line_map_merging/online/concurrent_mapper.hpp"
 #include "line_map_merging/online/online_mapper.hpp"
 #include "linemap_ros/message_conversions.hpp"
+#include "linemap_ros/param_loader.hpp"
 
 namespace line_map_merging
 {
-/// The nodes of a trajectory (base poses in the map frame); `bad` counts the poses skipped.
-inline std::vector<std::pair<double, linemap::Pose2>> toNodes(const nav_msgs::Path& path, std::size_t& bad)
+/// The nodes of a trajectory (base poses in the map frame `map_frame`; an empty frame is taken as
+/// it), or nothing for a trajectory in another frame; `bad` counts the poses skipped.
+inline std::optional<std::vector<std::pair<double, linemap::Pose2>>> toNodes(const nav_msgs::Path& path,
+                                                                             const std::string& map_frame,
+                                                                             std::size_t& bad)
 {
+  const std::string frame = linemap_ros::stripLeadingSlash(path.header.frame_id);
+  if (!frame.empty() && frame != map_frame) return std::nullopt;
   std::vector<std::pair<double, linemap::Pose2>> nodes;
   nodes.reserve(path.poses.size());
   for (const auto& p : path.poses)
@@ -58,27 +65,12 @@ inline std::optional<StampedScan> toStampedScan(const tf2_ros::Buffer& tf,
   return scan;
 }
 
-/// Runs `action`; returns its error message, empty on success.
-template <class Action>
-std::string attemptAll(Action&& action)
-{
-  try
-  {
-    action();
-    return "";
-  }
-  catch (const std::exception& e)
-  {
-    return e.what();
-  }
-}
-
-/// A service's answer: `error`, or `done` when there is none.
+/// A map service's response from the core's answer.
 template <class Response>
-bool answer(Response& res, const std::string& error, const std::string& done)
+bool answer(Response& res, const MapCommandAnswer& answer)
 {
-  res.success = error.empty();
-  res.message = res.success ? done : error;
+  res.success = answer.success;
+  res.message = answer.message;
   return true;
 }
 

@@ -1,6 +1,5 @@
-// ROS wrapper of the online mapper: line_segments (+ tf) and optimized_trajectory in, line_map and
-// its occupancy grid out. Reads the parameters, converts messages, looks up tf, calls the core
-// (online_mapper.hpp, map_grid.hpp), publishes.
+// ROS wrapper of the online mapper (concurrent_mapper.hpp): line_segments (+ tf) and optimized_trajectory
+// in; line_map, its markers and its occupancy grid (grid_publisher.hpp) out.
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <line_map_msgs/LoadMap.h>
 #include <line_map_msgs/ResetMap.h>
@@ -9,16 +8,14 @@
 #include <ros/ros.h>
 #include <tf2_ros/transform_listener.h>
 
-#include <chrono>
 #include <cmath>
 #include <memory>
 #include <mutex>
 #include <pluginlib/class_list_macros.hpp>
 #include <string>
 
-#include "line_map_merging/map/map_grid.hpp"
+#include "grid_publisher.hpp"
 #include "line_map_merging/online/concurrent_mapper.hpp"
-#include "linemap/small_helpers.hpp"
 #include "linemap_ros/param_loader.hpp"
 #include "linemap_ros/tf_wait_queue.hpp"
 #include "linemap_ros/transport.hpp"
@@ -34,9 +31,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   {
     autosave_timer_.stop();
     poll_timer_.stop();
-    grid_timer_.stop();
-    // Waits for a grid in progress.
-    std::lock_guard<std::mutex> building(grid_mutex_);
+    if (grid_) grid_->stop();
     tf_listener_.reset();  // its thread calls into the wait
     waiting_.reset();
     if (mapper_) autosave(INFINITY);  // the changes since the last autosave
@@ -54,13 +49,13 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     publish_labels_ = pnh.param("publish_labels", false);
     marker_width_ = pnh.param("marker_width", 0.03);
     autosave_path_ = pnh.param<std::string>("autosave_path", "");
-    OccupancyGridParams grid;
-    grid.resolution = pnh.param("grid_resolution", 0.05);
-    const linemap::ParamSet params = linemap_ros::loadParamSet(pnh);
     try
     {
-      grid_ = std::make_unique<LiveGrid>(grid, pnh.param("grid_period", 2.0));
-      mapper_ = ConcurrentMapper::fromParams(pnh.param<std::string>("method", "cae"), params);
+      mapper_ = ConcurrentMapper::fromParams(pnh.param<std::string>("method", "cae"),
+                                             linemap_ros::loadParamSet(pnh));
+      grid_ = std::make_unique<GridPublisher>(
+          nh, getMTNodeHandle(), pnh, map_frame_, mutex_, [this]() -> const Merger& { return merger(); },
+          newest_);
     }
     catch (const std::exception& e)
     {
@@ -72,12 +67,15 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_, nh, true, hints);
     map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
-    grid_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("grid", 1, true);
     const int queue = std::max(1, pnh.param("queue_size", 1000));
     waiting_ = std::make_unique<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>>(
         *tf_, map_frame_, queue, ros::Duration(tf_timeout_), nh,
         [this](const SegmentsEvent& e) { onSegments(e); },
-        [this](const SegmentsEvent&, const std::string& why) { drop(why); });
+        [this](const SegmentsEvent&, const std::string& why)
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          drop(why);
+        });
     waiting_->subscribe(nh, "line_segments", queue, [this](const SegmentsEvent& e) { return arrive(e); });
     trajectory_sub_ =
         nh.subscribe("optimized_trajectory", 10, &LineMapMergingNodelet::onTrajectory, this, hints);
@@ -100,23 +98,13 @@ class LineMapMergingNodelet : public nodelet::Nodelet
         });
     // A finished adjustment replaces the map at the next scan, or here when none comes.
     poll_timer_ = nh.createWallTimer(ros::WallDuration(0.02), &LineMapMergingNodelet::poll, this);
-    // The grid is built from a copy of the map on the multi-threaded queue, so scans (on this nodelet's
-    // serial queue) merge meanwhile. The tick also notices the first subscriber, who then gets the map
-    // as it is.
-    grid_timer_ =
-        getMTNodeHandle().createWallTimer(ros::WallDuration(0.1), &LineMapMergingNodelet::gridTick, this);
     NODELET_INFO("line_map_merging: method '%s' in frame '%s'", merger().name(), map_frame_.c_str());
   }
 
-  void drop(const std::string& why)
+  /// Segments turned away; counted here unless the core has (`counted`). Lock held.
+  void drop(const std::string& why, bool counted = false)
   {
-    std::lock_guard<std::mutex> lock(mutex_);
-    mapper_->countDropped();
-    warnDropped(why);
-  }
-
-  void warnDropped(const std::string& why)  // lock held
-  {
+    if (!counted) mapper_->countDropped();
     NODELET_WARN_THROTTLE(5.0, "line_map_merging: segments dropped: %s (%zu so far, %zu stamped zero)",
                           why.c_str(), counters().dropped, counters().zero_stamps);
   }
@@ -131,7 +119,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     bool jumped = false;
     const std::string why = mapper_->admit(ros::Time::now().toSec(), header.stamp.toSec(), known, jumped);
     if (jumped) forgetTimeLine();
-    if (!why.empty()) warnDropped(why + " ('" + header.frame_id + "')");
+    if (!why.empty()) drop(why + " ('" + header.frame_id + "')", true);
     return why.empty();
   }
 
@@ -153,11 +141,11 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     const std::string frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
     bool mount_found = true;
     const auto scan = toStampedScan(*tf_, *msg, frame, map_frame_, base_frame_, odom_frame_, mount_found);
+    std::lock_guard<std::mutex> lock(mutex_);
     if (!scan) return drop("no valid transform " + map_frame_ + " -> " + frame);
     if (!mount_found)  // a bag without it lacks it for good: once is enough
       NODELET_WARN_ONCE("line_map_merging: no %s -> %s transform; taking them as the same frame",
                         base_frame_.c_str(), frame.c_str());
-    std::lock_guard<std::mutex> lock(mutex_);
     newest_ = std::max(newest_, msg->header.stamp);
     const bool adjusted = mapper_->poll();
     if (mapper_->addScan(*scan) == ScanOutcome::kKeyframe || adjusted) publish(msg->header.stamp);
@@ -166,21 +154,20 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   void onTrajectory(const nav_msgs::Path::ConstPtr& path)
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string frame = linemap_ros::stripLeadingSlash(path->header.frame_id);
-    if (!frame.empty() && frame != map_frame_)
+    std::size_t bad = 0;
+    const auto nodes = toNodes(*path, map_frame_, bad);
+    if (!nodes)
     {
       mapper_->countIgnoredTrajectory();
       NODELET_WARN_THROTTLE(5.0, "line_map_merging: optimized_trajectory in frame '%s', not '%s'; ignored",
                             path->header.frame_id.c_str(), map_frame_.c_str());
       return;
     }
-    std::size_t bad = 0;
-    const std::vector<StampedPose> nodes = toNodes(*path, bad);
     mapper_->countBadPoses(bad);
     if (bad > 0)
       NODELET_WARN_THROTTLE(5.0, "line_map_merging: %zu invalid optimized_trajectory poses ignored", bad);
     newest_ = std::max(newest_, path->header.stamp.isZero() ? ros::Time::now() : path->header.stamp);
-    if (mapper_->addTrajectory(nodes)) publish(newest_);
+    if (mapper_->addTrajectory(*nodes)) publish(newest_);
   }
 
   void autosave(double now)  // infinite `now`: the last save, at shutdown
@@ -195,26 +182,21 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (mapper_->finish()) publish(newest_);  // the newest map, adjusted
-    const std::string error = attemptAll([&] { merger().save(req.path); });
-    return answer(res, error,
-                  "saved " + std::to_string(merger().segmentCount()) + " segments to " + req.path);
+    return answer(res, mapper_->saveMap(req.path));
   }
 
   bool onLoad(line_map_msgs::LoadMap::Request& req, line_map_msgs::LoadMap::Response& res)
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string error = attemptAll([&] { mapper_->load(req.path); });  // a failed load keeps the map
-    return answer(res, error,
-                  "loaded " + std::to_string(merger().segmentCount()) + " segments, " +
-                      std::to_string(merger().keyframeCount()) + " keyframes from " + req.path) &&
-           (error.empty() ? publish(ros::Time::now()) : true);
+    const MapCommandAnswer loaded = mapper_->loadMap(req.path);
+    return answer(res, loaded) && (loaded.success ? publish(ros::Time::now()) : true);
   }
 
   bool onReset(line_map_msgs::ResetMap::Request&, line_map_msgs::ResetMap::Response& res)
   {
     std::lock_guard<std::mutex> lock(mutex_);
     mapper_->reset();
-    return answer(res, "", "map cleared") && publish(ros::Time::now());
+    return answer(res, {true, "map cleared"}) && publish(ros::Time::now());
   }
 
   bool publish(const ros::Time& stamp)  // lock held
@@ -231,32 +213,6 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (mapper_->poll()) publish(newest_);
-  }
-
-  void gridTick(const ros::WallTimerEvent&)
-  {
-    std::unique_lock<std::mutex> building(grid_mutex_, std::try_to_lock);
-    if (!building.owns_lock()) return;  // the last tick's grid is still being built
-    std::optional<GridInput> input;
-    ros::Time newest;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      input = grid_->due(merger(), grid_pub_.getNumSubscribers() > 0);
-      newest = newest_;
-    }
-    if (!input) return;
-    const auto start = std::chrono::steady_clock::now();
-    try
-    {
-      const OccupancyGrid grid = buildOccupancyGrid(*input, grid_->params());
-      grid_pub_.publish(toGridMessage(grid, map_frame_, gridStamp(input->newest_stamp, newest)));
-      std::lock_guard<std::mutex> lock(mutex_);
-      grid_->made(grid, linemap::millisecondsSince(start));
-    }
-    catch (const std::exception& e)  // a map too large for the resolution: again after the next change
-    {
-      NODELET_WARN_THROTTLE(30.0, "line_map_merging: no occupancy grid: %s", e.what());
-    }
   }
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
@@ -278,16 +234,15 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   std::string map_frame_, base_frame_, odom_frame_, autosave_path_;
   double tf_timeout_ = 0.5, marker_width_ = 0.03;
   bool publish_labels_ = false;
-  std::unique_ptr<LiveGrid> grid_;
-  std::mutex grid_mutex_;  // held while a grid is built: one at a time
+  std::unique_ptr<GridPublisher> grid_;
   std::unique_ptr<tf2_ros::Buffer> tf_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>> waiting_;
   ros::Subscriber trajectory_sub_;
-  ros::Publisher map_pub_, marker_pub_, grid_pub_;
+  ros::Publisher map_pub_, marker_pub_;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
-  ros::WallTimer autosave_timer_, poll_timer_, grid_timer_;
+  ros::WallTimer autosave_timer_, poll_timer_;
 };
 
 }  // namespace line_map_merging

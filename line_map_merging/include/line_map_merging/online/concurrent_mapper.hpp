@@ -20,6 +20,13 @@
 
 namespace line_map_merging
 {
+/// A map service's answer: whether it succeeded, and what was done or why it failed.
+struct MapCommandAnswer
+{
+  bool success = false;
+  std::string message;
+};
+
 class ConcurrentMapper
 {
  public:
@@ -55,6 +62,10 @@ class ConcurrentMapper
   /// Both finish() first: they act on the newest map.
   void reset();
   void load(const std::string& path);
+  /// The map services (save, load): finish() first, then what was done, or why it failed (a failed
+  /// load keeps the map).
+  MapCommandAnswer saveMap(const std::string& path);
+  MapCommandAnswer loadMap(const std::string& path);
   /// OnlineMapper::autosave on the live mapper (a snapshot of a whole state); `wait` (the last save)
   /// finishes the adjustments first.
   std::string autosave(const std::string& path, double now, bool wait = false);
