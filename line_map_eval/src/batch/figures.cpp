@@ -90,6 +90,19 @@ constexpr std::uint32_t kScanGrey = 0xFFB4B4B4u;  // opaque light grey, native-e
 constexpr std::uint32_t kUncoveredOrange = 0xFFFF8000u;
 constexpr std::uint32_t kUnmappedCyan = 0xFF00B4F0u;  // neither the map's dark blue nor the orange
 
+/// An image surface to set pixels in (flushed), or null when cairo cannot make one.
+cairo_surface_t* pixelSurface(cairo_format_t format, int width, int height)
+{
+  cairo_surface_t* img = cairo_image_surface_create(format, width, height);
+  if (cairo_surface_status(img) != CAIRO_STATUS_SUCCESS)
+  {
+    cairo_surface_destroy(img);
+    return nullptr;
+  }
+  cairo_surface_flush(img);
+  return img;
+}
+
 /// Dots of `colour` (dot x dot canvas units) at the points as an image covering panel k's map
 /// area at `scale` image pixels per canvas unit: a raster layer keeps SVG/PDF small with 10^5 points.
 void drawScanPoints(cairo_t* cr, const std::vector<Vec2>& points, const FigureLayout& l, int panel,
@@ -98,13 +111,8 @@ void drawScanPoints(cairo_t* cr, const std::vector<Vec2>& points, const FigureLa
   if (points.empty()) return;
   const int w = std::max(1, static_cast<int>(std::ceil(l.map_width * scale)));
   const int h = std::max(1, static_cast<int>(std::ceil(l.map_height * scale)));
-  cairo_surface_t* img = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, w, h);
-  if (cairo_surface_status(img) != CAIRO_STATUS_SUCCESS)
-  {
-    cairo_surface_destroy(img);
-    return;
-  }
-  cairo_surface_flush(img);
+  cairo_surface_t* img = pixelSurface(CAIRO_FORMAT_ARGB32, w, h);
+  if (!img) return;
   unsigned char* data = cairo_image_surface_get_data(img);
   const int stride = cairo_image_surface_get_stride(img);
   const double ppm = l.pixels_per_metre * scale;
@@ -134,13 +142,8 @@ void drawScanPoints(cairo_t* cr, const std::vector<Vec2>& points, const FigureLa
 void drawLookup(cairo_t* cr, const LookupTable& t, const FigureLayout& l, int panel)
 {
   if (t.empty()) return;
-  cairo_surface_t* img = cairo_image_surface_create(CAIRO_FORMAT_RGB24, t.width(), t.height());
-  if (cairo_surface_status(img) != CAIRO_STATUS_SUCCESS)
-  {
-    cairo_surface_destroy(img);
-    return;
-  }
-  cairo_surface_flush(img);
+  cairo_surface_t* img = pixelSurface(CAIRO_FORMAT_RGB24, t.width(), t.height());
+  if (!img) return;
   unsigned char* data = cairo_image_surface_get_data(img);
   const int stride = cairo_image_surface_get_stride(img);
   const std::vector<float>& v = t.values();

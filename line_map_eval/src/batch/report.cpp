@@ -59,7 +59,8 @@ std::vector<Column> columns()
           {"total ms"}};
 }
 
-std::vector<std::string> row(const MergerRun& r)
+/// The full table's cells of one merger, coverages to `coverage_decimals`.
+std::vector<std::string> row(const MergerRun& r, int coverage_decimals = 2)
 {
   return {r.name,
           std::to_string(r.scans),
@@ -74,10 +75,10 @@ std::vector<std::string> row(const MergerRun& r)
           fixed(r.quality.quality, 2),
           fixed(r.error.mean_error * kMm, 2),
           std::to_string(r.error.unassigned),
-          fixed(r.point_coverage.fraction() * 100.0, 2),
-          fixed(r.length_coverage.fraction() * 100.0, 2),
-          fixed(r.structure_coverage.fraction() * 100.0, 2),
-          fixed(r.structure_coverage.unmapped_length, 2),
+          fixed(r.point_coverage.fraction() * 100.0, coverage_decimals),
+          fixed(r.length_coverage.fraction() * 100.0, coverage_decimals),
+          fixed(r.structure_coverage.fraction() * 100.0, coverage_decimals),
+          fixed(r.structure_coverage.unmapped_length, coverage_decimals),
           std::to_string(r.redundancy.pairs),
           fixed(r.redundancy.overlap_length, 2),
           std::to_string(r.crossing_pairs.size()),
@@ -94,19 +95,14 @@ std::vector<std::pair<Column, std::string>> compactColumns()
           {{"unmap."}, "m"},      {{"redund."}, "pairs"}, {{"cross"}, "pairs"}};
 }
 
+/// The terminal table's cells: those of the full table's columns it shows (see compactColumns).
 std::vector<std::string> compactRow(const MergerRun& r)
 {
-  return {r.name,
-          std::to_string(r.map_segments),
-          fixed(r.quality.quality, 2),
-          fixed(r.error.mean_error * kMm, 2),
-          std::to_string(r.error.unassigned),
-          fixed(r.point_coverage.fraction() * 100.0, 1),
-          fixed(r.length_coverage.fraction() * 100.0, 1),
-          fixed(r.structure_coverage.fraction() * 100.0, 1),
-          fixed(r.structure_coverage.unmapped_length, 1),
-          std::to_string(r.redundancy.pairs),
-          std::to_string(r.crossing_pairs.size())};
+  const std::vector<std::string> full = row(r, 1);
+  static constexpr std::size_t kShown[] = {0, 6, 10, 11, 12, 13, 14, 15, 16, 17, 19};
+  std::vector<std::string> cells;
+  for (const std::size_t i : kShown) cells.push_back(full[i]);
+  return cells;
 }
 
 /// Rounds for the JSON output so that the files stay readable; keeps null for non-finite values.
