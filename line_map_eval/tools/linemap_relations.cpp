@@ -21,6 +21,7 @@
 #include "line_map_eval/datasets/localization_recording.hpp"
 #include "line_map_eval/datasets/relations.hpp"
 #include "line_map_eval/datasets/slam_recording.hpp"
+#include "tool_main.hpp"
 
 namespace fs = std::filesystem;
 using namespace line_map_eval;
@@ -282,27 +283,6 @@ int run(const Arguments& a)
 int main(int argc, char** argv)
 {
   Arguments a;
-  try
-  {
-    if (!parseArguments(argc, argv, a))
-    {
-      usage(std::cout);
-      return 0;
-    }
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "linemap_relations: " << e.what() << "\n";
-    usage(std::cerr);
-    return 2;
-  }
-  try
-  {
-    return run(a);
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "linemap_relations: " << e.what() << "\n";
-    return 1;
-  }
+  return line_map_eval::toolMain(
+      "linemap_relations", [&] { return parseArguments(argc, argv, a); }, usage, [&] { return run(a); });
 }
