@@ -137,18 +137,23 @@ void measure(YAML::Emitter& out, const char* k, double value, int decimals = 3)
   number(out, value, decimals);
 }
 
+/// Shortest, longest and mean length [mm] under keys PREFIX shortest_mm, PREFIX longest_mm and
+/// PREFIX mean_length_mm.
+void emitLengths(YAML::Emitter& out, const std::string& prefix, const LengthStatistics& s)
+{
+  measure(out, (prefix + "shortest_mm").c_str(), s.shortest * kMm);
+  measure(out, (prefix + "longest_mm").c_str(), s.longest * kMm);
+  measure(out, (prefix + "mean_length_mm").c_str(), s.mean * kMm);
+}
+
 /// Segment counts, lengths, quality and error of one map.
 void emitSegmentsAndError(YAML::Emitter& out, const MergerRun& r)
 {
   field(out, "scans", r.scans);
   field(out, "original_segments", r.original_segments);
-  measure(out, "original_shortest_mm", r.originals.shortest * kMm);
-  measure(out, "original_longest_mm", r.originals.longest * kMm);
-  measure(out, "original_mean_length_mm", r.originals.mean * kMm);
+  emitLengths(out, "original_", r.originals);
   field(out, "map_segments", r.map_segments);
-  measure(out, "shortest_mm", r.map.shortest * kMm);
-  measure(out, "longest_mm", r.map.longest * kMm);
-  measure(out, "mean_length_mm", r.map.mean * kMm);
+  emitLengths(out, "", r.map);
   measure(out, "quality_pct", r.quality.quality);
   measure(out, "error_mm", r.error.mean_error * kMm);
   measure(out, "max_error_mm", r.error.max_error * kMm);
@@ -234,9 +239,7 @@ void emitDataset(YAML::Emitter& out, const BatchResult& result)
   field(out, "candidate_scans", result.candidate_scans);
   field(out, "scans", result.keyframes);
   field(out, "original_segments", result.originals.count);
-  measure(out, "original_shortest_mm", result.originals.shortest * kMm);
-  measure(out, "original_longest_mm", result.originals.longest * kMm);
-  measure(out, "original_mean_length_mm", result.originals.mean * kMm);
+  emitLengths(out, "original_", result.originals);
   measure(out, "original_fit_rms_mm", result.original_fit_rms * kMm);
   measure(out, "original_line_sigma_mm", result.original_line_sigma * kMm);
   field(out, "scan_points", result.scan_points);
