@@ -17,11 +17,11 @@
 
 namespace
 {
+using namespace line_map_eval;
 using linemap::kPi;
 using linemap::Pose2;
 using linemap::Segment2;
 using linemap::Vec2;
-using namespace line_map_eval;
 
 constexpr double kDeg = kPi / 180.0;
 

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <functional>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -14,6 +13,7 @@
 #include "line_map_eval/datasets/bag_writer.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_eval/datasets/carmen_recording.hpp"
+#include "tool_main.hpp"
 
 namespace
 {
@@ -95,6 +95,8 @@ std::vector<std::string> split(const std::string& s, char sep)
   return parts;
 }
 
+using line_map_eval::CommandLine;
+
 struct Options
 {
   std::vector<std::string> positional;
@@ -104,28 +106,28 @@ struct Options
   line_map_eval::BagWriterOptions bag;
 };
 
-/// Reads one option (with its value, when it takes one) at argv[i]; false for an unknown option.
-bool parseOption(const std::string& arg, const std::function<std::string()>& value, Options& o)
+/// Reads one option (with its value, when it takes one); false for an unknown option.
+bool parseOption(const std::string& arg, CommandLine& cl, Options& o)
 {
   if (arg == "--corrected")
-    o.corrected_path = value();
+    o.corrected_path = cl.value();
   else if (arg == "--every")
-    o.bag.trajectory_every = parseCount(arg, value(), 1);
+    o.bag.trajectory_every = parseCount(arg, cl.value(), 1);
   else if (arg == "--max-scans")
-    o.recording.max_scans = parseCount(arg, value(), 1);
+    o.recording.max_scans = parseCount(arg, cl.value(), 1);
   else if (arg == "--lenient")
     o.read.lenient = true;
   else if (arg == "--no-progress")
     o.bag.progress = false;
   else if (arg == "--compression")
-    o.bag.compression = value();
+    o.bag.compression = cl.value();
   else if (arg == "--min-step")
-    o.recording.min_stamp_step = parsePositive(arg, value());
+    o.recording.min_stamp_step = parsePositive(arg, cl.value());
   else if (arg == "--max-range")
-    o.recording.max_usable_range = parsePositive(arg, value());
+    o.recording.max_usable_range = parsePositive(arg, cl.value());
   else if (arg == "--frames")
   {
-    const std::vector<std::string> f = split(value(), ',');
+    const std::vector<std::string> f = split(cl.value(), ',');
     if (f.size() != 4 || f[0].empty() || f[1].empty() || f[2].empty() || f[3].empty())
       throw std::invalid_argument("--frames needs four non-empty names map,odom,base_link,laser");
     o.bag.map_frame = f[0];
@@ -141,16 +143,11 @@ bool parseOption(const std::string& arg, const std::function<std::string()>& val
 /// The command line; false after --help. Throws std::invalid_argument on a bad one.
 bool parseArguments(int argc, char** argv, Options& o)
 {
-  for (int i = 1; i < argc; ++i)
+  for (CommandLine cl(argc, argv); cl.next();)
   {
-    const std::string arg = argv[i];
-    const auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
+    const std::string& arg = cl.arg();
     if (arg == "--help" || arg == "-h") return false;
-    if (parseOption(arg, value, o)) continue;
+    if (parseOption(arg, cl, o)) continue;
     if (!arg.empty() && arg[0] == '-') throw std::invalid_argument("unknown option " + arg + " (see --help)");
     o.positional.push_back(arg);
   }

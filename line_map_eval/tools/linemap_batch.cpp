@@ -130,14 +130,9 @@ std::size_t parseEvery(const std::string& v)
 /// Parses the command line; false after --help. Throws std::invalid_argument on a bad one.
 bool parseArguments(int argc, char** argv, Arguments& a)
 {
-  for (int i = 1; i < argc; ++i)
+  for (CommandLine cl(argc, argv); cl.next();)
   {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
+    const std::string& arg = cl.arg();
     if (arg == "--help" || arg == "-h") return false;
     std::string* text = arg == "--corrected"    ? &a.corrected
                         : arg == "--extractor"  ? &a.options.extractor
@@ -151,11 +146,11 @@ bool parseArguments(int argc, char** argv, Arguments& a)
                                      : arg == "--config" ? &a.configs
                                                          : nullptr;
     if (text)
-      *text = value();
+      *text = cl.value();
     else if (list)
-      list->push_back(value());
+      list->push_back(cl.value());
     else if (arg == "--every")
-      a.options.adjust_every = parseEvery(value());
+      a.options.adjust_every = parseEvery(cl.value());
     else if (arg == "--no-progress")
       a.options.progress = false;
     else if (arg == "--no-figures")
