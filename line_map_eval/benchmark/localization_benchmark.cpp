@@ -18,6 +18,7 @@
 #include <fstream>
 #include <iostream>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -104,15 +105,18 @@ void runKidnappings(const Recording& recording, const std::vector<linemap::Segme
   std::printf("kidnapping: %zu of %zu recovered within %zu scans; median %.0f scans to recover\n", recovered,
               kidnappings, scans, percentile(recovery_scans, 0.5));
 }
-}  // namespace
-
-int main(int argc, char** argv)
+struct Arguments
 {
   std::vector<std::string> positional;
   std::string reference, config;
   Pose2 initial;
   std::size_t trials = 20, kidnappings = 20, scans = 200;
   unsigned seed = 1;
+};
+
+/// The command line; the exit code when it is wrong.
+std::optional<int> parseArguments(int argc, char** argv, Arguments& a)
+{
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
@@ -121,110 +125,133 @@ int main(int argc, char** argv)
     {
       char c1 = 0, c2 = 0;
       std::istringstream f(argv[++i]);
-      f >> initial.x >> c1 >> initial.y >> c2 >> initial.theta;
+      f >> a.initial.x >> c1 >> a.initial.y >> c2 >> a.initial.theta;
     }
     else if (arg == "--reference" && has_value)
-      reference = argv[++i];
+      a.reference = argv[++i];
     else if (arg == "--config" && has_value)
-      config = argv[++i];
+      a.config = argv[++i];
     else if (arg == "--trials" && has_value)
-      trials = std::stoul(argv[++i]);
+      a.trials = std::stoul(argv[++i]);
     else if (arg == "--kidnappings" && has_value)
-      kidnappings = std::stoul(argv[++i]);
+      a.kidnappings = std::stoul(argv[++i]);
     else if (arg == "--scans" && has_value)
-      scans = std::stoul(argv[++i]);
+      a.scans = std::stoul(argv[++i]);
     else if (arg == "--seed" && has_value)
-      seed = static_cast<unsigned>(std::stoul(argv[++i]));
+      a.seed = static_cast<unsigned>(std::stoul(argv[++i]));
     else if (!arg.empty() && arg[0] == '-')
     {
       std::cerr << "localization_benchmark: unknown option " << arg << "\n";
       return 2;
     }
     else
-      positional.push_back(arg);
+      a.positional.push_back(arg);
   }
-  if (positional.size() != 2)
+  if (a.positional.size() != 2)
   {
     std::cerr
         << "usage: localization_benchmark RAW_LOG MAP_FILE [--initial-pose X,Y,THETA] [--reference FILE]\n"
            "       [--trials N] [--kidnappings N] [--scans N] [--seed N] [--config FILE]\n";
     return 2;
   }
+  return std::nullopt;
+}
+
+/// 'timestamp x y theta' per line in scan order (linemap_relations --write), one per scan.
+std::vector<Pose2> readReference(const std::string& reference, std::size_t scans)
+{
+  std::ifstream in(reference);
+  std::vector<Pose2> ref;
+  double t, x, y, th;
+  while (in >> t >> x >> y >> th) ref.push_back({x, y, th});
+  if (ref.size() != scans)
+    throw std::runtime_error(reference + ": " + std::to_string(ref.size()) + " poses for " +
+                             std::to_string(scans) + " scans");
+  return ref;
+}
+
+void printTracking(const LocalizationRunResult& tracked, std::size_t segments)
+{
+  std::printf(
+      "tracking: %zu scans, %zu map segments, per scan median %.3f ms, mean %.3f ms, p95 %.3f ms, "
+      "max %.2f ms; %zu lost\n",
+      tracked.scan_ms.size(), segments, percentile(tracked.scan_ms, 0.5),
+      std::accumulate(tracked.scan_ms.begin(), tracked.scan_ms.end(), 0.0) /
+          std::max<std::size_t>(1, tracked.scan_ms.size()),
+      percentile(tracked.scan_ms, 0.95), percentile(tracked.scan_ms, 1.0), tracked.counters.lost);
+}
+
+/// Global localization from random wrong poses at random scans (see the top of this file).
+void runTrials(const Recording& recording, const std::vector<linemap::Segment2>& segments,
+               const line_map_merging::LocalizerParams& params, const std::vector<Pose2>& ref,
+               std::size_t trials, std::size_t scans, std::mt19937& rng)
+{
+  line_map_merging::LineMapLocalizer probe(segments, params);
+  const auto lo = probe.index().lower(), hi = probe.index().upper();
+  std::uniform_real_distribution<double> ux(lo.x(), hi.x()), uy(lo.y(), hi.y()),
+      ut(-linemap::kPi, linemap::kPi);
+  std::uniform_int_distribution<std::size_t> us(0, recording.scans.size() - scans - 1);
+  std::size_t successes = 0;
+  std::vector<double> search_ms, recovery_scans;
+  for (std::size_t t = 0; t < trials; ++t)
+  {
+    const std::size_t first = us(rng);
+    Pose2 wrong;
+    do wrong = {ux(rng), uy(rng), ut(rng)};
+    while (std::hypot(wrong.x - ref[first].x, wrong.y - ref[first].y) < 1.0);
+    line_map_merging::LineMapLocalizer localizer(segments, params);
+    localizer.setPose(wrong);
+    RecoveryWatch watch;
+    std::size_t searches_seen = 0;
+    for (std::size_t i = first; i < first + scans; ++i)
+    {
+      const auto r = localizer.addScan(localizerScan(recording, i));
+      if (localizer.counters().global_searches > searches_seen)
+      {
+        searches_seen = localizer.counters().global_searches;
+        search_ms.push_back(localizer.counters().last_global_search_ms);
+      }
+      watch.observe(i - first, r.localized && near(r.pose, ref[i]));
+    }
+    const bool success = watch.recovered();
+    const std::size_t good_since = watch.good_since;
+    successes += success;
+    if (success) recovery_scans.push_back(static_cast<double>(good_since));
+    std::printf("trial %2zu: scan %5zu, wrong pose (%.2f, %.2f, %.0f deg): %s", t, first, wrong.x, wrong.y,
+                wrong.theta * 180.0 / linemap::kPi, success ? "recovered" : "NOT recovered");
+    if (success) std::printf(" after %zu scans", good_since);
+    std::printf(" (lost %zu, recovered %zu, replaced by a rival %zu, global searches %zu)\n",
+                localizer.counters().lost, localizer.counters().recovered, localizer.counters().replaced,
+                localizer.counters().global_searches);
+  }
+  std::printf(
+      "global localization: %zu of %zu recovered within %zu scans; median %.0f scans to recover; "
+      "global search median %.0f ms, max %.0f ms\n",
+      successes, trials, scans, percentile(recovery_scans, 0.5), percentile(search_ms, 0.5),
+      percentile(search_ms, 1.0));
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  Arguments args;
+  if (const auto stop = parseArguments(argc, argv, args)) return *stop;
   try
   {
-    const CarmenLog raw = readCarmenLog(positional[0]);
+    const CarmenLog raw = readCarmenLog(args.positional[0]);
     const Recording recording = fromCarmen(raw, nullptr);
-    const auto segments = line_map_merging::loadLineMapSegments(positional[1]);
+    const auto segments = line_map_merging::loadLineMapSegments(args.positional[1]);
     std::vector<std::string> files;
-    if (!config.empty()) files.push_back(config);
+    if (!args.config.empty()) files.push_back(args.config);
     const auto params = line_map_merging::LocalizerParams::fromParams(loadParameterFiles(files));
 
-    const LocalizationRunResult tracked = runLocalization(recording, segments, params, initial);
-    std::printf(
-        "tracking: %zu scans, %zu map segments, per scan median %.3f ms, mean %.3f ms, p95 %.3f ms, "
-        "max %.2f ms; %zu lost\n",
-        tracked.scan_ms.size(), segments.size(), percentile(tracked.scan_ms, 0.5),
-        std::accumulate(tracked.scan_ms.begin(), tracked.scan_ms.end(), 0.0) /
-            std::max<std::size_t>(1, tracked.scan_ms.size()),
-        percentile(tracked.scan_ms, 0.95), percentile(tracked.scan_ms, 1.0), tracked.counters.lost);
-    std::vector<Pose2> ref = tracked.scan_poses;
-    if (!reference.empty())
-    {
-      // 'timestamp x y theta' per line in scan order (linemap_relations --write).
-      std::ifstream in(reference);
-      ref.clear();
-      double t, x, y, th;
-      while (in >> t >> x >> y >> th) ref.push_back({x, y, th});
-      if (ref.size() != recording.scans.size())
-        throw std::runtime_error(reference + ": " + std::to_string(ref.size()) + " poses for " +
-                                 std::to_string(recording.scans.size()) + " scans");
-    }
-
-    line_map_merging::LineMapLocalizer probe(segments, params);
-    const auto lo = probe.index().lower(), hi = probe.index().upper();
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> ux(lo.x(), hi.x()), uy(lo.y(), hi.y()),
-        ut(-linemap::kPi, linemap::kPi);
-    std::uniform_int_distribution<std::size_t> us(0, recording.scans.size() - scans - 1);
-    std::size_t successes = 0;
-    std::vector<double> search_ms, recovery_scans;
-    for (std::size_t t = 0; t < trials; ++t)
-    {
-      const std::size_t first = us(rng);
-      Pose2 wrong;
-      do wrong = {ux(rng), uy(rng), ut(rng)};
-      while (std::hypot(wrong.x - ref[first].x, wrong.y - ref[first].y) < 1.0);
-      line_map_merging::LineMapLocalizer localizer(segments, params);
-      localizer.setPose(wrong);
-      RecoveryWatch watch;
-      std::size_t searches_seen = 0;
-      for (std::size_t i = first; i < first + scans; ++i)
-      {
-        const auto r = localizer.addScan(localizerScan(recording, i));
-        if (localizer.counters().global_searches > searches_seen)
-        {
-          searches_seen = localizer.counters().global_searches;
-          search_ms.push_back(localizer.counters().last_global_search_ms);
-        }
-        watch.observe(i - first, r.localized && near(r.pose, ref[i]));
-      }
-      const bool success = watch.recovered();
-      const std::size_t good_since = watch.good_since;
-      successes += success;
-      if (success) recovery_scans.push_back(static_cast<double>(good_since));
-      std::printf("trial %2zu: scan %5zu, wrong pose (%.2f, %.2f, %.0f deg): %s", t, first, wrong.x, wrong.y,
-                  wrong.theta * 180.0 / linemap::kPi, success ? "recovered" : "NOT recovered");
-      if (success) std::printf(" after %zu scans", good_since);
-      std::printf(" (lost %zu, recovered %zu, replaced by a rival %zu, global searches %zu)\n",
-                  localizer.counters().lost, localizer.counters().recovered, localizer.counters().replaced,
-                  localizer.counters().global_searches);
-    }
-    std::printf(
-        "global localization: %zu of %zu recovered within %zu scans; median %.0f scans to recover; "
-        "global search median %.0f ms, max %.0f ms\n",
-        successes, trials, scans, percentile(recovery_scans, 0.5), percentile(search_ms, 0.5),
-        percentile(search_ms, 1.0));
-    runKidnappings(recording, segments, params, initial, ref, kidnappings, scans, rng);
+    const LocalizationRunResult tracked = runLocalization(recording, segments, params, args.initial);
+    printTracking(tracked, segments.size());
+    const std::vector<Pose2> ref =
+        args.reference.empty() ? tracked.scan_poses : readReference(args.reference, recording.scans.size());
+    std::mt19937 rng(args.seed);
+    runTrials(recording, segments, params, ref, args.trials, args.scans, rng);
+    runKidnappings(recording, segments, params, args.initial, ref, args.kidnappings, args.scans, rng);
   }
   catch (const std::exception& e)
   {

@@ -18,8 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/line_extractor.hpp"
-#include "line_map_eval/datasets/carmen_log.hpp"
+#include "benchmark_common.hpp"
 #include "line_map_eval/datasets/world.hpp"
 #include "line_map_eval/simulation/simulator.hpp"
 #include "line_map_merging/mergers/merger.hpp"
@@ -27,13 +26,11 @@
 
 namespace
 {
-using Clock = std::chrono::steady_clock;
+using line_map_eval::benchmark::Clock;
+using line_map_eval::benchmark::extractKeyframe;
+using line_map_eval::benchmark::intelKeyframes;
+using line_map_eval::benchmark::millis;
 using line_map_merging::Keyframe;
-
-double millis(Clock::time_point a, Clock::time_point b)
-{
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
 
 struct Dataset
 {
@@ -41,19 +38,6 @@ struct Dataset
   std::vector<Keyframe> keyframes;
   std::size_t segments = 0;
 };
-
-Keyframe extractKeyframe(line_extraction::LineExtractor& extractor, const std::vector<float>& ranges,
-                         const line_map_eval::ScanGeometry& g, std::size_t index, double stamp,
-                         const linemap::Pose2& laser_pose)
-{
-  const line_extraction::ScanInput input = line_map_eval::scanInput(g, ranges);
-  Keyframe k;
-  k.index = index;
-  k.stamp = stamp;
-  k.pose = laser_pose;
-  for (const auto& s : extractor.extract(input).segments) k.segments.emplace_back(s.start, s.end);
-  return k;
-}
 
 Dataset simulated(const std::string& path)
 {
@@ -69,18 +53,9 @@ Dataset simulated(const std::string& path)
 
 Dataset intel(const std::string& path)
 {
-  const auto log = line_map_eval::readCarmenLog(path);
-  if (log.scans.empty()) throw std::runtime_error(path + ": no scans");
   Dataset d;
   d.name = "intel-corrected";
-  line_extraction::LineExtractor extractor{linemap::ParamSet()};
-  for (std::size_t i = 0; i < log.scans.size(); ++i)
-  {
-    const auto& scan = log.scans[i];
-    // Intel writes no-return readings as 81.83 m (datasets README).
-    const auto g = line_map_eval::carmenBeamGeometry(scan.ranges.size(), 81.83);
-    d.keyframes.push_back(extractKeyframe(extractor, scan.ranges, g, i, scan.timestamp, scan.laser_pose));
-  }
+  d.keyframes = intelKeyframes(path);
   return d;
 }
 
@@ -151,45 +126,10 @@ std::string jsonNumber(double v)
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
 }
-}  // namespace
 
-int main(int argc, char** argv)
+/// The simulated worlds and Intel, each skipped (with a message) when it cannot be read.
+std::vector<Dataset> readDatasets(const std::string& worlds, const std::string& intel_path)
 {
-  // Defaults relative to this file: line_map_eval/benchmark/ -> repository root and the shared datasets.
-  const std::string here = __FILE__;
-  const std::string root = here.substr(0, here.rfind('/')) + "/../..";
-  std::string intel_path = root + "/../shared/datasets/intel-corrected.log.gz";
-  std::string worlds = root + "/config/worlds";
-  std::string json = "mergers_benchmark.json";
-  int runs = 3;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc)
-      {
-        std::fprintf(stderr, "mergers_benchmark: %s needs a value\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--intel")
-      intel_path = value();
-    else if (a == "--worlds")
-      worlds = value();
-    else if (a == "--json")
-      json = value();
-    else if (a == "--runs")
-      runs = std::max(1, std::atoi(value().c_str()));
-    else
-    {
-      std::fprintf(stderr,
-                   "usage: mergers_benchmark [--intel PATH] [--worlds DIR] [--json PATH] [--runs N]\n");
-      return a == "--help" ? 0 : 2;
-    }
-  }
-
   std::vector<Dataset> datasets;
   for (const char* w : {"square_room", "loop", "office"})
   {
@@ -210,24 +150,11 @@ int main(int argc, char** argv)
   {
     std::fprintf(stderr, "mergers_benchmark: Intel skipped: %s\n", e.what());
   }
-  if (datasets.empty())
-  {
-    std::fprintf(stderr, "mergers_benchmark: no dataset could be read\n");
-    return 1;
-  }
+  return datasets;
+}
 
-  std::vector<Row> rows;
-  try
-  {
-    for (const Dataset& d : datasets)
-      for (const std::string& m : line_map_merging::mergerNames()) rows.push_back(measure(d, m, runs));
-  }
-  catch (const std::exception& e)
-  {
-    std::fprintf(stderr, "mergers_benchmark: %s\n", e.what());
-    return 1;
-  }
-
+void printTable(const std::vector<Row>& rows)
+{
   std::printf("%-18s %-12s %6s %7s %8s %8s %8s %8s %10s %11s %10s\n", "dataset", "method", "kf", "leaves",
               "segments", "min [m]", "max [m]", "mean [m]", "total [ms]", "frame med", "frame max");
   for (const Row& r : rows)
@@ -239,7 +166,10 @@ int main(int argc, char** argv)
     else
       std::printf(" %11s %10s\n", "-", "-");
   }
+}
 
+bool writeJson(const std::vector<Row>& rows, int runs, const std::string& json)
+{
   std::ofstream out(json);
   out << "{\n  \"runs\": " << runs << ",\n  \"rows\": [\n";
   for (std::size_t i = 0; i < rows.size(); ++i)
@@ -255,7 +185,47 @@ int main(int argc, char** argv)
         << "\n";
   }
   out << "  ]\n}\n";
-  if (!out)
+  return static_cast<bool>(out);
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  // Defaults relative to this file: line_map_eval/benchmark/ -> repository root and the shared datasets.
+  const std::string here = __FILE__;
+  const std::string root = here.substr(0, here.rfind('/')) + "/../..";
+  std::string intel_path = root + "/../shared/datasets/intel-corrected.log.gz";
+  std::string worlds = root + "/config/worlds";
+  std::string json = "mergers_benchmark.json";
+  int runs = 3;
+  if (const auto stop = line_map_eval::benchmark::parseOptions(
+          argc, argv, "mergers_benchmark",
+          "usage: mergers_benchmark [--intel PATH] [--worlds DIR] [--json PATH] [--runs N]",
+          {{"--intel", [&](const std::string& v) { intel_path = v; }},
+           {"--worlds", [&](const std::string& v) { worlds = v; }},
+           {"--json", [&](const std::string& v) { json = v; }},
+           {"--runs", [&](const std::string& v) { runs = std::max(1, std::atoi(v.c_str())); }}}))
+    return *stop;
+
+  const std::vector<Dataset> datasets = readDatasets(worlds, intel_path);
+  if (datasets.empty())
+  {
+    std::fprintf(stderr, "mergers_benchmark: no dataset could be read\n");
+    return 1;
+  }
+  std::vector<Row> rows;
+  try
+  {
+    for (const Dataset& d : datasets)
+      for (const std::string& m : line_map_merging::mergerNames()) rows.push_back(measure(d, m, runs));
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "mergers_benchmark: %s\n", e.what());
+    return 1;
+  }
+  printTable(rows);
+  if (!writeJson(rows, runs, json))
   {
     std::fprintf(stderr, "mergers_benchmark: cannot write %s\n", json.c_str());
     return 1;

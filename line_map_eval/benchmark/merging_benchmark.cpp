@@ -14,25 +14,21 @@
 #include <string>
 #include <vector>
 
-#include "line_extraction/line_extractor.hpp"
-#include "line_map_eval/datasets/carmen_log.hpp"
+#include "benchmark_common.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
 #include "linemap/small_helpers.hpp"
 
 namespace
 {
-using Clock = std::chrono::steady_clock;
+using line_map_eval::benchmark::Clock;
+using line_map_eval::benchmark::intelKeyframes;
+using line_map_eval::benchmark::millis;
 using line_map_merging::CaeParams;
 using line_map_merging::CaeRlsm;
 using line_map_merging::Keyframe;
 using linemap::Pose2;
 using linemap::Segment2;
 using linemap::Vec2;
-
-double ms(Clock::time_point a, Clock::time_point b)
-{
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
 
 double percentile(std::vector<double> v, double q)
 {
@@ -52,32 +48,9 @@ std::vector<double> timeFrames(CaeRlsm& merger, const std::vector<Keyframe>& key
   {
     const auto t0 = Clock::now();
     merger.addKeyframe(k);
-    t.push_back(ms(t0, Clock::now()));
+    t.push_back(millis(t0, Clock::now()));
   }
   return t;
-}
-
-std::vector<Keyframe> intelKeyframes(const std::string& path)
-{
-  const line_map_eval::CarmenLog log = line_map_eval::readCarmenLog(path);
-  if (log.scans.empty()) throw std::runtime_error(path + ": no scans");
-  linemap::ParamSet params;  // the extraction defaults (srg)
-  line_extraction::LineExtractor extractor(params);
-  std::vector<Keyframe> out;
-  for (std::size_t i = 0; i < log.scans.size(); ++i)
-  {
-    const auto& scan = log.scans[i];
-    const auto geometry = line_map_eval::carmenBeamGeometry(scan.ranges.size(), 81.83);
-    const line_extraction::ScanInput input = line_map_eval::scanInput(geometry, scan.ranges);
-    const auto& result = extractor.extract(input);
-    Keyframe k;
-    k.index = i;
-    k.stamp = scan.timestamp;
-    k.pose = Pose2(scan.laser_pose.x, scan.laser_pose.y, scan.laser_pose.theta);
-    for (const auto& s : result.segments) k.segments.emplace_back(s.start, s.end);
-    out.push_back(std::move(k));
-  }
-  return out;
 }
 
 /// `walls` random walls, one per 3 m grid cell, each seen 10 times, `per_frame` walls per keyframe:
@@ -148,17 +121,115 @@ GmaFigures timeGma(const std::vector<Keyframe>& keyframes, int threads, bool con
   {
     const auto t0 = Clock::now();
     merger.adjust(r % 2 == 0 ? a : b);
-    t.push_back(ms(t0, Clock::now()));
+    t.push_back(millis(t0, Clock::now()));
     Keyframe probe;  // one segment far from the map
     probe.index = keyframes.size() + static_cast<std::size_t>(r);
     probe.segments.emplace_back(Vec2(-100.0 - 5.0 * r, -100.0), Vec2(-99.0 - 5.0 * r, -100.0));
     const auto t1 = Clock::now();
     merger.addKeyframe(probe);
-    next.push_back(ms(t1, Clock::now()));
+    next.push_back(millis(t1, Clock::now()));
   }
   return {percentile(t, 0.5), percentile(next, 0.5), merger.leafCount(), merger.segmentCount()};
 }
 
+/// OTM per frame on the Intel corrected keyframes, `runs` times.
+struct IntelFigures
+{
+  double median = std::nan(""), p99 = std::nan("");
+  std::size_t frames = 0, segments = 0, leaves = 0;
+};
+
+IntelFigures timeIntel(const std::string& intel, int runs)
+{
+  IntelFigures f;
+  try
+  {
+    const auto keyframes = intelKeyframes(intel);
+    std::vector<double> all;
+    for (int r = 0; r < runs; ++r)
+    {
+      CaeRlsm merger;
+      const auto t = timeFrames(merger, keyframes);
+      all.insert(all.end(), t.begin(), t.end());
+      f.segments = merger.segmentCount();
+      f.leaves = merger.leafCount();
+    }
+    f.frames = keyframes.size();
+    f.median = percentile(all, 0.5);
+    f.p99 = percentile(all, 0.99);
+    std::printf(
+        "Intel corrected: %zu keyframes, %zu leaves -> %zu map segments; OTM per frame median %.4f ms, "
+        "p99 %.4f ms (%d runs)\n",
+        f.frames, f.leaves, f.segments, f.median, f.p99, runs);
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "merging_benchmark: Intel part skipped: %s\n", e.what());
+  }
+  return f;
+}
+
+/// OTM per frame while a map grows to `walls` map segments, over its first and last frames.
+struct GrowthFigures
+{
+  std::size_t keyframes = 0, per_frame = 0, leaves = 0, segments = 0, tail = 0;
+  double first_median = 0.0, last_median = 0.0, last_p99 = 0.0;
+};
+
+GrowthFigures timeGrowth(CaeRlsm& grown, const std::vector<Keyframe>& synthetic, std::size_t per_frame)
+{
+  const auto t = timeFrames(grown, synthetic);
+  const std::size_t tail = std::min<std::size_t>(1000, t.size());
+  const std::vector<double> first(t.begin(), t.begin() + tail), last(t.end() - tail, t.end());
+  const GrowthFigures f{synthetic.size(),
+                        per_frame,
+                        grown.leafCount(),
+                        grown.segmentCount(),
+                        tail,
+                        percentile(first, 0.5),
+                        percentile(last, 0.5),
+                        percentile(last, 0.99)};
+  std::printf(
+      "Synthetic: %zu keyframes of %zu segments, %zu leaves -> %zu map segments; OTM per frame median "
+      "%.4f ms (first %zu frames) / %.4f ms, p99 %.4f ms (last %zu frames)\n",
+      f.keyframes, f.per_frame, f.leaves, f.segments, f.first_median, f.tail, f.last_median, f.last_p99,
+      f.tail);
+  return f;
+}
+
+/// The copy ConcurrentMapper takes on the merge thread before adjusting in the background.
+void timeCopy(const CaeRlsm& grown, int runs)
+{
+  std::vector<double> copy_ms;
+  for (int r = 0; r < std::max(3, runs); ++r)
+  {
+    const auto c0 = std::chrono::steady_clock::now();
+    const auto copy = grown.clone();
+    copy_ms.push_back(linemap::millisecondsSince(c0));
+  }
+  std::printf("Copy of that map for a background adjustment (merge thread): median %.1f ms\n",
+              percentile(copy_ms, 0.5));
+}
+
+void writeJson(const std::string& json, const IntelFigures& intel, const GrowthFigures& growth,
+               const GmaFigures& g1, const GmaFigures& g2, const GmaFigures& c1, const GmaFigures& c2)
+{
+  std::ofstream out(json);
+  out << "{\n"
+      << "  \"intel\": {\"keyframes\": " << intel.frames << ", \"leaves\": " << intel.leaves
+      << ", \"map_segments\": " << intel.segments << ", \"otm_median_ms\": " << intel.median
+      << ", \"otm_p99_ms\": " << intel.p99 << "},\n"
+      << "  \"synthetic\": {\"keyframes\": " << growth.keyframes << ", \"leaves\": " << growth.leaves
+      << ", \"segments_per_keyframe\": " << growth.per_frame << ", \"map_segments\": " << growth.segments
+      << ", \"otm_median_ms_first\": " << growth.first_median
+      << ", \"otm_median_ms_last\": " << growth.last_median << ", \"otm_p99_ms_last\": " << growth.last_p99
+      << "},\n"
+      << "  \"gma\": {\"leaves\": " << g1.leaves << ", \"ms_1_thread\": " << g1.median_ms
+      << ", \"ms_2_threads\": " << g2.median_ms << ", \"next_frame_ms\": " << g2.next_frame_ms
+      << ", \"consistent_ms_1_thread\": " << c1.median_ms << ", \"consistent_ms_2_threads\": " << c2.median_ms
+      << "}\n"
+      << "}\n";
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -169,33 +240,14 @@ int main(int argc, char** argv)
   std::string json = "merging_benchmark.json";
   std::size_t walls = 100000;
   int runs = 5;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc)
-      {
-        std::fprintf(stderr, "merging_benchmark: %s needs a value\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--intel")
-      intel = value();
-    else if (a == "--json")
-      json = value();
-    else if (a == "--segments")
-      walls = std::strtoul(value().c_str(), nullptr, 10);
-    else if (a == "--runs")
-      runs = std::max(1, std::atoi(value().c_str()));
-    else
-    {
-      std::fprintf(stderr,
-                   "usage: merging_benchmark [--intel PATH] [--json PATH] [--segments N] [--runs N]\n");
-      return a == "--help" ? 0 : 2;
-    }
-  }
+  if (const auto stop = line_map_eval::benchmark::parseOptions(
+          argc, argv, "merging_benchmark",
+          "usage: merging_benchmark [--intel PATH] [--json PATH] [--segments N] [--runs N]",
+          {{"--intel", [&](const std::string& v) { intel = v; }},
+           {"--json", [&](const std::string& v) { json = v; }},
+           {"--segments", [&](const std::string& v) { walls = std::strtoul(v.c_str(), nullptr, 10); }},
+           {"--runs", [&](const std::string& v) { runs = std::max(1, std::atoi(v.c_str())); }}}))
+    return *stop;
   if (walls < 100)
   {
     std::fprintf(stderr, "merging_benchmark: --segments must be >= 100\n");
@@ -205,58 +257,19 @@ int main(int argc, char** argv)
   try
   {
     // 1. Intel corrected keyframes, extracted with the default extractor (srg).
-    double intel_median = std::nan(""), intel_p99 = std::nan("");
-    std::size_t intel_frames = 0, intel_segments = 0, intel_leaves = 0;
-    try
-    {
-      const auto keyframes = intelKeyframes(intel);
-      std::vector<double> all;
-      for (int r = 0; r < runs; ++r)
-      {
-        CaeRlsm merger;
-        const auto t = timeFrames(merger, keyframes);
-        all.insert(all.end(), t.begin(), t.end());
-        intel_segments = merger.segmentCount();
-        intel_leaves = merger.leafCount();
-      }
-      intel_frames = keyframes.size();
-      intel_median = percentile(all, 0.5);
-      intel_p99 = percentile(all, 0.99);
-      std::printf(
-          "Intel corrected: %zu keyframes, %zu leaves -> %zu map segments; OTM per frame median %.4f ms, "
-          "p99 %.4f ms (%d runs)\n",
-          intel_frames, intel_leaves, intel_segments, intel_median, intel_p99, runs);
-    }
-    catch (const std::exception& e)
-    {
-      std::fprintf(stderr, "merging_benchmark: Intel part skipped: %s\n", e.what());
-    }
+    const IntelFigures intel_figures = timeIntel(intel, runs);
 
     // 2. Synthetic map grown to `walls` map segments (10 leaves each).
     // As many segments per keyframe as the Intel keyframes have on average (3 when unknown).
     const std::size_t per_frame =
-        intel_frames > 0 ? std::max<std::size_t>(1, (intel_leaves + intel_frames / 2) / intel_frames) : 3;
+        intel_figures.frames > 0
+            ? std::max<std::size_t>(1,
+                                    (intel_figures.leaves + intel_figures.frames / 2) / intel_figures.frames)
+            : 3;
     const auto synthetic = syntheticKeyframes(walls, per_frame, 7);
     CaeRlsm grown;
-    const auto t = timeFrames(grown, synthetic);
-    const std::size_t tail = std::min<std::size_t>(1000, t.size());
-    const std::vector<double> first(t.begin(), t.begin() + tail), last(t.end() - tail, t.end());
-    std::printf(
-        "Synthetic: %zu keyframes of %zu segments, %zu leaves -> %zu map segments; OTM per frame median "
-        "%.4f ms (first %zu frames) / %.4f ms, p99 %.4f ms (last %zu frames)\n",
-        synthetic.size(), per_frame, grown.leafCount(), grown.segmentCount(), percentile(first, 0.5), tail,
-        percentile(last, 0.5), percentile(last, 0.99), tail);
-
-    // The copy ConcurrentMapper takes on the merge thread before adjusting in the background.
-    std::vector<double> copy_ms;
-    for (int r = 0; r < std::max(3, runs); ++r)
-    {
-      const auto c0 = std::chrono::steady_clock::now();
-      const auto copy = grown.clone();
-      copy_ms.push_back(linemap::millisecondsSince(c0));
-    }
-    std::printf("Copy of that map for a background adjustment (merge thread): median %.1f ms\n",
-                percentile(copy_ms, 0.5));
+    const GrowthFigures growth = timeGrowth(grown, synthetic, per_frame);
+    timeCopy(grown, runs);
 
     // 3. MP-GMA over all leaves, 1 and 2 threads, with and without the consistency pass.
     const GmaFigures g1 = timeGma(synthetic, 1, false, runs);
@@ -269,22 +282,7 @@ int main(int argc, char** argv)
         g1.leaves, g1.segments, g1.median_ms, g2.median_ms, g1.median_ms / g2.median_ms, g2.next_frame_ms);
     std::printf("MP-GMA + consistency pass: 1 thread %.1f ms, 2 threads %.1f ms, speed-up %.2fx\n",
                 c1.median_ms, c2.median_ms, c1.median_ms / c2.median_ms);
-
-    std::ofstream out(json);
-    out << "{\n"
-        << "  \"intel\": {\"keyframes\": " << intel_frames << ", \"leaves\": " << intel_leaves
-        << ", \"map_segments\": " << intel_segments << ", \"otm_median_ms\": " << intel_median
-        << ", \"otm_p99_ms\": " << intel_p99 << "},\n"
-        << "  \"synthetic\": {\"keyframes\": " << synthetic.size() << ", \"leaves\": " << grown.leafCount()
-        << ", \"segments_per_keyframe\": " << per_frame << ", \"map_segments\": " << grown.segmentCount()
-        << ", \"otm_median_ms_first\": " << percentile(first, 0.5)
-        << ", \"otm_median_ms_last\": " << percentile(last, 0.5)
-        << ", \"otm_p99_ms_last\": " << percentile(last, 0.99) << "},\n"
-        << "  \"gma\": {\"leaves\": " << g1.leaves << ", \"ms_1_thread\": " << g1.median_ms
-        << ", \"ms_2_threads\": " << g2.median_ms << ", \"next_frame_ms\": " << g2.next_frame_ms
-        << ", \"consistent_ms_1_thread\": " << c1.median_ms
-        << ", \"consistent_ms_2_threads\": " << c2.median_ms << "}\n"
-        << "}\n";
+    writeJson(json, intel_figures, growth, g1, g2, c1, c2);
     std::printf("wrote %s\n", json.c_str());
   }
   catch (const std::exception& e)

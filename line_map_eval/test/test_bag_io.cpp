@@ -12,6 +12,7 @@
 #include <cmath>
 #include <string>
 
+#include "eval_test_helpers.hpp"
 #include "line_map_eval/datasets/bag_reader.hpp"
 #include "line_map_eval/datasets/bag_writer.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
@@ -24,22 +25,7 @@ namespace
 const std::string kDatasets = LINEMAP_SOURCE_DIR "/../shared/datasets/";
 constexpr double kPi = linemap::kPi;
 
-class TempDir
-{
- public:
-  TempDir()
-  {
-    char tmpl[] = "/tmp/test_bag_io_XXXXXX";
-    const char* d = mkdtemp(tmpl);
-    if (!d) throw std::runtime_error("mkdtemp failed");
-    path_ = d;
-  }
-  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
-  std::string file(const std::string& name) const { return path_ + "/" + name; }
-
- private:
-  std::string path_;
-};
+using line_map_eval::test_helpers::TempDir;
 
 double angleDiff(double a, double b)
 {

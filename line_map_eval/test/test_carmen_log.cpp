@@ -18,6 +18,7 @@
 #include <string>
 #include <utility>
 
+#include "eval_test_helpers.hpp"
 #include "line_map_eval/batch/progress.hpp"
 #include "line_map_eval/datasets/bag_reader.hpp"
 #include "line_map_eval/datasets/bag_writer.hpp"
@@ -41,28 +42,7 @@ bool dataset(const std::string& name, std::string& path)
   return false;
 }
 
-class TempDir
-{
- public:
-  TempDir()
-  {
-    char tmpl[] = "/tmp/test_carmen_log_XXXXXX";
-    const char* d = mkdtemp(tmpl);
-    if (!d) throw std::runtime_error("mkdtemp failed");
-    path_ = d;
-  }
-  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
-  std::string file(const std::string& name, const std::string& content) const
-  {
-    const std::string p = path_ + "/" + name;
-    std::ofstream(p, std::ios::binary) << content;
-    return p;
-  }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
+using line_map_eval::test_helpers::TempDir;
 
 /// A valid 3-beam FLASER line.
 std::string flaser(double t, double x = 0.0)
@@ -75,7 +55,7 @@ std::string flaser(double t, double x = 0.0)
 /// Error message of reading `content` (line `bad_line` is the bad one), or "" when it parsed.
 std::string errorOf(const TempDir& dir, const std::string& content)
 {
-  const std::string p = dir.file("bad.clf", content);
+  const std::string p = dir.write("bad.clf", content);
   try
   {
     readCarmenLog(p);
@@ -168,7 +148,7 @@ TEST(CarmenLog, CorruptLinesNameFileAndLine)
   EXPECT_NE(errorOf(dir, "FLASER 3 1 2\n").find("bad.clf:1: "), std::string::npos);
 
   // Lenient mode drops the bad line, counts it and keeps the rest.
-  const std::string p = dir.file("lenient.clf", head + "FLASER 3 1 2\n" + flaser(3.0) + "\n");
+  const std::string p = dir.write("lenient.clf", head + "FLASER 3 1 2\n" + flaser(3.0) + "\n");
   CarmenReadOptions lenient;
   lenient.lenient = true;
   const CarmenLog log = readCarmenLog(p, lenient);
@@ -180,7 +160,7 @@ TEST(CarmenLog, CorruptLinesNameFileAndLine)
 
   EXPECT_THROW(readCarmenLog(dir.path() + "/does_not_exist.clf"), std::runtime_error);
   // A file that claims to be bzip2 but is not.
-  const std::string fake = dir.file("fake.clf.bz2", "BZh9 this is not bzip2 data at all");
+  const std::string fake = dir.write("fake.clf.bz2", "BZh9 this is not bzip2 data at all");
   try
   {
     readCarmenLog(fake);
@@ -201,7 +181,7 @@ TEST(CarmenLog, ParsesEveryField)
       "FLASER 3 1.5 2.25 81.83 0.1 0.2 0.3 1.1 1.2 1.3 100.5 host 0.75\n"
       "ROBOTLASER1 0 -1.5 0.04 0.02 81.9 0.01 0 3 4.5 5.5 6.5 2 0.25 0.75 "
       "1.2 2.0 0.0 1.0 2.0 0.0 0.4 0.1 0.5 0.6 0.7 101.0 b21 1.25\n";
-  const CarmenLog log = readCarmenLog(dir.file("fields.clf", text));
+  const CarmenLog log = readCarmenLog(dir.write("fields.clf", text));
   EXPECT_EQ(log.skipped_unknown, 2u);  // NEFF, RLASER
   ASSERT_EQ(log.odometry.size(), 1u);
   EXPECT_DOUBLE_EQ(log.odometry[0].pose.y, 2.0);
@@ -279,7 +259,7 @@ void expectGeometry(const ScanGeometry& g, double angle_min, double increment, s
 TEST(CarmenRecording, RobotLaser1GeometryIsReadScanByScan)
 {
   TempDir dir;
-  const CarmenLog log = readCarmenLog(dir.file("alternating.clf", alternatingLog()));
+  const CarmenLog log = readCarmenLog(dir.write("alternating.clf", alternatingLog()));
   ASSERT_EQ(log.scans.size(), 3u);
   EXPECT_EQ(log.scans[1].ranges.size(), 2u);
   EXPECT_NEAR(log.scans[1].start_angle, -kPi / 4, 1e-15);
@@ -327,7 +307,7 @@ TEST(CarmenRecording, FlaserBeamCountMayChangeToo)
 {
   TempDir dir;
   const CarmenLog log = readCarmenLog(
-      dir.file("f.clf", flaser(1.0) + "\nFLASER 4 1 2 3 4 0 0 0 0 0 0 2.0 host 2.0\n" + flaser(3.0) + "\n"));
+      dir.write("f.clf", flaser(1.0) + "\nFLASER 4 1 2 3 4 0 0 0 0 0 0 2.0 host 2.0\n" + flaser(3.0) + "\n"));
   CarmenRecordingOptions options;
   options.no_return_range = 10.0;
   const Recording rec = fromCarmen(log, nullptr, options);
@@ -339,7 +319,7 @@ TEST(CarmenRecording, FlaserBeamCountMayChangeToo)
 TEST(CarmenRecording, VaryingGeometryReachesEveryLaserScanOfTheBag)
 {
   TempDir dir;
-  const Recording rec = fromCarmen(readCarmenLog(dir.file("alternating.clf", alternatingLog())), nullptr);
+  const Recording rec = fromCarmen(readCarmenLog(dir.write("alternating.clf", alternatingLog())), nullptr);
   BagWriterOptions options;
   options.progress = false;
   const std::string path = dir.path() + "/alternating.bag";
@@ -431,7 +411,7 @@ TEST(CarmenRecording, RawLaserOdometryFromOdomLines)
       "RAWLASER1 0 -1.5707963267948966 3.1415926535897931 1.5707963267948966 10 0.01 0 3 1 2 3 0 11.0 h 1\n"
       "RAWLASER1 0 -0.78539816339744828 3.1415926535897931 1.5707963267948966 20 0.01 0 2 1 1 2 0.5 0.75 "
       "11.5 h 1.5\n";
-  const CarmenLog log = readCarmenLog(dir.file("raw.clf", text));
+  const CarmenLog log = readCarmenLog(dir.write("raw.clf", text));
   ASSERT_EQ(log.scans.size(), 2u);
   EXPECT_EQ(log.scans[0].type, CarmenScanType::RawLaser);
   EXPECT_EQ(log.scans[1].raw_laser, 1);
@@ -451,7 +431,7 @@ TEST(CarmenRecording, RawLaserOdometryFromOdomLines)
   expectGeometry(rec.geometryOf(rec.scans[1]), -kPi / 4, kPi / 2, 2, 19.995);
 
   // RAWLASER2 (another laser): not the front laser's offset; with no ODOM lines no odometry at all.
-  const CarmenLog rear = readCarmenLog(dir.file(
+  const CarmenLog rear = readCarmenLog(dir.write(
       "rear.clf",
       "PARAM robot_frontlaser_offset 0.1 nohost 0\n"
       "RAWLASER2 0 -1.5707963267948966 3.1415926535897931 1.5707963267948966 10 0.01 0 3 1 2 3 0 11 h 1\n"));
@@ -462,9 +442,9 @@ TEST(CarmenRecording, RawLaserOdometryFromOdomLines)
 
   // Two lasers in one log: refused, naming the line.
   const CarmenLog two =
-      readCarmenLog(dir.file("two.clf", text + "RAWLASER2 0 -1.5707963267948966 "
-                                               "3.1415926535897931 1.5707963267948966 10 0.01 0 3 "
-                                               "1 2 3 0 12 h 2\n"));
+      readCarmenLog(dir.write("two.clf", text + "RAWLASER2 0 -1.5707963267948966 "
+                                                "3.1415926535897931 1.5707963267948966 10 0.01 0 3 "
+                                                "1 2 3 0 12 h 2\n"));
   try
   {
     fromCarmen(two, nullptr);
@@ -526,15 +506,15 @@ TEST(CarmenLog, PlainGzipAndBzip2GiveIdenticalRecords)
   std::string text, line;
   for (int i = 0; i < 3000 && std::getline(all, line); ++i) text += line + "\n";
   TempDir dir;
-  const CarmenLog plain = readCarmenLog(dir.file("a.gz", text));
-  const CarmenLog gz = readCarmenLog(dir.file("b.clf", compress(text, true)));
-  const CarmenLog bz = readCarmenLog(dir.file("c.log", compress(text, false)));
+  const CarmenLog plain = readCarmenLog(dir.write("a.gz", text));
+  const CarmenLog gz = readCarmenLog(dir.write("b.clf", compress(text, true)));
+  const CarmenLog bz = readCarmenLog(dir.write("c.log", compress(text, false)));
   ASSERT_GT(plain.scans.size(), 500u);
   // Truncated compressed files are errors naming the file, not silently shorter logs.
   for (const bool gzip : {true, false})
   {
     const std::string packed = compress(text, gzip);
-    const std::string cut = dir.file(gzip ? "cut.gz" : "cut.bz2", packed.substr(0, packed.size() / 2));
+    const std::string cut = dir.write(gzip ? "cut.gz" : "cut.bz2", packed.substr(0, packed.size() / 2));
     try
     {
       readCarmenLog(cut);
@@ -596,10 +576,10 @@ TEST(CarmenLog, KeyframesPairWithRawScansByRanges)
 TEST(CarmenLog, UnpairableKeyframeIsAnError)
 {
   TempDir dir;
-  const CarmenLog raw = readCarmenLog(dir.file("raw.clf", flaser(1.0) + "\n" + flaser(2.0, 1.0) + "\n"));
+  const CarmenLog raw = readCarmenLog(dir.write("raw.clf", flaser(1.0) + "\n" + flaser(2.0, 1.0) + "\n"));
   // Keyframe 1 has ranges that no raw scan has.
   const CarmenLog corrected =
-      readCarmenLog(dir.file("corr.log", "# x\n" + flaser(2.0) + "\nFLASER 3 9 9 9 0 0 0 0 0 0 3 h 3\n"));
+      readCarmenLog(dir.write("corr.log", "# x\n" + flaser(2.0) + "\nFLASER 3 9 9 9 0 0 0 0 0 0 3 h 3\n"));
   try
   {
     pairKeyframes(raw, corrected);
@@ -610,7 +590,7 @@ TEST(CarmenLog, UnpairableKeyframeIsAnError)
     EXPECT_NE(std::string(e.what()).find("corr.log:3: keyframe 1"), std::string::npos) << e.what();
   }
   // Identical ranges in both raw scans: keyframes pair in order, never twice with the same scan.
-  const CarmenLog twice = readCarmenLog(dir.file("twice.log", flaser(5.0) + "\n" + flaser(6.0) + "\n"));
+  const CarmenLog twice = readCarmenLog(dir.write("twice.log", flaser(5.0) + "\n" + flaser(6.0) + "\n"));
   EXPECT_EQ(pairKeyframes(raw, twice), (std::vector<std::size_t>{0, 1}));
 }
 
@@ -650,7 +630,7 @@ TEST(CarmenRecording, NoReturnCodesThatVaryAreAllInvalid)
   // No-return written as 81.87, 81.89 and 81.91 m: all three are codes (range_max 5 mm below the
   // lowest, 81.865 m); 81.0 m lies more than 1 % (0.82 m) below the largest and stays a reading.
   TempDir dir;
-  const CarmenLog log = readCarmenLog(dir.file(
+  const CarmenLog log = readCarmenLog(dir.write(
       "jitter.clf", flaserRanges(1.0, 2.5, 81.91, 7.0) + "\n" + flaserRanges(2.0, 81.87, 3.0, 81.89) + "\n" +
                         flaserRanges(3.0, 81.89, 81.91, 10.0) + "\n" + flaserRanges(4.0, 81.0, 4.0, 81.87) +
                         "\n"));
@@ -670,7 +650,7 @@ TEST(CarmenRecording, NoReturnCodesThatVaryAreAllInvalid)
   EXPECT_EQ(valid, 6u);
 
   // ACES: 50.0 for no return, real readings up to 49.91 m (9 cm apart: no code).
-  const CarmenLog aces = readCarmenLog(dir.file("aces.clf", flaserRanges(1.0, 50.0, 49.91, 3.0) + "\n"));
+  const CarmenLog aces = readCarmenLog(dir.write("aces.clf", flaserRanges(1.0, 50.0, 49.91, 3.0) + "\n"));
   EXPECT_DOUBLE_EQ(carmenNoReturnFloor(aces), static_cast<double>(50.0f));
   EXPECT_GE(fromCarmen(aces, nullptr).geometry.range_max, 49.91);
   EXPECT_LT(fromCarmen(aces, nullptr).geometry.range_max, 50.0);
@@ -685,8 +665,8 @@ TEST(CarmenRecording, StampsBecomeStrictlyIncreasing)
 {
   TempDir dir;
   const CarmenLog raw =
-      readCarmenLog(dir.file("t.clf", flaser(10.0) + "\n" + flaser(10.1) + "\n" + flaser(10.05) + "\n" +
-                                          flaser(10.1005) + "\n" + flaser(10.2) + "\n"));
+      readCarmenLog(dir.write("t.clf", flaser(10.0) + "\n" + flaser(10.1) + "\n" + flaser(10.05) + "\n" +
+                                           flaser(10.1005) + "\n" + flaser(10.2) + "\n"));
   CarmenRecordingReport report;
   const Recording rec = fromCarmen(raw, nullptr, {}, &report);
   const double expected[] = {10.0, 10.1, 10.101, 10.102, 10.2};
@@ -704,9 +684,9 @@ TEST(CarmenRecording, OdometryFromOdomLinesAndMountingFromParam)
       "PARAM robot_frontlaser_offset 0.1 nohost 0\n"
       "ODOM 0 0 0 0 0 0 1.0 h 0\nODOM 1 0 0.2 0 0 0 2.0 h 0\nODOM 3 0 0.4 0 0 0 3.0 h 0\n" +
       flaser(1.5) + "\n" + flaser(2.75) + "\n";
-  const CarmenLog raw = readCarmenLog(dir.file("o.clf", text));
+  const CarmenLog raw = readCarmenLog(dir.write("o.clf", text));
   const CarmenLog corrected = readCarmenLog(
-      dir.file("c.log", "FLASER 3 1.5 2.25 3 1 1 1.5707963267948966 1 1 1.5707963267948966 2 h 2\n"));
+      dir.write("c.log", "FLASER 3 1.5 2.25 3 1 1 1.5707963267948966 1 1 1.5707963267948966 2 h 2\n"));
   CarmenRecordingReport report;
   const Recording rec = fromCarmen(raw, &corrected, {}, &report);
   EXPECT_EQ(report.odometry_source, "ODOM lines");

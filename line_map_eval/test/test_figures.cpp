@@ -77,6 +77,29 @@ Rgb pixel(cairo_surface_t* img, int x, int y)
   return {static_cast<int>((v >> 16) & 0xFF), static_cast<int>((v >> 8) & 0xFF), static_cast<int>(v & 0xFF)};
 }
 
+/// Expects the pixel at (x, y) to be exactly (r, g, b).
+void expectPixel(cairo_surface_t* img, int x, int y, int r, int g, int b)
+{
+  const Rgb c = pixel(img, x, y);
+  EXPECT_EQ(c.r, r) << "red at " << x << ", " << y;
+  EXPECT_EQ(c.g, g) << "green at " << x << ", " << y;
+  EXPECT_EQ(c.b, b) << "blue at " << x << ", " << y;
+}
+
+/// `f` drawn with the test style as the PNG `name` in a fresh directory and read back; null (after a
+/// failure) when either fails.
+cairo_surface_t* drawnPng(const MapFigure& f, const std::string& name)
+{
+  const auto files = drawMap(f, tempDir() + "/" + name, line_map_eval::kFigurePng, testStyle());
+  EXPECT_EQ(files.size(), 1u);
+  if (files.size() != 1u) return nullptr;
+  cairo_surface_t* img = cairo_image_surface_create_from_png(files[0].c_str());
+  if (cairo_surface_status(img) == CAIRO_STATUS_SUCCESS) return img;
+  ADD_FAILURE() << files[0] << ": " << cairo_status_to_string(cairo_surface_status(img));
+  cairo_surface_destroy(img);
+  return nullptr;
+}
+
 bool isRed(const Rgb& c)
 {
   return c.r > 200 && c.g < 60 && c.b < 60;
@@ -122,14 +145,8 @@ TEST(Figures, MapInAllFormatsWithEndpointColours)
   const Rgb line = pixel(img, 132, 132);       // (2, 0): dark blue
   EXPECT_LT(line.r, 80);
   EXPECT_GT(line.b, line.r + 40);
-  const Rgb point = pixel(img, 132, 82);  // the lone scan point (2, 1): light grey
-  EXPECT_EQ(point.r, 0xB4);
-  EXPECT_EQ(point.g, 0xB4);
-  EXPECT_EQ(point.b, 0xB4);
-  const Rgb paper = pixel(img, 82, 82);  // (1, 1): nothing there
-  EXPECT_EQ(paper.r, 255);
-  EXPECT_EQ(paper.g, 255);
-  EXPECT_EQ(paper.b, 255);
+  expectPixel(img, 132, 82, 0xB4, 0xB4, 0xB4);  // the lone scan point (2, 1): light grey
+  expectPixel(img, 82, 82, 255, 255, 255);      // (1, 1): nothing there
   cairo_surface_destroy(img);
 }
 
@@ -197,19 +214,13 @@ TEST(Figures, UnwritableFileNamesTheFile)
 // under the map, and the legend's first glyph (a map segment) in the band under the caption.
 TEST(Figures, UncoveredPointsRedundantPairsAndLegend)
 {
-  const std::string dir = tempDir();
   MapFigure f = testFigure();
   f.show_coverage = true;
   f.uncovered_points = {Vec2(2.0, 1.0)};
   f.redundant_pairs = {{f.segments[0], Segment2(Vec2(1, 0.02), Vec2(3, 0.02))}};
-  const auto files = drawMap(f, dir + "/cov.png", line_map_eval::kFigurePng, testStyle());
-  ASSERT_EQ(files.size(), 1u);
-  cairo_surface_t* img = cairo_image_surface_create_from_png(files[0].c_str());
-  ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
-  const Rgb orange = pixel(img, 132, 82);  // (2, 1)
-  EXPECT_EQ(orange.r, 255);
-  EXPECT_EQ(orange.g, 128);
-  EXPECT_EQ(orange.b, 0);
+  cairo_surface_t* img = drawnPng(f, "cov.png");
+  ASSERT_NE(img, nullptr);
+  expectPixel(img, 132, 82, 255, 128, 0);  // (2, 1): orange
   // 2 px below (2, 0), inside the 6 px band but off the 1.5 px line and the scan points: magenta at
   // 45 % over white, 255 (1 - 0.45) + 0.45 * 0.85 * 255 = 238 in red and blue, 140 in green.
   const Rgb band = pixel(img, 132, 134);
@@ -226,18 +237,12 @@ TEST(Figures, UncoveredPointsRedundantPairsAndLegend)
 // Uncovered points on straight structure are cyan (0, 180, 240), apart from the orange clutter.
 TEST(Figures, UnmappedStructureInItsOwnColour)
 {
-  const std::string dir = tempDir();
   MapFigure f = testFigure();
   f.show_coverage = true;
   f.uncovered_structure_points = {Vec2(2.0, 1.0)};
-  const auto files = drawMap(f, dir + "/structure.png", line_map_eval::kFigurePng, testStyle());
-  ASSERT_EQ(files.size(), 1u);
-  cairo_surface_t* img = cairo_image_surface_create_from_png(files[0].c_str());
-  ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
-  const Rgb cyan = pixel(img, 132, 82);  // (2, 1)
-  EXPECT_EQ(cyan.r, 0);
-  EXPECT_EQ(cyan.g, 180);
-  EXPECT_EQ(cyan.b, 240);
+  cairo_surface_t* img = drawnPng(f, "structure.png");
+  ASSERT_NE(img, nullptr);
+  expectPixel(img, 132, 82, 0, 180, 240);  // (2, 1): cyan
   cairo_surface_destroy(img);
 }
 

@@ -15,6 +15,7 @@
 #include <regex>
 #include <sstream>
 
+#include "eval_test_helpers.hpp"
 #include "line_map_eval/batch/map_export.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
 
@@ -31,22 +32,7 @@ using linemap::Vec2;
 
 namespace
 {
-class TempDir
-{
- public:
-  TempDir()
-  {
-    char tmpl[] = "/tmp/test_map_export_XXXXXX";
-    const char* d = mkdtemp(tmpl);
-    if (!d) throw std::runtime_error("mkdtemp failed");
-    path_ = d;
-  }
-  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
-  std::string file(const std::string& name) const { return path_ + "/" + name; }
-
- private:
-  std::string path_;
-};
+using line_map_eval::test_helpers::TempDir;
 
 std::string slurp(const std::string& path)
 {

@@ -9,6 +9,7 @@
 #include <limits>
 #include <string>
 
+#include "eval_test_helpers.hpp"
 #include "line_map_eval/datasets/world.hpp"
 #include "line_map_eval/simulation/ground_truth.hpp"
 #include "line_map_eval/simulation/simulator.hpp"
@@ -509,48 +510,32 @@ const char* kPath = "path:\n  waypoints: [[1, 1], [3, 1], [3, 3]]\n";
 
 TEST(World, ErrorsNameFileKeyAndLine)
 {
-  const std::string missing = worldError(std::string("name: x\n") + kPath);
-  EXPECT_NE(missing.find("walls"), std::string::npos) << missing;
-
-  const std::string three = worldError(std::string("walls:\n  - [0, 0, 4, 0]\n  - [4, 0, 4]\n") + kPath);
-  EXPECT_NE(three.find("walls[1]"), std::string::npos) << three;
-  EXPECT_NE(three.find("got 3"), std::string::npos) << three;
-  EXPECT_NE(three.find("line 3"), std::string::npos) << three;
-
-  const std::string word = worldError(std::string("walls:\n  - [0, 0, 4, zero]\n") + kPath);
-  EXPECT_NE(word.find("walls[0][3]"), std::string::npos) << word;
-
-  const std::string typo = worldError(std::string("walls: [[0, 0, 4, 0]]\nlazer: {beams: 3}\n") + kPath);
-  EXPECT_NE(typo.find("lazer"), std::string::npos) << typo;
-
-  const std::string spurious =
-      worldError(std::string("walls: [[0, 0, 4, 0]]\nlaser: {spurious: 1.5}\n") + kPath);
-  EXPECT_NE(spurious.find("laser/spurious"), std::string::npos) << spurious;
-
+  using line_map_eval::test_helpers::expectMentions;
+  expectMentions(worldError(std::string("name: x\n") + kPath), {"walls"});
+  expectMentions(worldError(std::string("walls:\n  - [0, 0, 4, 0]\n  - [4, 0, 4]\n") + kPath),
+                 {"walls[1]", "got 3", "line 3"});
+  expectMentions(worldError(std::string("walls:\n  - [0, 0, 4, zero]\n") + kPath), {"walls[0][3]"});
+  expectMentions(worldError(std::string("walls: [[0, 0, 4, 0]]\nlazer: {beams: 3}\n") + kPath), {"lazer"});
+  expectMentions(worldError(std::string("walls: [[0, 0, 4, 0]]\nlaser: {spurious: 1.5}\n") + kPath),
+                 {"laser/spurious"});
   // The leg from (3, 1) to (3, 3) crosses the wall y = 2.
-  const std::string blocked = worldError(std::string("walls: [[0, 2, 4, 2]]\n") + kPath);
-  EXPECT_NE(blocked.find("path/waypoints[1]"), std::string::npos) << blocked;
-  EXPECT_NE(blocked.find("walls[0]"), std::string::npos) << blocked;
-
-  const std::string thick = worldError(
-      std::string("walls:\n  - [0, 0, 4, 0]\n  - {segment: [0, 0, 0, 4], thickness: -0.1}\n") + kPath);
-  EXPECT_NE(thick.find("walls[1]/thickness"), std::string::npos) << thick;
-  EXPECT_NE(thick.find("line 3"), std::string::npos) << thick;
-  const std::string wall_typo =
-      worldError(std::string("walls:\n  - {segment: [0, 0, 4, 0], thicknes: 0.1}\n") + kPath);
-  EXPECT_NE(wall_typo.find("walls[0]/thicknes"), std::string::npos) << wall_typo;
-  const std::string world_thick =
-      worldError(std::string("wall_thickness: -1\nwalls: [[0, 0, 4, 0]]\n") + kPath);
-  EXPECT_NE(world_thick.find("wall_thickness"), std::string::npos) << world_thick;
+  expectMentions(worldError(std::string("walls: [[0, 2, 4, 2]]\n") + kPath),
+                 {"path/waypoints[1]", "walls[0]"});
+  expectMentions(
+      worldError(std::string("walls:\n  - [0, 0, 4, 0]\n  - {segment: [0, 0, 0, 4], thickness: -0.1}\n") +
+                 kPath),
+      {"walls[1]/thickness", "line 3"});
+  expectMentions(worldError(std::string("walls:\n  - {segment: [0, 0, 4, 0], thicknes: 0.1}\n") + kPath),
+                 {"walls[0]/thicknes"});
+  expectMentions(worldError(std::string("wall_thickness: -1\nwalls: [[0, 0, 4, 0]]\n") + kPath),
+                 {"wall_thickness"});
   // The path keeps its clearance from the wall's surface: 0.95 m from the centre line y = 0 of a
   // 1.6 m thick wall is 0.15 m from its face, below the default 0.2 m.
-  const std::string close =
-      worldError(std::string("wall_thickness: 1.6\nwalls: [[0, 0, 4, 0]]\npath:\n  "
-                             "waypoints: [[1, 0.95], [3, 0.95], [3, 3]]\n"));
-  EXPECT_NE(close.find("surface of walls[0]"), std::string::npos) << close;
+  expectMentions(worldError(std::string("wall_thickness: 1.6\nwalls: [[0, 0, 4, 0]]\npath:\n  "
+                                        "waypoints: [[1, 0.95], [3, 0.95], [3, 3]]\n")),
+                 {"surface of walls[0]"});
 
-  const std::string syntax = worldError("walls: [[0, 0, 4, 0]\n");
-  EXPECT_NE(syntax.find("line"), std::string::npos) << syntax;
+  expectMentions(worldError("walls: [[0, 0, 4, 0]\n"), {"line"});
 
   EXPECT_NE(worldError("").find("empty"), std::string::npos);
   EXPECT_EQ(worldError(std::string("walls: [[0, 0, 4, 0]]\n") + kPath), "");

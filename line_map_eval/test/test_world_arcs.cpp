@@ -8,6 +8,7 @@
 #include <fstream>
 #include <string>
 
+#include "eval_test_helpers.hpp"
 #include "line_map_eval/datasets/world.hpp"
 #include "line_map_eval/metrics/ground_truth_metrics.hpp"
 #include "line_map_eval/simulation/ground_truth.hpp"
@@ -16,11 +17,11 @@
 
 namespace
 {
+using namespace line_map_eval;
 using linemap::kPi;
 using linemap::Pose2;
 using linemap::Segment2;
 using linemap::Vec2;
-using namespace line_map_eval;
 
 constexpr double kDeg = kPi / 180.0;
 
@@ -255,27 +256,25 @@ TEST(WorldArcs, ArcEntriesExpandAndBadOnesAreNamed)
   EXPECT_EQ(w.walls[7].thickness, 0.0);
   EXPECT_EQ(w.arc_sagitta, 0.02);
 
-  const std::string radius = worldError(std::string("walls:\n  - {arc: [0, 0, -2, 0, 90]}\n") + kPath);
-  EXPECT_NE(radius.find("arcs.yaml: walls[0]/arc: the radius must be > 0, got -2"), std::string::npos)
-      << radius;
-  EXPECT_NE(radius.find("line 2"), std::string::npos) << radius;
-  const std::string sweep = worldError(std::string("walls:\n  - {arc: [0, 0, 2, 30, 30]}\n") + kPath);
-  EXPECT_NE(sweep.find("walls[0]/arc: the arc has zero sweep"), std::string::npos) << sweep;
-  const std::string big = worldError(std::string("walls:\n  - {arc: [0, 0, 2, 0, 400]}\n") + kPath);
-  EXPECT_NE(big.find("walls[0]/arc"), std::string::npos) << big;
-  const std::string four = worldError(std::string("walls:\n  - {arc: [0, 0, 2, 90]}\n") + kPath);
-  EXPECT_NE(four.find("walls[0]/arc: expected 5 numbers"), std::string::npos) << four;
-  const std::string none = worldError(std::string("walls:\n  - {thickness: 0.2}\n") + kPath);
-  EXPECT_NE(none.find("walls[0]/segment: missing key"), std::string::npos) << none;
-  const std::string both =
-      worldError(std::string("walls:\n  - {segment: [0, 0, 1, 0], arc: [0, 0, 2, 0, 90]}\n") + kPath);
-  EXPECT_NE(both.find("walls[0]: give either segment or arc"), std::string::npos) << both;
-  const std::string sagitta = worldError(std::string("arc_sagitta: 0\nwalls: [[0, 0, 4, 0]]\n") + kPath);
-  EXPECT_NE(sagitta.find("arc_sagitta: must be > 0"), std::string::npos) << sagitta;
+  using line_map_eval::test_helpers::expectMentions;
+  expectMentions(worldError(std::string("walls:\n  - {arc: [0, 0, -2, 0, 90]}\n") + kPath),
+                 {"arcs.yaml: walls[0]/arc: the radius must be > 0, got -2", "line 2"});
+  expectMentions(worldError(std::string("walls:\n  - {arc: [0, 0, 2, 30, 30]}\n") + kPath),
+                 {"walls[0]/arc: the arc has zero sweep"});
+  expectMentions(worldError(std::string("walls:\n  - {arc: [0, 0, 2, 0, 400]}\n") + kPath), {"walls[0]/arc"});
+  expectMentions(worldError(std::string("walls:\n  - {arc: [0, 0, 2, 90]}\n") + kPath),
+                 {"walls[0]/arc: expected 5 numbers"});
+  expectMentions(worldError(std::string("walls:\n  - {thickness: 0.2}\n") + kPath),
+                 {"walls[0]/segment: missing key"});
+  expectMentions(
+      worldError(std::string("walls:\n  - {segment: [0, 0, 1, 0], arc: [0, 0, 2, 0, 90]}\n") + kPath),
+      {"walls[0]: give either segment or arc"});
+  expectMentions(worldError(std::string("arc_sagitta: 0\nwalls: [[0, 0, 4, 0]]\n") + kPath),
+                 {"arc_sagitta: must be > 0"});
   // The path keeps its clearance from the chords too: the leg (1, 1) - (3, 1) runs 1.7 m from the
   // centre of a circle of radius 1.5, 0.15 m from its 10 cm wall's surface (path/clearance 0.2 m).
-  const std::string close = worldError(std::string("walls:\n  - {arc: [2, 2.7, 1.5, 0, 360]}\n") + kPath);
-  EXPECT_NE(close.find("path/waypoints[0]"), std::string::npos) << close;
+  expectMentions(worldError(std::string("walls:\n  - {arc: [2, 2.7, 1.5, 0, 360]}\n") + kPath),
+                 {"path/waypoints[0]"});
 }
 
 TEST(WorldArcs, TruthFileKeepsArcsAndCurves)

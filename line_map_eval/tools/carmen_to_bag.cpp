@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <initializer_list>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -14,6 +13,7 @@
 #include "line_map_eval/datasets/bag_writer.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_eval/datasets/carmen_recording.hpp"
+#include "tool_main.hpp"
 
 namespace
 {
@@ -94,68 +94,157 @@ std::vector<std::string> split(const std::string& s, char sep)
   if (!s.empty() && s.back() == sep) parts.emplace_back();
   return parts;
 }
+
+using line_map_eval::CommandLine;
+
+struct Options
+{
+  std::vector<std::string> positional;
+  std::string corrected_path;
+  line_map_eval::CarmenReadOptions read;
+  line_map_eval::CarmenRecordingOptions recording;
+  line_map_eval::BagWriterOptions bag;
+};
+
+/// Reads one option (with its value, when it takes one); false for an unknown option.
+bool parseOption(const std::string& arg, CommandLine& cl, Options& o)
+{
+  if (arg == "--corrected")
+    o.corrected_path = cl.value();
+  else if (arg == "--every")
+    o.bag.trajectory_every = parseCount(arg, cl.value(), 1);
+  else if (arg == "--max-scans")
+    o.recording.max_scans = parseCount(arg, cl.value(), 1);
+  else if (arg == "--lenient")
+    o.read.lenient = true;
+  else if (arg == "--no-progress")
+    o.bag.progress = false;
+  else if (arg == "--compression")
+    o.bag.compression = cl.value();
+  else if (arg == "--min-step")
+    o.recording.min_stamp_step = parsePositive(arg, cl.value());
+  else if (arg == "--max-range")
+    o.recording.max_usable_range = parsePositive(arg, cl.value());
+  else if (arg == "--frames")
+  {
+    const std::vector<std::string> f = split(cl.value(), ',');
+    if (f.size() != 4 || f[0].empty() || f[1].empty() || f[2].empty() || f[3].empty())
+      throw std::invalid_argument("--frames needs four non-empty names map,odom,base_link,laser");
+    o.bag.map_frame = f[0];
+    o.bag.odom_frame = f[1];
+    o.bag.base_frame = f[2];
+    o.bag.laser_frame = f[3];
+  }
+  else
+    return false;
+  return true;
+}
+
+/// The command line; false after --help. Throws std::invalid_argument on a bad one.
+bool parseArguments(int argc, char** argv, Options& o)
+{
+  for (CommandLine cl(argc, argv); cl.next();)
+  {
+    const std::string& arg = cl.arg();
+    if (arg == "--help" || arg == "-h") return false;
+    if (parseOption(arg, cl, o)) continue;
+    if (!arg.empty() && arg[0] == '-') throw std::invalid_argument("unknown option " + arg + " (see --help)");
+    o.positional.push_back(arg);
+  }
+  if (o.positional.size() != 2)
+    throw std::invalid_argument("expected IN and OUT, got " + std::to_string(o.positional.size()) +
+                                " positional argument(s) (see --help)");
+  if (o.bag.compression != "none" && o.bag.compression != "lz4" && o.bag.compression != "bz2")
+    throw std::invalid_argument("--compression must be none, lz4 or bz2");
+  return true;
+}
+
+void reportSkippedLines(const line_map_eval::CarmenLog& log)
+{
+  if (log.skipped_bad == 0) return;
+  std::cerr << "carmen_to_bag: skipped " << log.skipped_bad << " malformed line(s) of " << log.path << ":\n";
+  for (const std::string& p : log.problems) std::cerr << "  " << p << "\n";
+}
+
+/// The spread of the scans' own geometries, for logs whose geometry changes.
+void printGeometries(const line_map_eval::Recording& rec, const line_map_eval::CarmenRecordingReport& report)
+{
+  std::size_t own = 0, min_beams = rec.geometry.beam_count, max_beams = rec.geometry.beam_count;
+  double min_angle = rec.geometry.angle_min, max_angle = rec.geometry.angle_min;
+  for (const line_map_eval::RecordedScan& s : rec.scans)
+  {
+    const line_map_eval::ScanGeometry& g = rec.geometryOf(s);
+    own += s.geometry ? 1 : 0;
+    min_beams = std::min(min_beams, g.beam_count);
+    max_beams = std::max(max_beams, g.beam_count);
+    min_angle = std::min(min_angle, g.angle_min);
+    max_angle = std::max(max_angle, g.angle_min);
+  }
+  std::printf(
+      "  geometry     %zu distinct, %zu scans differ from the first: %zu..%zu beams, "
+      "angle_min %.4f..%.4f rad\n",
+      report.geometries, own, min_beams, max_beams, min_angle, max_angle);
+}
+
+void printSummary(const Options& o, const line_map_eval::Recording& rec,
+                  const line_map_eval::CarmenRecordingReport& report,
+                  const line_map_eval::BagWriteSummary& summary)
+{
+  std::printf("carmen_to_bag: wrote %s\n", o.positional[1].c_str());
+  std::printf("  scans        %zu (%zu beams, angle_min %.4f rad, increment %.6f rad, range_max %.3f m)\n",
+              summary.scans, rec.geometry.beam_count, rec.geometry.angle_min, rec.geometry.angle_increment,
+              rec.geometry.range_max);
+  if (report.geometries > 1) printGeometries(rec, report);
+  std::printf("  duration     %.1f s (median scan period %.4f s)\n", summary.duration, summary.scan_time);
+  std::printf("  stamps       %zu moved to keep time increasing (largest move %.3f s)\n",
+              report.stamps_adjusted, report.max_stamp_shift);
+  std::printf("  odometry     %s\n", report.odometry_source.c_str());
+  std::printf("  base->laser  (%.3f, %.3f, %.3f) from %s\n", rec.base_to_laser.x, rec.base_to_laser.y,
+              rec.base_to_laser.theta, report.mounting_source.c_str());
+  if (report.max_mounting_shift > 0.0 || report.max_mounting_turn > 0.0)
+    std::printf("               other lines differ by up to %.2g m, %.2g rad\n", report.max_mounting_shift,
+                report.max_mounting_turn);
+  if (!o.corrected_path.empty())
+    std::printf("  keyframes    %zu, trajectory emitted %zu times (every %zu)\n", summary.keyframes,
+                summary.trajectory_emissions, o.bag.trajectory_every);
+  else
+    std::printf("  keyframes    none (no --corrected log)\n");
+}
+
+void convert(const Options& o)
+{
+  using namespace line_map_eval;
+  const auto start = std::chrono::steady_clock::now();
+  const CarmenLog raw = readCarmenLog(o.positional[0], o.read);
+  CarmenLog corrected;
+  if (!o.corrected_path.empty()) corrected = readCarmenLog(o.corrected_path, o.read);
+  reportSkippedLines(raw);
+  reportSkippedLines(corrected);
+  CarmenRecordingReport report;
+  const Recording rec =
+      fromCarmen(raw, o.corrected_path.empty() ? nullptr : &corrected, o.recording, &report);
+  const double parse_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  BagWriteSummary summary;
+  writeBag(rec, o.positional[1], o.bag, &summary);
+  const double total_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  printSummary(o, rec, report, summary);
+  std::printf("  time         %.2f s reading and converting, %.2f s in total\n", parse_seconds,
+              total_seconds);
+}
 }  // namespace
 
 int main(int argc, char** argv)
 {
-  using namespace line_map_eval;
-  std::vector<std::string> positional;
-  std::string corrected_path;
-  CarmenReadOptions read_options;
-  CarmenRecordingOptions rec_options;
-  BagWriterOptions bag_options;
+  Options options;
   try
   {
-    for (int i = 1; i < argc; ++i)
+    if (!parseArguments(argc, argv, options))
     {
-      const std::string arg = argv[i];
-      const auto value = [&]() -> std::string
-      {
-        if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-        return argv[++i];
-      };
-      if (arg == "--help" || arg == "-h")
-      {
-        std::cout << kUsage << std::endl;
-        return 0;
-      }
-      else if (arg == "--corrected")
-        corrected_path = value();
-      else if (arg == "--every")
-        bag_options.trajectory_every = parseCount(arg, value(), 1);
-      else if (arg == "--max-scans")
-        rec_options.max_scans = parseCount(arg, value(), 1);
-      else if (arg == "--lenient")
-        read_options.lenient = true;
-      else if (arg == "--no-progress")
-        bag_options.progress = false;
-      else if (arg == "--compression")
-        bag_options.compression = value();
-      else if (arg == "--min-step")
-        rec_options.min_stamp_step = parsePositive(arg, value());
-      else if (arg == "--max-range")
-        rec_options.max_usable_range = parsePositive(arg, value());
-      else if (arg == "--frames")
-      {
-        const std::vector<std::string> f = split(value(), ',');
-        if (f.size() != 4 || f[0].empty() || f[1].empty() || f[2].empty() || f[3].empty())
-          throw std::invalid_argument("--frames needs four non-empty names map,odom,base_link,laser");
-        bag_options.map_frame = f[0];
-        bag_options.odom_frame = f[1];
-        bag_options.base_frame = f[2];
-        bag_options.laser_frame = f[3];
-      }
-      else if (!arg.empty() && arg[0] == '-')
-        throw std::invalid_argument("unknown option " + arg + " (see --help)");
-      else
-        positional.push_back(arg);
+      std::cout << kUsage << std::endl;
+      return 0;
     }
-    if (positional.size() != 2)
-      throw std::invalid_argument("expected IN and OUT, got " + std::to_string(positional.size()) +
-                                  " positional argument(s) (see --help)");
-    if (bag_options.compression != "none" && bag_options.compression != "lz4" &&
-        bag_options.compression != "bz2")
-      throw std::invalid_argument("--compression must be none, lz4 or bz2");
   }
   catch (const std::exception& e)
   {
@@ -163,68 +252,9 @@ int main(int argc, char** argv)
     std::cerr << kUsage << std::endl;
     return 1;
   }
-
   try
   {
-    const auto start = std::chrono::steady_clock::now();
-    const CarmenLog raw = readCarmenLog(positional[0], read_options);
-    CarmenLog corrected;
-    if (!corrected_path.empty()) corrected = readCarmenLog(corrected_path, read_options);
-    for (const CarmenLog* log : std::initializer_list<const CarmenLog*>{&raw, &corrected})
-    {
-      if (log->skipped_bad == 0) continue;
-      std::cerr << "carmen_to_bag: skipped " << log->skipped_bad << " malformed line(s) of " << log->path
-                << ":\n";
-      for (const std::string& p : log->problems) std::cerr << "  " << p << "\n";
-    }
-    CarmenRecordingReport report;
-    const Recording rec =
-        fromCarmen(raw, corrected_path.empty() ? nullptr : &corrected, rec_options, &report);
-    const double parse_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    BagWriteSummary summary;
-    writeBag(rec, positional[1], bag_options, &summary);
-    const double total_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-    std::printf("carmen_to_bag: wrote %s\n", positional[1].c_str());
-    std::printf("  scans        %zu (%zu beams, angle_min %.4f rad, increment %.6f rad, range_max %.3f m)\n",
-                summary.scans, rec.geometry.beam_count, rec.geometry.angle_min, rec.geometry.angle_increment,
-                rec.geometry.range_max);
-    if (report.geometries > 1)
-    {
-      std::size_t own = 0, min_beams = rec.geometry.beam_count, max_beams = rec.geometry.beam_count;
-      double min_angle = rec.geometry.angle_min, max_angle = rec.geometry.angle_min;
-      for (const RecordedScan& s : rec.scans)
-      {
-        const ScanGeometry& g = rec.geometryOf(s);
-        own += s.geometry ? 1 : 0;
-        min_beams = std::min(min_beams, g.beam_count);
-        max_beams = std::max(max_beams, g.beam_count);
-        min_angle = std::min(min_angle, g.angle_min);
-        max_angle = std::max(max_angle, g.angle_min);
-      }
-      std::printf(
-          "  geometry     %zu distinct, %zu scans differ from the first: %zu..%zu beams, "
-          "angle_min %.4f..%.4f rad\n",
-          report.geometries, own, min_beams, max_beams, min_angle, max_angle);
-    }
-    std::printf("  duration     %.1f s (median scan period %.4f s)\n", summary.duration, summary.scan_time);
-    std::printf("  stamps       %zu moved to keep time increasing (largest move %.3f s)\n",
-                report.stamps_adjusted, report.max_stamp_shift);
-    std::printf("  odometry     %s\n", report.odometry_source.c_str());
-    std::printf("  base->laser  (%.3f, %.3f, %.3f) from %s\n", rec.base_to_laser.x, rec.base_to_laser.y,
-                rec.base_to_laser.theta, report.mounting_source.c_str());
-    if (report.max_mounting_shift > 0.0 || report.max_mounting_turn > 0.0)
-      std::printf("               other lines differ by up to %.2g m, %.2g rad\n", report.max_mounting_shift,
-                  report.max_mounting_turn);
-    if (!corrected_path.empty())
-      std::printf("  keyframes    %zu, trajectory emitted %zu times (every %zu)\n", summary.keyframes,
-                  summary.trajectory_emissions, bag_options.trajectory_every);
-    else
-      std::printf("  keyframes    none (no --corrected log)\n");
-    std::printf("  time         %.2f s reading and converting, %.2f s in total\n", parse_seconds,
-                total_seconds);
+    convert(options);
   }
   catch (const std::exception& e)
   {

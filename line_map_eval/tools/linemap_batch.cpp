@@ -24,6 +24,7 @@
 #include "line_map_eval/simulation/ground_truth.hpp"
 #include "line_map_merging/mergers/merger.hpp"
 #include "linemap/small_helpers.hpp"
+#include "tool_main.hpp"
 
 namespace fs = std::filesystem;
 using namespace line_map_eval;
@@ -129,14 +130,9 @@ std::size_t parseEvery(const std::string& v)
 /// Parses the command line; false after --help. Throws std::invalid_argument on a bad one.
 bool parseArguments(int argc, char** argv, Arguments& a)
 {
-  for (int i = 1; i < argc; ++i)
+  for (CommandLine cl(argc, argv); cl.next();)
   {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
+    const std::string& arg = cl.arg();
     if (arg == "--help" || arg == "-h") return false;
     std::string* text = arg == "--corrected"    ? &a.corrected
                         : arg == "--extractor"  ? &a.options.extractor
@@ -150,11 +146,11 @@ bool parseArguments(int argc, char** argv, Arguments& a)
                                      : arg == "--config" ? &a.configs
                                                          : nullptr;
     if (text)
-      *text = value();
+      *text = cl.value();
     else if (list)
-      list->push_back(value());
+      list->push_back(cl.value());
     else if (arg == "--every")
-      a.options.adjust_every = parseEvery(value());
+      a.options.adjust_every = parseEvery(cl.value());
     else if (arg == "--no-progress")
       a.options.progress = false;
     else if (arg == "--no-figures")
@@ -310,46 +306,30 @@ void printResult(const BatchResult& result)
             << " mm): the error column's excess comes from the poses and the merging\n";
 }
 
+/// Everything after the command line: the dataset, the mergers, the reports.
+int run(Arguments& a)
+{
+  linemap::ParamSet slam_params;
+  loadParameters(a, slam_params);
+  a.options.out_dir = a.out_dir;
+  if (!a.sensor.empty() && !isWorldFile(a.dataset))
+    throw std::invalid_argument("--sensor goes with a world file (config/worlds/*.yaml), not " + a.dataset);
+  if (a.replay) return runReplay(a);
+  const BatchResult result = runBatch(loadDataset(a, slam_params), a.options);
+  printResult(result);
+  writeReports(result, a.out_dir);
+  const std::string& out_dir = a.out_dir;
+  std::cout << "wrote " << (fs::path(out_dir) / "report.json").string() << ", "
+            << (fs::path(out_dir) / "report.md").string() << " and the per-merger files under " << out_dir
+            << "/<merger>/\n";
+  return 0;
+}
 }  // namespace
 
 int main(int argc, char** argv)
 {
   Arguments a;
   a.options.progress = isatty(STDERR_FILENO) != 0;
-  try
-  {
-    if (!parseArguments(argc, argv, a))
-    {
-      usage(std::cout);
-      return 0;
-    }
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "linemap_batch: " << e.what() << "\n\n";
-    usage(std::cerr);
-    return 2;
-  }
-  try
-  {
-    linemap::ParamSet slam_params;
-    loadParameters(a, slam_params);
-    a.options.out_dir = a.out_dir;
-    if (!a.sensor.empty() && !isWorldFile(a.dataset))
-      throw std::invalid_argument("--sensor goes with a world file (config/worlds/*.yaml), not " + a.dataset);
-    if (a.replay) return runReplay(a);
-    const BatchResult result = runBatch(loadDataset(a, slam_params), a.options);
-    printResult(result);
-    writeReports(result, a.out_dir);
-    const std::string& out_dir = a.out_dir;
-    std::cout << "wrote " << (fs::path(out_dir) / "report.json").string() << ", "
-              << (fs::path(out_dir) / "report.md").string() << " and the per-merger files under " << out_dir
-              << "/<merger>/\n";
-    return 0;
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "linemap_batch: " << e.what() << "\n";
-    return 1;
-  }
+  return line_map_eval::toolMain(
+      "linemap_batch", [&] { return parseArguments(argc, argv, a); }, usage, [&] { return run(a); }, "\n\n");
 }

@@ -21,6 +21,7 @@
 #include "line_map_eval/datasets/localization_recording.hpp"
 #include "line_map_eval/datasets/relations.hpp"
 #include "line_map_eval/datasets/slam_recording.hpp"
+#include "tool_main.hpp"
 
 namespace fs = std::filesystem;
 using namespace line_map_eval;
@@ -123,14 +124,9 @@ Pose2 parsePose(const std::string& v)
 /// Parses the command line; false after --help. Throws std::invalid_argument on a bad one.
 bool parseArguments(int argc, char** argv, Arguments& a)
 {
-  for (int i = 1; i < argc; ++i)
+  for (CommandLine cl(argc, argv); cl.next();)
   {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
+    const std::string& arg = cl.arg();
     std::string* text = arg == "--corrected"         ? &a.corrected
                         : arg == "--config"          ? &a.config
                         : arg == "--write"           ? &a.write
@@ -143,9 +139,9 @@ bool parseArguments(int argc, char** argv, Arguments& a)
                                                                  : nullptr;
     if (arg == "--help" || arg == "-h") return false;
     if (text)
-      *text = value();
+      *text = cl.value();
     else if (list)
-      list->push_back(value());
+      list->push_back(cl.value());
     else if (arg == "--slam")
       a.slam = true;
     else if (arg == "--slam-no-odometry")
@@ -153,7 +149,7 @@ bool parseArguments(int argc, char** argv, Arguments& a)
     else if (arg == "--odometry")
       a.odometry = true;
     else if (arg == "--initial-pose")
-      a.initial_pose = parsePose(value());
+      a.initial_pose = parsePose(cl.value());
     else if (!arg.empty() && arg[0] == '-')
       throw std::invalid_argument("unknown option " + arg);
     else
@@ -282,27 +278,6 @@ int run(const Arguments& a)
 int main(int argc, char** argv)
 {
   Arguments a;
-  try
-  {
-    if (!parseArguments(argc, argv, a))
-    {
-      usage(std::cout);
-      return 0;
-    }
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "linemap_relations: " << e.what() << "\n";
-    usage(std::cerr);
-    return 2;
-  }
-  try
-  {
-    return run(a);
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "linemap_relations: " << e.what() << "\n";
-    return 1;
-  }
+  return line_map_eval::toolMain(
+      "linemap_relations", [&] { return parseArguments(argc, argv, a); }, usage, [&] { return run(a); });
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <exception>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <limits>
@@ -78,15 +79,43 @@ double parseNumber(const std::string& option, const char* text, double min, doub
   return v;
 }
 
-}  // namespace
-
-int main(int argc, char** argv)
+struct Arguments
 {
-  using namespace line_map_eval;
   std::string world_path, bag_path, sensor_path;
-  SimulationOptions options;
+  line_map_eval::SimulationOptions options;
   std::size_t every = 0;
   bool progress = true;
+};
+
+/// Reads one option (with its value, when it takes one); false for an unknown option.
+bool parseOption(const std::string& arg, const std::function<const char*()>& value, Arguments& a)
+{
+  if (arg == "--sensor")
+    a.sensor_path = value();
+  else if (arg == "--seed")
+    a.options.seed = static_cast<std::uint32_t>(parseCount(arg, value(), 0, 4294967295ull));
+  else if (arg == "--scans")
+    a.options.scans = parseCount(arg, value(), 1, 10000000);
+  else if (arg == "--beams")
+    a.options.beams = parseCount(arg, value(), 2, 100000);
+  else if (arg == "--noise")
+    a.options.sigma = parseNumber(arg, value(), 0.0, 1e3);
+  else if (arg == "--spurious")
+    a.options.spurious = parseNumber(arg, value(), 0.0, 1.0);
+  else if (arg == "--no-drift")
+    a.options.drift = false;
+  else if (arg == "--every")
+    a.every = parseCount(arg, value(), 1, 10000000);
+  else if (arg == "--no-progress")
+    a.progress = false;
+  else
+    return false;
+  return true;
+}
+
+/// The command line; false after --help. Exits with usageError on a bad one.
+bool parseArguments(int argc, char** argv, Arguments& a)
+{
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
@@ -95,85 +124,93 @@ int main(int argc, char** argv)
       if (i + 1 >= argc) usageError(arg + " needs a value");
       return argv[++i];
     };
-    if (arg == "--help" || arg == "-h")
-    {
-      std::cout << kUsage;
-      return 0;
-    }
-    else if (arg == "--sensor")
-      sensor_path = value();
-    else if (arg == "--seed")
-      options.seed = static_cast<std::uint32_t>(parseCount(arg, value(), 0, 4294967295ull));
-    else if (arg == "--scans")
-      options.scans = parseCount(arg, value(), 1, 10000000);
-    else if (arg == "--beams")
-      options.beams = parseCount(arg, value(), 2, 100000);
-    else if (arg == "--noise")
-      options.sigma = parseNumber(arg, value(), 0.0, 1e3);
-    else if (arg == "--spurious")
-      options.spurious = parseNumber(arg, value(), 0.0, 1.0);
-    else if (arg == "--no-drift")
-      options.drift = false;
-    else if (arg == "--every")
-      every = parseCount(arg, value(), 1, 10000000);
-    else if (arg == "--no-progress")
-      progress = false;
-    else if (!arg.empty() && arg[0] == '-')
+    if (arg == "--help" || arg == "-h") return false;
+    if (parseOption(arg, value, a)) continue;
+    if (!arg.empty() && arg[0] == '-')
       usageError("unknown option '" + arg + "'");
-    else if (world_path.empty())
-      world_path = arg;
-    else if (bag_path.empty())
-      bag_path = arg;
+    else if (a.world_path.empty())
+      a.world_path = arg;
+    else if (a.bag_path.empty())
+      a.bag_path = arg;
     else
       usageError("unexpected argument '" + arg + "'");
   }
-  if (world_path.empty() || bag_path.empty()) usageError("WORLD.yaml and OUT.bag are required");
+  if (a.world_path.empty() || a.bag_path.empty()) usageError("WORLD.yaml and OUT.bag are required");
+  return true;
+}
 
+/// Simulates with a progress bar, created at the first scan, when the total is known.
+line_map_eval::SimulationResult simulateWithProgress(const line_map_eval::World& world, Arguments& a)
+{
+  std::unique_ptr<line_map_eval::ProgressBar> bar;
+  a.options.on_scan = [&](std::size_t done, std::size_t total)
+  {
+    if (!bar) bar = std::make_unique<line_map_eval::ProgressBar>("simulating", total, a.progress);
+    bar->update(done);
+  };
+  line_map_eval::SimulationResult sim = line_map_eval::simulate(world, a.options);
+  if (bar) bar->finish();
+  return sim;
+}
+
+/// The world, the sensor and the odometry error at the last scan (leaves std::cout in fixed notation).
+void printSimulation(const line_map_eval::SimulationResult& sim, const std::string& world_path,
+                     double sim_seconds)
+{
+  const line_map_eval::World& w = sim.world;
+  const line_map_eval::Recording& rec = sim.recording;
+  std::cout << std::fixed << std::setprecision(2);
+  std::cout << "simulate_world: " << w.name << " (" << world_path << "): " << w.walls.size()
+            << " walls, path " << sim.path_length << " m, " << rec.scans.size() << " scans of "
+            << w.laser.beams << " beams over " << w.laser.fov * 180.0 / linemap::kPi << " deg\n";
+  std::cout << "simulate_world: range noise " << std::setprecision(3) << w.laser.sigma << " m"
+            << (w.laser.sigma_slope > 0.0 ? " + " + std::to_string(w.laser.sigma_slope) + " x range" : "")
+            << ", range_max " << std::setprecision(1) << w.laser.range_max << " m, " << std::setprecision(1)
+            << 100.0 * w.laser.spurious << " % spurious, seed " << w.seed << ", odometry drift "
+            << (w.odometry.isZero() ? "off" : "on") << "\n";
+  const linemap::Pose2 err = rec.keyframes.back().pose.inverse() * rec.scans.back().odom;
+  std::cout << "simulate_world: odometry error at the last scan " << std::setprecision(3)
+            << std::hypot(err.x, err.y) << " m, " << std::abs(err.theta) * 180.0 / linemap::kPi
+            << " deg; simulated in " << sim_seconds << " s\n";
+}
+
+/// OUT.bag and OUT.truth.yaml.
+void writeOutputs(const line_map_eval::SimulationResult& sim, const Arguments& a)
+{
+  using namespace line_map_eval;
+  const Recording& rec = sim.recording;
+  BagWriterOptions bag_options;
+  bag_options.trajectory_every = a.every > 0 ? a.every : rec.keyframes.size();
+  bag_options.progress = a.progress;
+  BagWriteSummary summary;
+  writeBag(rec, a.bag_path, bag_options, &summary);
+  const std::string truth_path = truthPathForBag(a.bag_path);
+  writeGroundTruth(sim.truth, truth_path);
+  std::cout << "simulate_world: wrote " << a.bag_path << " (" << summary.scans << " scans, "
+            << summary.trajectory_emissions << " trajectory message"
+            << (summary.trajectory_emissions == 1 ? "" : "s") << ", " << summary.duration << " s)\n";
+  std::cout << "simulate_world: wrote " << truth_path << "\n";
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  using namespace line_map_eval;
+  Arguments args;
+  if (!parseArguments(argc, argv, args))
+  {
+    std::cout << kUsage;
+    return 0;
+  }
   try
   {
-    World world = loadWorld(world_path);
-    if (!sensor_path.empty()) world = withSensorProfile(world, sensor_path);
+    World world = loadWorld(args.world_path);
+    if (!args.sensor_path.empty()) world = withSensorProfile(world, args.sensor_path);
     const auto t0 = std::chrono::steady_clock::now();
-    SimulationResult sim;
-    {
-      std::unique_ptr<ProgressBar> bar;  // created at the first scan, when the total is known
-      options.on_scan = [&](std::size_t done, std::size_t total)
-      {
-        if (!bar) bar = std::make_unique<ProgressBar>("simulating", total, progress);
-        bar->update(done);
-      };
-      sim = simulate(world, options);
-      if (bar) bar->finish();
-    }
+    const SimulationResult sim = simulateWithProgress(world, args);
     const double sim_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const World& w = sim.world;
-    const Recording& rec = sim.recording;
-
-    std::cout << std::fixed << std::setprecision(2);
-    std::cout << "simulate_world: " << w.name << " (" << world_path << "): " << w.walls.size()
-              << " walls, path " << sim.path_length << " m, " << rec.scans.size() << " scans of "
-              << w.laser.beams << " beams over " << w.laser.fov * 180.0 / linemap::kPi << " deg\n";
-    std::cout << "simulate_world: range noise " << std::setprecision(3) << w.laser.sigma << " m"
-              << (w.laser.sigma_slope > 0.0 ? " + " + std::to_string(w.laser.sigma_slope) + " x range" : "")
-              << ", range_max " << std::setprecision(1) << w.laser.range_max << " m, " << std::setprecision(1)
-              << 100.0 * w.laser.spurious << " % spurious, seed " << w.seed << ", odometry drift "
-              << (w.odometry.isZero() ? "off" : "on") << "\n";
-    const linemap::Pose2 err = rec.keyframes.back().pose.inverse() * rec.scans.back().odom;
-    std::cout << "simulate_world: odometry error at the last scan " << std::setprecision(3)
-              << std::hypot(err.x, err.y) << " m, " << std::abs(err.theta) * 180.0 / linemap::kPi
-              << " deg; simulated in " << sim_seconds << " s\n";
-
-    BagWriterOptions bag_options;
-    bag_options.trajectory_every = every > 0 ? every : rec.keyframes.size();
-    bag_options.progress = progress;
-    BagWriteSummary summary;
-    writeBag(rec, bag_path, bag_options, &summary);
-    const std::string truth_path = truthPathForBag(bag_path);
-    writeGroundTruth(sim.truth, truth_path);
-    std::cout << "simulate_world: wrote " << bag_path << " (" << summary.scans << " scans, "
-              << summary.trajectory_emissions << " trajectory message"
-              << (summary.trajectory_emissions == 1 ? "" : "s") << ", " << summary.duration << " s)\n";
-    std::cout << "simulate_world: wrote " << truth_path << "\n";
+    printSimulation(sim, args.world_path, sim_seconds);
+    writeOutputs(sim, args);
   }
   catch (const std::exception& e)
   {

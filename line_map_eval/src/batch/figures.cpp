@@ -90,6 +90,19 @@ constexpr std::uint32_t kScanGrey = 0xFFB4B4B4u;  // opaque light grey, native-e
 constexpr std::uint32_t kUncoveredOrange = 0xFFFF8000u;
 constexpr std::uint32_t kUnmappedCyan = 0xFF00B4F0u;  // neither the map's dark blue nor the orange
 
+/// An image surface to set pixels in (flushed), or null when cairo cannot make one.
+cairo_surface_t* pixelSurface(cairo_format_t format, int width, int height)
+{
+  cairo_surface_t* img = cairo_image_surface_create(format, width, height);
+  if (cairo_surface_status(img) != CAIRO_STATUS_SUCCESS)
+  {
+    cairo_surface_destroy(img);
+    return nullptr;
+  }
+  cairo_surface_flush(img);
+  return img;
+}
+
 /// Dots of `colour` (dot x dot canvas units) at the points as an image covering panel k's map
 /// area at `scale` image pixels per canvas unit: a raster layer keeps SVG/PDF small with 10^5 points.
 void drawScanPoints(cairo_t* cr, const std::vector<Vec2>& points, const FigureLayout& l, int panel,
@@ -98,13 +111,8 @@ void drawScanPoints(cairo_t* cr, const std::vector<Vec2>& points, const FigureLa
   if (points.empty()) return;
   const int w = std::max(1, static_cast<int>(std::ceil(l.map_width * scale)));
   const int h = std::max(1, static_cast<int>(std::ceil(l.map_height * scale)));
-  cairo_surface_t* img = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, w, h);
-  if (cairo_surface_status(img) != CAIRO_STATUS_SUCCESS)
-  {
-    cairo_surface_destroy(img);
-    return;
-  }
-  cairo_surface_flush(img);
+  cairo_surface_t* img = pixelSurface(CAIRO_FORMAT_ARGB32, w, h);
+  if (!img) return;
   unsigned char* data = cairo_image_surface_get_data(img);
   const int stride = cairo_image_surface_get_stride(img);
   const double ppm = l.pixels_per_metre * scale;
@@ -134,13 +142,8 @@ void drawScanPoints(cairo_t* cr, const std::vector<Vec2>& points, const FigureLa
 void drawLookup(cairo_t* cr, const LookupTable& t, const FigureLayout& l, int panel)
 {
   if (t.empty()) return;
-  cairo_surface_t* img = cairo_image_surface_create(CAIRO_FORMAT_RGB24, t.width(), t.height());
-  if (cairo_surface_status(img) != CAIRO_STATUS_SUCCESS)
-  {
-    cairo_surface_destroy(img);
-    return;
-  }
-  cairo_surface_flush(img);
+  cairo_surface_t* img = pixelSurface(CAIRO_FORMAT_RGB24, t.width(), t.height());
+  if (!img) return;
   unsigned char* data = cairo_image_surface_get_data(img);
   const int stride = cairo_image_surface_get_stride(img);
   const std::vector<float>& v = t.values();
@@ -188,68 +191,83 @@ const double kMapBlue[3] = {0.05, 0.10, 0.45};
 const double kRedundantMagenta[4] = {0.85, 0.0, 0.85, 0.45};
 
 /// One line of legend entries (a glyph and a label each), left to right from x, centred on y.
+class LegendLine
+{
+ public:
+  LegendLine(cairo_t* cr, double x, double y, const FigureStyle& style) : cr_(cr), x_(x), y_(y), style_(style)
+  {
+  }
+
+  void label(const std::string& text)
+  {
+    cairo_set_source_rgb(cr_, 0.0, 0.0, 0.0);
+    cairo_move_to(cr_, x_ + kGlyph + 4.0, y_ + 0.3 * style_.font_size);
+    cairo_show_text(cr_, text.c_str());
+    cairo_text_extents_t ext;
+    cairo_text_extents(cr_, text.c_str(), &ext);
+    x_ += kGlyph + 4.0 + ext.x_advance + 14.0;
+  }
+  void line(const double* rgba, double width)
+  {
+    cairo_set_line_cap(cr_, CAIRO_LINE_CAP_ROUND);
+    cairo_set_line_width(cr_, width);
+    cairo_set_source_rgba(cr_, rgba[0], rgba[1], rgba[2], rgba[3]);
+    cairo_move_to(cr_, x_ + 2.0, y_);
+    cairo_line_to(cr_, x_ + kGlyph - 2.0, y_);
+    cairo_stroke(cr_);
+  }
+  void disc(double r, double g, double b)
+  {
+    cairo_set_source_rgb(cr_, r, g, b);
+    cairo_new_sub_path(cr_);
+    cairo_arc(cr_, x_ + 0.5 * kGlyph, y_, style_.endpoint_radius, 0.0, 2.0 * linemap::kPi);
+    cairo_fill(cr_);
+  }
+  void square(std::uint32_t argb, double side)
+  {
+    setColour(cr_, argb);
+    cairo_rectangle(cr_, x_ + 0.5 * (kGlyph - side), y_ - 0.5 * side, side, side);
+    cairo_fill(cr_);
+  }
+
+ private:
+  static constexpr double kGlyph = 14.0;
+  cairo_t* cr_;
+  double x_, y_;
+  const FigureStyle& style_;
+};
+
 void drawLegend(cairo_t* cr, const MapFigure& f, double x, double y, const FigureStyle& style)
 {
   cairo_save(cr);
   cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
   cairo_set_font_size(cr, 0.85 * style.font_size);
-  const double glyph = 14.0;
-  const auto label = [&](const std::string& text)
-  {
-    cairo_set_source_rgb(cr, 0.0, 0.0, 0.0);
-    cairo_move_to(cr, x + glyph + 4.0, y + 0.3 * style.font_size);
-    cairo_show_text(cr, text.c_str());
-    cairo_text_extents_t ext;
-    cairo_text_extents(cr, text.c_str(), &ext);
-    x += glyph + 4.0 + ext.x_advance + 14.0;
-  };
-  const auto line = [&](const double* rgba, double width)
-  {
-    cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
-    cairo_set_line_width(cr, width);
-    cairo_set_source_rgba(cr, rgba[0], rgba[1], rgba[2], rgba[3]);
-    cairo_move_to(cr, x + 2.0, y);
-    cairo_line_to(cr, x + glyph - 2.0, y);
-    cairo_stroke(cr);
-  };
-  const auto disc = [&](double r, double g, double b)
-  {
-    cairo_set_source_rgb(cr, r, g, b);
-    cairo_new_sub_path(cr);
-    cairo_arc(cr, x + 0.5 * glyph, y, style.endpoint_radius, 0.0, 2.0 * linemap::kPi);
-    cairo_fill(cr);
-  };
-  const auto square = [&](std::uint32_t argb, double side)
-  {
-    setColour(cr, argb);
-    cairo_rectangle(cr, x + 0.5 * (glyph - side), y - 0.5 * side, side, side);
-    cairo_fill(cr);
-  };
+  LegendLine legend(cr, x, y, style);
   const double blue[4] = {kMapBlue[0], kMapBlue[1], kMapBlue[2], 1.0};
-  line(blue, style.line_width);
-  label("map segment");
-  disc(0.90, 0.0, 0.0);
-  label("start");
-  disc(0.0, 0.70, 0.0);
-  label("end");
+  legend.line(blue, style.line_width);
+  legend.label("map segment");
+  legend.disc(0.90, 0.0, 0.0);
+  legend.label("start");
+  legend.disc(0.0, 0.70, 0.0);
+  legend.label("end");
   if (!f.scan_points.empty())
   {
-    square(kScanGrey, 4.0);
-    label("scan point");
+    legend.square(kScanGrey, 4.0);
+    legend.label("scan point");
   }
   if (f.lookup)
   {
-    square(0xFF999999u, 10.0);  // the table's 1 (grey 40 %); 0 is white
-    label("lookup table (white 0 to grey 1)");
+    legend.square(0xFF999999u, 10.0);  // the table's 1 (grey 40 %); 0 is white
+    legend.label("lookup table (white 0 to grey 1)");
   }
   if (f.show_coverage)
   {
-    square(kUncoveredOrange, 4.0);
-    label("uncovered scan point (" + std::to_string(f.uncovered_points.size()) + ")");
-    square(kUnmappedCyan, 4.0);
-    label("unmapped straight structure (" + std::to_string(f.uncovered_structure_points.size()) + ")");
-    line(kRedundantMagenta, 4.0 * style.line_width);
-    label("redundant pair (" + std::to_string(f.redundant_pairs.size()) + ")");
+    legend.square(kUncoveredOrange, 4.0);
+    legend.label("uncovered scan point (" + std::to_string(f.uncovered_points.size()) + ")");
+    legend.square(kUnmappedCyan, 4.0);
+    legend.label("unmapped straight structure (" + std::to_string(f.uncovered_structure_points.size()) + ")");
+    legend.line(kRedundantMagenta, 4.0 * style.line_width);
+    legend.label("redundant pair (" + std::to_string(f.redundant_pairs.size()) + ")");
   }
   cairo_restore(cr);
 }
@@ -370,6 +388,23 @@ bool endsWith(const std::string& s, const std::string& suffix)
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+/// Renders the panels into a vector file made by `create` (cairo's SVG or PDF surface) and returns its name.
+std::string drawVector(cairo_surface_t* (*create)(const char*, double, double), const std::string& file,
+                       const std::vector<const MapFigure*>& panels, const FigureLayout& l,
+                       const FigureStyle& style)
+{
+  cairo_surface_t* s = create(file.c_str(), l.width, l.height);
+  checkSurface(s, file);
+  cairo_t* cr = cairo_create(s);
+  render(cr, panels, l, style, 2.0);
+  cairo_destroy(cr);
+  cairo_surface_finish(s);
+  const cairo_status_t st = cairo_surface_status(s);
+  cairo_surface_destroy(s);
+  throwIfFailed(st, file);
+  return file;
+}
+
 std::vector<std::string> drawPanels(const std::vector<const MapFigure*>& panels, const std::string& path,
                                     unsigned formats, const FigureStyle& style)
 {
@@ -388,33 +423,9 @@ std::vector<std::string> drawPanels(const std::vector<const MapFigure*>& panels,
   std::vector<std::string> written;
 
   if (formats & kFigureSvg)
-  {
-    const std::string file = base + ".svg";
-    cairo_surface_t* s = cairo_svg_surface_create(file.c_str(), l.width, l.height);
-    checkSurface(s, file);
-    cairo_t* cr = cairo_create(s);
-    render(cr, panels, l, style, 2.0);
-    cairo_destroy(cr);
-    cairo_surface_finish(s);
-    const cairo_status_t st = cairo_surface_status(s);
-    cairo_surface_destroy(s);
-    throwIfFailed(st, file);
-    written.push_back(file);
-  }
+    written.push_back(drawVector(cairo_svg_surface_create, base + ".svg", panels, l, style));
   if (formats & kFigurePdf)
-  {
-    const std::string file = base + ".pdf";
-    cairo_surface_t* s = cairo_pdf_surface_create(file.c_str(), l.width, l.height);
-    checkSurface(s, file);
-    cairo_t* cr = cairo_create(s);
-    render(cr, panels, l, style, 2.0);
-    cairo_destroy(cr);
-    cairo_surface_finish(s);
-    const cairo_status_t st = cairo_surface_status(s);
-    cairo_surface_destroy(s);
-    throwIfFailed(st, file);
-    written.push_back(file);
-  }
+    written.push_back(drawVector(cairo_pdf_surface_create, base + ".pdf", panels, l, style));
   if (formats & kFigurePng)
   {
     const std::string file = base + ".png";

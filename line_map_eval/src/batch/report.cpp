@@ -59,7 +59,8 @@ std::vector<Column> columns()
           {"total ms"}};
 }
 
-std::vector<std::string> row(const MergerRun& r)
+/// The full table's cells of one merger, coverages to `coverage_decimals`.
+std::vector<std::string> row(const MergerRun& r, int coverage_decimals = 2)
 {
   return {r.name,
           std::to_string(r.scans),
@@ -74,10 +75,10 @@ std::vector<std::string> row(const MergerRun& r)
           fixed(r.quality.quality, 2),
           fixed(r.error.mean_error * kMm, 2),
           std::to_string(r.error.unassigned),
-          fixed(r.point_coverage.fraction() * 100.0, 2),
-          fixed(r.length_coverage.fraction() * 100.0, 2),
-          fixed(r.structure_coverage.fraction() * 100.0, 2),
-          fixed(r.structure_coverage.unmapped_length, 2),
+          fixed(r.point_coverage.fraction() * 100.0, coverage_decimals),
+          fixed(r.length_coverage.fraction() * 100.0, coverage_decimals),
+          fixed(r.structure_coverage.fraction() * 100.0, coverage_decimals),
+          fixed(r.structure_coverage.unmapped_length, coverage_decimals),
           std::to_string(r.redundancy.pairs),
           fixed(r.redundancy.overlap_length, 2),
           std::to_string(r.crossing_pairs.size()),
@@ -94,19 +95,14 @@ std::vector<std::pair<Column, std::string>> compactColumns()
           {{"unmap."}, "m"},      {{"redund."}, "pairs"}, {{"cross"}, "pairs"}};
 }
 
+/// The terminal table's cells: those of the full table's columns it shows (see compactColumns).
 std::vector<std::string> compactRow(const MergerRun& r)
 {
-  return {r.name,
-          std::to_string(r.map_segments),
-          fixed(r.quality.quality, 2),
-          fixed(r.error.mean_error * kMm, 2),
-          std::to_string(r.error.unassigned),
-          fixed(r.point_coverage.fraction() * 100.0, 1),
-          fixed(r.length_coverage.fraction() * 100.0, 1),
-          fixed(r.structure_coverage.fraction() * 100.0, 1),
-          fixed(r.structure_coverage.unmapped_length, 1),
-          std::to_string(r.redundancy.pairs),
-          std::to_string(r.crossing_pairs.size())};
+  const std::vector<std::string> full = row(r, 1);
+  static constexpr std::size_t kShown[] = {0, 6, 10, 11, 12, 13, 14, 15, 16, 17, 19};
+  std::vector<std::string> cells;
+  for (const std::size_t i : kShown) cells.push_back(full[i]);
+  return cells;
 }
 
 /// Rounds for the JSON output so that the files stay readable; keeps null for non-finite values.
@@ -126,119 +122,130 @@ void key(YAML::Emitter& out, const char* k)
   out << YAML::Key << k << YAML::Value;
 }
 
+/// key: value for counts, strings and flags, written as they are.
+template <typename T>
+void field(YAML::Emitter& out, const char* k, const T& value)
+{
+  key(out, k);
+  out << value;
+}
+
+/// key: value for measures, rounded by number().
+void measure(YAML::Emitter& out, const char* k, double value, int decimals = 3)
+{
+  key(out, k);
+  number(out, value, decimals);
+}
+
+/// Shortest, longest and mean length [mm] under keys PREFIX shortest_mm, PREFIX longest_mm and
+/// PREFIX mean_length_mm.
+void emitLengths(YAML::Emitter& out, const std::string& prefix, const LengthStatistics& s)
+{
+  measure(out, (prefix + "shortest_mm").c_str(), s.shortest * kMm);
+  measure(out, (prefix + "longest_mm").c_str(), s.longest * kMm);
+  measure(out, (prefix + "mean_length_mm").c_str(), s.mean * kMm);
+}
+
+/// Segment counts, lengths, quality and error of one map.
+void emitSegmentsAndError(YAML::Emitter& out, const MergerRun& r)
+{
+  field(out, "scans", r.scans);
+  field(out, "original_segments", r.original_segments);
+  emitLengths(out, "original_", r.originals);
+  field(out, "map_segments", r.map_segments);
+  emitLengths(out, "", r.map);
+  measure(out, "quality_pct", r.quality.quality);
+  measure(out, "error_mm", r.error.mean_error * kMm);
+  measure(out, "max_error_mm", r.error.max_error * kMm);
+  field(out, "error_assignment", r.error_assignment);
+  field(out, "assigned_originals", r.error.assigned);
+  field(out, "unassigned_originals", r.error.unassigned);
+}
+
+/// The coverages, redundancy and crossings of one map.
+void emitCoverage(YAML::Emitter& out, const MergerRun& r)
+{
+  field(out, "scan_points", r.point_coverage.points);
+  field(out, "covered_scan_points", r.point_coverage.covered);
+  measure(out, "point_coverage_pct", r.point_coverage.fraction() * 100.0);
+  measure(out, "original_length_m", r.length_coverage.total);
+  measure(out, "covered_original_length_m", r.length_coverage.covered);
+  measure(out, "length_coverage_pct", r.length_coverage.fraction() * 100.0);
+  field(out, "redundant_pairs", r.redundancy.pairs);
+  measure(out, "redundant_overlap_m", r.redundancy.overlap_length);
+  field(out, "structure_points", r.structure_coverage.points);
+  field(out, "covered_structure_points", r.structure_coverage.covered);
+  measure(out, "structure_coverage_pct", r.structure_coverage.fraction() * 100.0);
+  measure(out, "structure_length_m", r.structure_coverage.length);
+  measure(out, "unmapped_structure_length_m", r.structure_coverage.unmapped_length);
+  field(out, "crossing_pairs", r.crossing_pairs.size());
+}
+
+/// Runtimes and how the map came about.
+void emitRunning(YAML::Emitter& out, const MergerRun& r)
+{
+  measure(out, "per_frame_ms", r.per_frame_ms, 4);
+  measure(out, "total_ms", r.total_ms);
+  measure(out, "adjust_ms", r.adjust_ms);
+  field(out, "trajectories", r.trajectories);
+  field(out, "adjustments", r.adjustments);
+  field(out, "rebuilds", r.rebuilds);
+  measure(out, "evaluation_ms", r.evaluation_ms);
+  field(out, "online", r.online);
+  field(out, "provenance", r.provenance);
+  measure(out, "quality_before_adjust_pct",
+          r.quality_before_adjust ? *r.quality_before_adjust : std::nan(""));
+}
+
+void emitGroundTruth(YAML::Emitter& out, const GroundTruthResult& g)
+{
+  key(out, "ground_truth");
+  out << YAML::BeginMap;
+  measure(out, "coverage_pct", g.coverage * 100.0);
+  field(out, "undetected_walls", g.undetected_walls);
+  measure(out, "max_endpoint_error_mm", g.max_endpoint_error * kMm);
+  measure(out, "mean_endpoint_error_mm", g.mean_endpoint_error * kMm);
+  field(out, "unmapped_ends", g.unmapped_ends);
+  field(out, "unseen_faces", g.unseen_walls);
+  measure(out, "mean_vertex_error_mm", g.mean_vertex_error * kMm);
+  field(out, "missed_corners", g.missed_corners);
+  field(out, "corners", g.corners.size());
+  field(out, "walls", g.walls.size());
+  out << YAML::EndMap;
+}
+
 void emitRun(YAML::Emitter& out, const MergerRun& r)
 {
   out << YAML::BeginMap;
-  key(out, "scans");
-  out << r.scans;
-  key(out, "original_segments");
-  out << r.original_segments;
-  key(out, "original_shortest_mm");
-  number(out, r.originals.shortest * kMm);
-  key(out, "original_longest_mm");
-  number(out, r.originals.longest * kMm);
-  key(out, "original_mean_length_mm");
-  number(out, r.originals.mean * kMm);
-  key(out, "map_segments");
-  out << r.map_segments;
-  key(out, "shortest_mm");
-  number(out, r.map.shortest * kMm);
-  key(out, "longest_mm");
-  number(out, r.map.longest * kMm);
-  key(out, "mean_length_mm");
-  number(out, r.map.mean * kMm);
-  key(out, "quality_pct");
-  number(out, r.quality.quality);
-  key(out, "error_mm");
-  number(out, r.error.mean_error * kMm);
-  key(out, "max_error_mm");
-  number(out, r.error.max_error * kMm);
-  key(out, "error_assignment");
-  out << r.error_assignment;
-  key(out, "assigned_originals");
-  out << r.error.assigned;
-  key(out, "unassigned_originals");
-  out << r.error.unassigned;
-  key(out, "scan_points");
-  out << r.point_coverage.points;
-  key(out, "covered_scan_points");
-  out << r.point_coverage.covered;
-  key(out, "point_coverage_pct");
-  number(out, r.point_coverage.fraction() * 100.0);
-  key(out, "original_length_m");
-  number(out, r.length_coverage.total);
-  key(out, "covered_original_length_m");
-  number(out, r.length_coverage.covered);
-  key(out, "length_coverage_pct");
-  number(out, r.length_coverage.fraction() * 100.0);
-  key(out, "redundant_pairs");
-  out << r.redundancy.pairs;
-  key(out, "redundant_overlap_m");
-  number(out, r.redundancy.overlap_length);
-  key(out, "structure_points");
-  out << r.structure_coverage.points;
-  key(out, "covered_structure_points");
-  out << r.structure_coverage.covered;
-  key(out, "structure_coverage_pct");
-  number(out, r.structure_coverage.fraction() * 100.0);
-  key(out, "structure_length_m");
-  number(out, r.structure_coverage.length);
-  key(out, "unmapped_structure_length_m");
-  number(out, r.structure_coverage.unmapped_length);
-  key(out, "crossing_pairs");
-  out << r.crossing_pairs.size();
-  key(out, "per_frame_ms");
-  number(out, r.per_frame_ms, 4);
-  key(out, "total_ms");
-  number(out, r.total_ms);
-  key(out, "adjust_ms");
-  number(out, r.adjust_ms);
-  key(out, "trajectories");
-  out << r.trajectories;
-  key(out, "adjustments");
-  out << r.adjustments;
-  key(out, "rebuilds");
-  out << r.rebuilds;
-  key(out, "evaluation_ms");
-  number(out, r.evaluation_ms);
-  key(out, "online");
-  out << r.online;
-  key(out, "provenance");
-  out << r.provenance;
-  key(out, "quality_before_adjust_pct");
-  number(out, r.quality_before_adjust ? *r.quality_before_adjust : std::nan(""));
-  if (r.ground_truth)
-  {
-    const GroundTruthResult& g = *r.ground_truth;
-    key(out, "ground_truth");
-    out << YAML::BeginMap;
-    key(out, "coverage_pct");
-    number(out, g.coverage * 100.0);
-    key(out, "undetected_walls");
-    out << g.undetected_walls;
-    key(out, "max_endpoint_error_mm");
-    number(out, g.max_endpoint_error * kMm);
-    key(out, "mean_endpoint_error_mm");
-    number(out, g.mean_endpoint_error * kMm);
-    key(out, "unmapped_ends");
-    out << g.unmapped_ends;
-    key(out, "unseen_faces");
-    out << g.unseen_walls;
-    key(out, "mean_vertex_error_mm");
-    number(out, g.mean_vertex_error * kMm);
-    key(out, "missed_corners");
-    out << g.missed_corners;
-    key(out, "corners");
-    out << g.corners.size();
-    key(out, "walls");
-    out << g.walls.size();
-    out << YAML::EndMap;
-  }
+  emitSegmentsAndError(out, r);
+  emitCoverage(out, r);
+  emitRunning(out, r);
+  if (r.ground_truth) emitGroundTruth(out, *r.ground_truth);
   key(out, "files");
   out << YAML::BeginSeq;
   for (const auto& f : r.files) out << f;
   out << YAML::EndSeq;
   out << YAML::EndMap;
+}
+
+/// What was run on which data, and the originals all mergers share.
+void emitDataset(YAML::Emitter& out, const BatchResult& result)
+{
+  field(out, "dataset", result.dataset);
+  field(out, "kind", result.kind);
+  field(out, "extractor", result.extractor);
+  field(out, "loop_closure", result.loop_closure);
+  field(out, "adjust_every", result.adjust_every);
+  field(out, "candidate_scans", result.candidate_scans);
+  field(out, "scans", result.keyframes);
+  field(out, "original_segments", result.originals.count);
+  emitLengths(out, "original_", result.originals);
+  measure(out, "original_fit_rms_mm", result.original_fit_rms * kMm);
+  measure(out, "original_line_sigma_mm", result.original_line_sigma * kMm);
+  field(out, "scan_points", result.scan_points);
+  measure(out, "extraction_ms", result.extraction_ms);
+  measure(out, "table_ms", result.table_ms);
+  measure(out, "structure_ms", result.structure_ms);
 }
 
 void writeFile(const std::filesystem::path& path, const std::string& text)
@@ -289,40 +296,7 @@ std::string toJson(const BatchResult& result)
   out.SetNullFormat(YAML::LowerNull);
   out.SetDoublePrecision(12);
   out << YAML::BeginMap;
-  key(out, "dataset");
-  out << result.dataset;
-  key(out, "kind");
-  out << result.kind;
-  key(out, "extractor");
-  out << result.extractor;
-  key(out, "loop_closure");
-  out << result.loop_closure;
-  key(out, "adjust_every");
-  out << result.adjust_every;
-  key(out, "candidate_scans");
-  out << result.candidate_scans;
-  key(out, "scans");
-  out << result.keyframes;
-  key(out, "original_segments");
-  out << result.originals.count;
-  key(out, "original_shortest_mm");
-  number(out, result.originals.shortest * kMm);
-  key(out, "original_longest_mm");
-  number(out, result.originals.longest * kMm);
-  key(out, "original_mean_length_mm");
-  number(out, result.originals.mean * kMm);
-  key(out, "original_fit_rms_mm");
-  number(out, result.original_fit_rms * kMm);
-  key(out, "original_line_sigma_mm");
-  number(out, result.original_line_sigma * kMm);
-  key(out, "scan_points");
-  out << result.scan_points;
-  key(out, "extraction_ms");
-  number(out, result.extraction_ms);
-  key(out, "table_ms");
-  number(out, result.table_ms);
-  key(out, "structure_ms");
-  number(out, result.structure_ms);
+  emitDataset(out, result);
   // The whole evaluation of one map: the shared table and structure classification plus that map's
   // metrics.
   key(out, "map_evaluation_ms");
@@ -353,9 +327,11 @@ std::string toJson(const BatchResult& result)
   return std::string(out.c_str()) + "\n";
 }
 
-std::string toMarkdown(const BatchResult& result)
+namespace
 {
-  std::ostringstream md;
+/// The dataset, extractor and the figures every merger shares.
+void markdownHeader(std::ostringstream& md, const BatchResult& result)
+{
   md << "# Line map comparison: " << result.dataset << "\n\n";
   md << "- dataset kind: " << result.kind
      << (result.loop_closure
@@ -382,7 +358,11 @@ std::string toMarkdown(const BatchResult& result)
        << " m), classified in " << fixed(result.structure_ms, 1) << " ms\n";
   }
   md << "\n";
+}
 
+/// The full table, one row per merger.
+void markdownTable(std::ostringstream& md, const BatchResult& result)
+{
   const auto cols = columns();
   md << "|";
   for (const auto& c : cols) md << " " << c.header << " |";
@@ -395,6 +375,44 @@ std::string toMarkdown(const BatchResult& result)
     for (const auto& cell : row(r)) md << " " << cell << " |";
     md << "\n";
   }
+}
+
+void groundTruthNote(std::ostringstream& md, const GroundTruthResult& g)
+{
+  md << "; ground truth over the " << g.walls.size() << " seen faces (" << g.unseen_walls
+     << " never seen, not scored): coverage " << fixed(g.coverage * 100.0, 1) << " %, " << g.undetected_walls
+     << " undetected, endpoint error mean " << fixed(g.mean_endpoint_error * kMm, 1) << " / max "
+     << fixed(g.max_endpoint_error * kMm, 1) << " mm, " << g.unmapped_ends
+     << " seen ends no segment reaches, mean vertex error " << fixed(g.mean_vertex_error * kMm, 1) << " mm, "
+     << g.missed_corners << " of " << g.corners.size() << " corners missed";
+}
+
+/// One merger's bullet: error assignment, timings, ground truth and its files.
+void mergerNote(std::ostringstream& md, const MergerRun& r)
+{
+  md << "- **" << r.name << "** (" << (r.online ? "online" : "offline") << "): error from "
+     << r.error_assignment << " (" << r.error.assigned << " originals assigned, " << r.error.unassigned
+     << " without a map segment; max " << fixed(r.error.max_error * kMm, 1) << " mm); evaluation "
+     << fixed(r.evaluation_ms, 1) << " ms";
+  if (r.adjustments) md << "; " << r.adjustments << " adjustments, " << fixed(r.adjust_ms, 1) << " ms";
+  if (r.rebuilds) md << "; rebuilt from the nodes of the first trajectory";
+  if (r.quality_before_adjust)
+    md << "; quality before the last trajectory " << fixed(*r.quality_before_adjust, 2) << " %";
+  if (r.ground_truth) groundTruthNote(md, *r.ground_truth);
+  md << "\n";
+  for (const auto& f : r.files) md << "  - `" << f << "`\n";
+  // The map figure inline, relative to report.md (which sits in the output directory).
+  for (const auto& f : r.files)
+    if (std::filesystem::path(f).filename() == "map.png")
+      md << "\n  ![" << r.name << "](" << r.name << "/map.png)\n";
+}
+}  // namespace
+
+std::string toMarkdown(const BatchResult& result)
+{
+  std::ostringstream md;
+  markdownHeader(md, result);
+  markdownTable(md, result);
   md << "\nOriginal segments and their lengths are those of Table I of the CAE-RLSM paper, map segments "
         "those of Table III. Quality is the correlation quality against the lookup table of the registered "
         "scans; error the mean distance of the originals' midpoints to their map segment's line, over the "
@@ -409,33 +427,7 @@ std::string toMarkdown(const BatchResult& result)
         "point-coverage radius. Per-frame runtime is the median addKeyframe time of online mergers; total "
         "runtime covers every addKeyframe, adjust and the final map.\n\n";
   md << "## Notes per merger\n\n";
-  for (const auto& r : result.mergers)
-  {
-    md << "- **" << r.name << "** (" << (r.online ? "online" : "offline") << "): error from "
-       << r.error_assignment << " (" << r.error.assigned << " originals assigned, " << r.error.unassigned
-       << " without a map segment; max " << fixed(r.error.max_error * kMm, 1) << " mm); evaluation "
-       << fixed(r.evaluation_ms, 1) << " ms";
-    if (r.adjustments) md << "; " << r.adjustments << " adjustments, " << fixed(r.adjust_ms, 1) << " ms";
-    if (r.rebuilds) md << "; rebuilt from the nodes of the first trajectory";
-    if (r.quality_before_adjust)
-      md << "; quality before the last trajectory " << fixed(*r.quality_before_adjust, 2) << " %";
-    if (r.ground_truth)
-    {
-      const auto& g = *r.ground_truth;
-      md << "; ground truth over the " << g.walls.size() << " seen faces (" << g.unseen_walls
-         << " never seen, not scored): coverage " << fixed(g.coverage * 100.0, 1) << " %, "
-         << g.undetected_walls << " undetected, endpoint error mean " << fixed(g.mean_endpoint_error * kMm, 1)
-         << " / max " << fixed(g.max_endpoint_error * kMm, 1) << " mm, " << g.unmapped_ends
-         << " seen ends no segment reaches, mean vertex error " << fixed(g.mean_vertex_error * kMm, 1)
-         << " mm, " << g.missed_corners << " of " << g.corners.size() << " corners missed";
-    }
-    md << "\n";
-    for (const auto& f : r.files) md << "  - `" << f << "`\n";
-    // The map figure inline, relative to report.md (which sits in the output directory).
-    for (const auto& f : r.files)
-      if (std::filesystem::path(f).filename() == "map.png")
-        md << "\n  ![" << r.name << "](" << r.name << "/map.png)\n";
-  }
+  for (const auto& r : result.mergers) mergerNote(md, r);
   md << "\n## Parameters\n\n";
   for (const auto& [k, v] : result.parameters.values()) md << "- `" << k << "`: `" << v << "`\n";
   return md.str();

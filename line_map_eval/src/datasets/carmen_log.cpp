@@ -278,6 +278,58 @@ std::string readMaybeCompressedFile(const std::string& path)
   return text;
 }
 
+namespace
+{
+/// Adds one tokenized line (a laser scan, odometry or a parameter) to the log; throws LineError.
+/// Returns true when the log holds options.max_scans scans.
+bool parseRecord(const std::vector<std::string_view>& tokens, std::size_t line_no,
+                 const CarmenReadOptions& options, CarmenLog& log)
+{
+  const std::string_view type = tokens[0];
+  if (type.front() == '#')
+  {
+    ++log.skipped_unknown;
+    return false;
+  }
+  const int raw_laser = rawLaserIndex(type);
+  if (type == "FLASER" || type == "ROBOTLASER1" || raw_laser > 0)
+  {
+    static const char* const kRawNames[] = {"", "RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4"};
+    Fields f(raw_laser > 0 ? kRawNames[raw_laser] : type == "FLASER" ? "FLASER" : "ROBOTLASER1", tokens);
+    CarmenScan scan;
+    if (raw_laser > 0)
+      parseRawLaser(f, scan, raw_laser);
+    else if (type == "FLASER")
+      parseFlaser(f, scan);
+    else
+      parseRobotLaser1(f, scan);
+    scan.line = line_no;
+    log.scans.push_back(std::move(scan));
+    return options.max_scans > 0 && log.scans.size() >= options.max_scans;
+  }
+  if (type == "ODOM")
+  {
+    Fields f("ODOM", tokens);
+    CarmenOdom odom;
+    parseOdom(f, odom);
+    odom.line = line_no;
+    log.odometry.push_back(odom);
+  }
+  else if (type == "PARAM")
+  {
+    Fields f("PARAM", tokens);
+    const std::string_view key = f.word("name");
+    const std::string_view value = f.word("value");
+    log.params[std::string(key)] = std::string(value);
+  }
+  else
+  {
+    ++log.skipped_unknown;
+  }
+  return false;
+}
+}  // namespace
+
 CarmenLog parseCarmenLog(const std::string& text, const std::string& name, const CarmenReadOptions& options)
 {
   CarmenLog log;
@@ -303,47 +355,7 @@ CarmenLog parseCarmenLog(const std::string& text, const std::string& name, const
                         std::to_string(options.max_line_length)};
       tokenize(line, tokens);
       if (tokens.empty()) continue;
-      const std::string_view type = tokens[0];
-      if (type.front() == '#')
-      {
-        ++log.skipped_unknown;
-        continue;
-      }
-      const int raw_laser = rawLaserIndex(type);
-      if (type == "FLASER" || type == "ROBOTLASER1" || raw_laser > 0)
-      {
-        static const char* const kRawNames[] = {"", "RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4"};
-        Fields f(raw_laser > 0 ? kRawNames[raw_laser] : type == "FLASER" ? "FLASER" : "ROBOTLASER1", tokens);
-        CarmenScan scan;
-        if (raw_laser > 0)
-          parseRawLaser(f, scan, raw_laser);
-        else if (type == "FLASER")
-          parseFlaser(f, scan);
-        else
-          parseRobotLaser1(f, scan);
-        scan.line = line_no;
-        log.scans.push_back(std::move(scan));
-        if (options.max_scans > 0 && log.scans.size() >= options.max_scans) break;
-      }
-      else if (type == "ODOM")
-      {
-        Fields f("ODOM", tokens);
-        CarmenOdom odom;
-        parseOdom(f, odom);
-        odom.line = line_no;
-        log.odometry.push_back(odom);
-      }
-      else if (type == "PARAM")
-      {
-        Fields f("PARAM", tokens);
-        const std::string_view key = f.word("name");
-        const std::string_view value = f.word("value");
-        log.params[std::string(key)] = std::string(value);
-      }
-      else
-      {
-        ++log.skipped_unknown;
-      }
+      if (parseRecord(tokens, line_no, options, log)) break;
     }
     catch (const LineError& e)
     {

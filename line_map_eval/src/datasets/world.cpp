@@ -179,7 +179,25 @@ class WorldParser
     checkKeys(root, "",
               {"name", "seed", "walls", "wall_thickness", "arc_sagitta", "path", "laser", "odometry",
                "min_visible_beams"});
+    parseSettings(root, w);
+    parseWalls(root, w);
+    parsePath(root, w.path);
+    if (const YAML::Node l = root["laser"]) laser(l, w.laser);
+    if (const YAML::Node odo = root["odometry"])
+    {
+      checkKeys(odo, "odometry", {"translation_noise", "rotation_noise", "heading_noise", "heading_bias"});
+      optionalNumber(odo, "odometry", "translation_noise", w.odometry.translation_noise, 0.0, false);
+      optionalNumber(odo, "odometry", "rotation_noise", w.odometry.rotation_noise, 0.0, false);
+      optionalNumber(odo, "odometry", "heading_noise", w.odometry.heading_noise, 0.0, false);
+      optionalNumber(odo, "odometry", "heading_bias", w.odometry.heading_bias, -HUGE_VAL, false);
+    }
+    return w;
+  }
 
+ private:
+  /// name, seed, min_visible_beams and the defaults of the walls.
+  void parseSettings(const YAML::Node& root, World& w) const
+  {
     if (root["name"]) w.name = root["name"].as<std::string>();
     if (w.name.empty()) w.name = linemap::fileStem(source_);
     if (root["seed"])
@@ -209,6 +227,10 @@ class WorldParser
       if (!(w.arc_sagitta > 0.0))
         fail("arc_sagitta", "must be > 0, got " + toString(w.arc_sagitta), root["arc_sagitta"]);
     }
+  }
+
+  void parseWalls(const YAML::Node& root, World& w) const
+  {
     const YAML::Node walls = root["walls"];
     const char* kWallForms =
         "[x1, y1, x2, y2], {segment: [x1, y1, x2, y2], thickness: t} or {arc: [cx, cy, radius, start_deg, "
@@ -218,35 +240,40 @@ class WorldParser
       fail("walls", std::string("expected a non-empty list of ") + kWallForms, walls);
     int arcs = 0;
     for (std::size_t i = 0; i < walls.size(); ++i)
-    {
-      const std::string key = "walls[" + std::to_string(i) + "]";
-      Wall wall;
-      wall.thickness = w.wall_thickness;
-      const bool with_thickness = walls[i].IsMap();
-      if (with_thickness)
-      {
-        checkKeys(walls[i], key, {"segment", "arc", "thickness"});
-        if (walls[i]["segment"] && walls[i]["arc"])
-          fail(key, "give either segment or arc, not both", walls[i]);
-        if (!walls[i]["segment"] && !walls[i]["arc"])
-          fail(key + "/segment",
-               "missing key ([x1, y1, x2, y2], or arc: [cx, cy, radius, start_deg, end_deg])", walls[i]);
-        optionalNumber(walls[i], key, "thickness", wall.thickness, 0.0, false);
-        if (const YAML::Node a = walls[i]["arc"])
-        {
-          const auto pieces = arc(a, key + "/arc", wall.thickness, w.arc_sagitta, arcs++);
-          w.walls.insert(w.walls.end(), pieces.begin(), pieces.end());
-          continue;
-        }
-      }
-      // (A new Node, not an assignment: assigning a yaml-cpp Node overwrites the node it refers to.)
-      const YAML::Node at = with_thickness ? walls[i]["segment"] : walls[i];
-      const auto v = numbers(at, with_thickness ? key + "/segment" : key, 4, "[x1, y1, x2, y2]");
-      wall.segment = linemap::Segment2(Vec2(v[0], v[1]), Vec2(v[2], v[3]));
-      if (wall.segment.length() <= 1e-9) fail(key, "the wall has zero length", walls[i]);
-      w.walls.push_back(wall);
-    }
+      parseWall(walls[i], "walls[" + std::to_string(i) + "]", w, arcs);
+  }
 
+  /// One entry of `walls`: a segment, or an arc's chain of pieces (`arcs` counts the arcs so far).
+  void parseWall(const YAML::Node& entry, const std::string& key, World& w, int& arcs) const
+  {
+    Wall wall;
+    wall.thickness = w.wall_thickness;
+    const bool with_thickness = entry.IsMap();
+    if (with_thickness)
+    {
+      checkKeys(entry, key, {"segment", "arc", "thickness"});
+      if (entry["segment"] && entry["arc"]) fail(key, "give either segment or arc, not both", entry);
+      if (!entry["segment"] && !entry["arc"])
+        fail(key + "/segment", "missing key ([x1, y1, x2, y2], or arc: [cx, cy, radius, start_deg, end_deg])",
+             entry);
+      optionalNumber(entry, key, "thickness", wall.thickness, 0.0, false);
+      if (const YAML::Node a = entry["arc"])
+      {
+        const auto pieces = arc(a, key + "/arc", wall.thickness, w.arc_sagitta, arcs++);
+        w.walls.insert(w.walls.end(), pieces.begin(), pieces.end());
+        return;
+      }
+    }
+    // (A new Node, not an assignment: assigning a yaml-cpp Node overwrites the node it refers to.)
+    const YAML::Node at = with_thickness ? entry["segment"] : entry;
+    const auto v = numbers(at, with_thickness ? key + "/segment" : key, 4, "[x1, y1, x2, y2]");
+    wall.segment = linemap::Segment2(Vec2(v[0], v[1]), Vec2(v[2], v[3]));
+    if (wall.segment.length() <= 1e-9) fail(key, "the wall has zero length", entry);
+    w.walls.push_back(wall);
+  }
+
+  void parsePath(const YAML::Node& root, PathModel& out) const
+  {
     const YAML::Node path = root["path"];
     if (!path) fail("path", "missing key (waypoints, speed, turn_rate, scan_period)", root);
     checkKeys(path, "path", {"waypoints", "speed", "turn_rate", "scan_period", "scans", "clearance"});
@@ -259,38 +286,25 @@ class WorldParser
       const std::string key = "path/waypoints[" + std::to_string(i) + "]";
       const auto v = numbers(wps[i], key, 2, "[x, y]");
       const Vec2 p(v[0], v[1]);
-      if (!w.path.waypoints.empty() && (p - w.path.waypoints.back()).norm() < 1e-6)
+      if (!out.waypoints.empty() && (p - out.waypoints.back()).norm() < 1e-6)
         fail(key, "repeats the previous waypoint", wps[i]);
-      w.path.waypoints.push_back(p);
+      out.waypoints.push_back(p);
     }
-    if ((w.path.waypoints.back() - w.path.waypoints.front()).norm() < 1e-6)
+    if ((out.waypoints.back() - out.waypoints.front()).norm() < 1e-6)
       fail("path/waypoints", "the last waypoint repeats the first (the loop closes by itself)", wps);
-    optionalNumber(path, "path", "speed", w.path.speed, 0.0, true);
-    optionalNumber(path, "path", "turn_rate", w.path.turn_rate, 0.0, true);
-    optionalNumber(path, "path", "scan_period", w.path.scan_period, 0.0, true);
-    optionalNumber(path, "path", "clearance", w.path.clearance, 0.0, false);
+    optionalNumber(path, "path", "speed", out.speed, 0.0, true);
+    optionalNumber(path, "path", "turn_rate", out.turn_rate, 0.0, true);
+    optionalNumber(path, "path", "scan_period", out.scan_period, 0.0, true);
+    optionalNumber(path, "path", "clearance", out.clearance, 0.0, false);
     if (path["scans"])
     {
       const double n = number(path["scans"], "path/scans");
       if (n < 0 || n != std::floor(n))
         fail("path/scans", "must be an integer >= 0, got " + toString(n), path["scans"]);
-      w.path.scans = static_cast<std::size_t>(n);
+      out.scans = static_cast<std::size_t>(n);
     }
-
-    if (const YAML::Node l = root["laser"]) laser(l, w.laser);
-
-    if (const YAML::Node odo = root["odometry"])
-    {
-      checkKeys(odo, "odometry", {"translation_noise", "rotation_noise", "heading_noise", "heading_bias"});
-      optionalNumber(odo, "odometry", "translation_noise", w.odometry.translation_noise, 0.0, false);
-      optionalNumber(odo, "odometry", "rotation_noise", w.odometry.rotation_noise, 0.0, false);
-      optionalNumber(odo, "odometry", "heading_noise", w.odometry.heading_noise, 0.0, false);
-      optionalNumber(odo, "odometry", "heading_bias", w.odometry.heading_bias, -HUGE_VAL, false);
-    }
-    return w;
   }
 
- private:
   std::string source_;
 };
 

@@ -1,14 +1,14 @@
 #include "line_map_eval/metrics/error_metric.hpp"
 
 #include <algorithm>
-#include <boost/geometry.hpp>
-#include <boost/geometry/index/rtree.hpp>
 #include <cmath>
 #include <iterator>
 #include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
+
+#include "line_map_eval/metrics/segment_tree.hpp"
 
 namespace line_map_eval
 {
@@ -51,52 +51,31 @@ ErrorMetricResult computeErrorMetric(const std::vector<Segment2>& originals,
 std::vector<int> assignToMapSegments(const std::vector<Segment2>& originals, const std::vector<Segment2>& map,
                                      const line_map_merging::FusionParams& params)
 {
-  namespace bg = boost::geometry;
-  namespace bgi = boost::geometry::index;
-  using Point = bg::model::point<double, 2, bg::cs::cartesian>;
-  using Box = bg::model::box<Point>;
-  using Entry = std::pair<Box, int>;
-
   params.validate();
-  const double pad = params.searchPadding();
-  std::vector<Entry> entries;
-  entries.reserve(map.size());
-  for (std::size_t j = 0; j < map.size(); ++j)
-  {
-    const Segment2& m = map[j];
-    if (!m.start.allFinite() || !m.end.allFinite())
-      throw std::invalid_argument("assignToMapSegments: map segment " + std::to_string(j) +
-                                  " has non-finite coordinates");
-    entries.emplace_back(
-        Box(Point(std::min(m.start.x(), m.end.x()) - pad, std::min(m.start.y(), m.end.y()) - pad),
-            Point(std::max(m.start.x(), m.end.x()) + pad, std::max(m.start.y(), m.end.y()) + pad)),
-        static_cast<int>(j));
-  }
-  const bgi::rtree<Entry, bgi::quadratic<16>> tree(entries.begin(), entries.end());
+  const SegmentTree tree = segmentTree(map, params.searchPadding(), "assignToMapSegments");
 
   std::vector<int> out(originals.size(), -1);
-  std::vector<Entry> hits;
+  std::vector<SegmentEntry> hits;
   for (std::size_t i = 0; i < originals.size(); ++i)
   {
     const Segment2& s = originals[i];
     if (!s.start.allFinite() || !s.end.allFinite())
       throw std::invalid_argument("assignToMapSegments: original segment " + std::to_string(i) +
                                   " has non-finite coordinates");
-    const Box box(Point(std::min(s.start.x(), s.end.x()), std::min(s.start.y(), s.end.y())),
-                  Point(std::max(s.start.x(), s.end.x()), std::max(s.start.y(), s.end.y())));
     hits.clear();
-    tree.query(bgi::intersects(box), std::back_inserter(hits));
+    tree.query(boost::geometry::index::intersects(segmentBox(s)), std::back_inserter(hits));
     double best = std::numeric_limits<double>::infinity();
-    for (const Entry& e : hits)
+    for (const SegmentEntry& e : hits)
     {
-      const Segment2& m = map[static_cast<std::size_t>(e.second)];
+      const Segment2& m = map[e.second];
+      const int j = static_cast<int>(e.second);
       if (!line_map_merging::meetsFusionConditions(m, s, params)) continue;
       const double d = linemap::distanceToLine(s.midpoint(), m.start, m.end);
       // Ties (collinear pieces of one wall) go to the lower index, so the result is deterministic.
-      if (d < best || (d == best && e.second < out[i]))
+      if (d < best || (d == best && j < out[i]))
       {
         best = d;
-        out[i] = e.second;
+        out[i] = j;
       }
     }
   }

@@ -1,14 +1,13 @@
 #include "line_map_eval/metrics/length_coverage.hpp"
 
 #include <algorithm>
-#include <boost/geometry.hpp>
-#include <boost/geometry/index/rtree.hpp>
 #include <cmath>
 #include <iterator>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
+#include "line_map_eval/metrics/segment_tree.hpp"
 #include "line_map_merging/mergers/fusion.hpp"
 
 namespace line_map_eval
@@ -33,36 +32,16 @@ bool clipLinear(double c0, double c1, double lo, double hi, double& t0, double& 
 LengthCoverage computeLengthCoverage(const std::vector<Segment2>& originals, const std::vector<Segment2>& map,
                                      double max_distance, double max_angle)
 {
-  namespace bg = boost::geometry;
-  namespace bgi = boost::geometry::index;
-  using Point = bg::model::point<double, 2, bg::cs::cartesian>;
-  using Box = bg::model::box<Point>;
-  using Entry = std::pair<Box, std::size_t>;
-
   if (!(max_distance >= 0.0) || !std::isfinite(max_distance))
     throw std::invalid_argument("length coverage: max_distance must be finite and >= 0");
   if (!(max_angle >= 0.0) || !std::isfinite(max_angle))
     throw std::invalid_argument("length coverage: max_angle must be finite and >= 0");
-  std::vector<Entry> entries;
-  entries.reserve(map.size());
-  for (std::size_t j = 0; j < map.size(); ++j)
-  {
-    const Segment2& m = map[j];
-    if (!m.start.allFinite() || !m.end.allFinite())
-      throw std::invalid_argument("length coverage: map segment " + std::to_string(j) +
-                                  " has non-finite coordinates");
-    // A represented point lies within max_distance of M's line with its foot on M: inside M's box
-    // padded by max_distance.
-    entries.emplace_back(Box(Point(std::min(m.start.x(), m.end.x()) - max_distance,
-                                   std::min(m.start.y(), m.end.y()) - max_distance),
-                             Point(std::max(m.start.x(), m.end.x()) + max_distance,
-                                   std::max(m.start.y(), m.end.y()) + max_distance)),
-                         j);
-  }
-  const bgi::rtree<Entry, bgi::quadratic<16>> tree(entries.begin(), entries.end());
+  // A represented point lies within max_distance of M's line with its foot on M: inside M's box
+  // padded by max_distance.
+  const SegmentTree tree = segmentTree(map, max_distance, "length coverage");
 
   LengthCoverage c;
-  std::vector<Entry> hits;
+  std::vector<SegmentEntry> hits;
   std::vector<std::pair<double, double>> intervals;
   for (std::size_t i = 0; i < originals.size(); ++i)
   {
@@ -74,13 +53,10 @@ LengthCoverage computeLengthCoverage(const std::vector<Segment2>& originals, con
     if (!(length > 0.0)) continue;
     c.total += length;
     hits.clear();
-    tree.query(
-        bgi::intersects(Box(Point(std::min(o.start.x(), o.end.x()), std::min(o.start.y(), o.end.y())),
-                            Point(std::max(o.start.x(), o.end.x()), std::max(o.start.y(), o.end.y())))),
-        std::back_inserter(hits));
+    tree.query(boost::geometry::index::intersects(segmentBox(o)), std::back_inserter(hits));
     intervals.clear();
     const Vec2 d = o.end - o.start;  // p(t) = o.start + t d, t in [0, 1]
-    for (const Entry& e : hits)
+    for (const SegmentEntry& e : hits)
     {
       const Segment2& m = map[e.second];
       const double lm = m.length();

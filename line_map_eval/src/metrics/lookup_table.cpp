@@ -50,6 +50,44 @@ Vec2 LookupTable::cellCenter(const Cell& c) const
   return {(c.x + 0.5) * params_.resolution, (c.y + 0.5) * params_.resolution};
 }
 
+namespace
+{
+/// The bounding box of the points, which must all be finite.
+void boundingBox(const std::vector<Vec2>& points, double& min_x, double& min_y, double& max_x, double& max_y)
+{
+  min_x = std::numeric_limits<double>::infinity();
+  min_y = min_x;
+  max_x = -min_x;
+  max_y = -min_x;
+  for (std::size_t i = 0; i < points.size(); ++i)
+  {
+    const Vec2& p = points[i];
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y()))
+      throw std::invalid_argument("lookup table: scan point " + std::to_string(i) + " is not finite");
+    min_x = std::min(min_x, p.x());
+    min_y = std::min(min_y, p.y());
+    max_x = std::max(max_x, p.x());
+    max_y = std::max(max_y, p.y());
+  }
+}
+
+/// The kernel on cell offsets (2 r + 1 square, row-major), circularly truncated at radius_m.
+std::vector<float> kernelOf(int r, double res, double radius_m, double sigma)
+{
+  const int k = 2 * r + 1;
+  std::vector<float> kernel(static_cast<std::size_t>(k * k), 0.0f);
+  const double inv2s2 = 1.0 / (2.0 * sigma * sigma);
+  for (int dy = -r; dy <= r; ++dy)
+    for (int dx = -r; dx <= r; ++dx)
+    {
+      const double d2 = (dx * dx + dy * dy) * res * res;
+      if (d2 <= radius_m * radius_m * (1.0 + 1e-12))
+        kernel[static_cast<std::size_t>((dy + r) * k + dx + r)] = static_cast<float>(std::exp(-d2 * inv2s2));
+    }
+  return kernel;
+}
+}  // namespace
+
 LookupTable LookupTable::build(const std::vector<Vec2>& world_points, const LookupTableParams& params)
 {
   params.validate();
@@ -58,18 +96,8 @@ LookupTable LookupTable::build(const std::vector<Vec2>& world_points, const Look
   if (world_points.empty()) return t;
 
   const double res = params.resolution;
-  double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
-  double max_x = -min_x, max_y = -min_x;
-  for (std::size_t i = 0; i < world_points.size(); ++i)
-  {
-    const Vec2& p = world_points[i];
-    if (!std::isfinite(p.x()) || !std::isfinite(p.y()))
-      throw std::invalid_argument("lookup table: scan point " + std::to_string(i) + " is not finite");
-    min_x = std::min(min_x, p.x());
-    min_y = std::min(min_y, p.y());
-    max_x = std::max(max_x, p.x());
-    max_y = std::max(max_y, p.y());
-  }
+  double min_x, min_y, max_x, max_y;
+  boundingBox(world_points, min_x, min_y, max_x, max_y);
   // Kernel half-width in cells; the window keeps one spare cell beyond it on each side.
   const double radius_m = params.kernel_radius * params.sigma;
   const int r = static_cast<int>(std::floor(radius_m / res + 1e-9));  // 3 sigma = 3 cells stays 3
@@ -84,49 +112,47 @@ LookupTable LookupTable::build(const std::vector<Vec2>& world_points, const Look
   t.y0_ = static_cast<int>(std::floor(min_y / res)) - r - 1;
   t.width_ = static_cast<int>(wx);
   t.height_ = static_cast<int>(wy);
-  const std::size_t w = static_cast<std::size_t>(t.width_);
-  t.values_.assign(w * static_cast<std::size_t>(t.height_), 0.0f);
+  t.values_.assign(static_cast<std::size_t>(t.width_) * static_cast<std::size_t>(t.height_), 0.0f);
+  t.stamp(t.hitCells(world_points), kernelOf(r, res, radius_m, params.sigma), r);
+  return t;
+}
 
+std::vector<std::size_t> LookupTable::hitCells(const std::vector<Vec2>& world_points)
+{
   // Hits first: a wall sampled every centimetre puts many points into one cell, and
   // stamping each distinct cell once is what keeps the table fast.
-  std::vector<std::uint8_t> hit(t.values_.size(), 0);
+  const std::size_t w = static_cast<std::size_t>(width_);
+  std::vector<std::uint8_t> hit(values_.size(), 0);
   std::vector<std::size_t> cells;
   cells.reserve(world_points.size() / 4 + 16);
   for (const Vec2& p : world_points)
   {
-    const Cell c = t.cellOf(p);
-    const std::size_t idx = static_cast<std::size_t>(c.y - t.y0_) * w + static_cast<std::size_t>(c.x - t.x0_);
+    const Cell c = cellOf(p);
+    const std::size_t idx = static_cast<std::size_t>(c.y - y0_) * w + static_cast<std::size_t>(c.x - x0_);
     if (!hit[idx])
     {
       hit[idx] = 1;
       cells.push_back(idx);
     }
   }
-  t.occupied_ = cells.size();
+  occupied_ = cells.size();
+  return cells;
+}
 
-  // Precomputed kernel on cell offsets, circularly truncated at radius_m.
+void LookupTable::stamp(const std::vector<std::size_t>& cells, const std::vector<float>& kernel, int r)
+{
+  const std::size_t w = static_cast<std::size_t>(width_);
   const int k = 2 * r + 1;
-  std::vector<float> kernel(static_cast<std::size_t>(k * k), 0.0f);
-  const double inv2s2 = 1.0 / (2.0 * params.sigma * params.sigma);
-  for (int dy = -r; dy <= r; ++dy)
-    for (int dx = -r; dx <= r; ++dx)
-    {
-      const double d2 = (dx * dx + dy * dy) * res * res;
-      if (d2 <= radius_m * radius_m * (1.0 + 1e-12))
-        kernel[static_cast<std::size_t>((dy + r) * k + dx + r)] = static_cast<float>(std::exp(-d2 * inv2s2));
-    }
-
   for (const std::size_t idx : cells)
   {
     const std::size_t cy = idx / w, cx = idx % w;  // r + 1 <= cx < width - r - 1: no bounds checks
     for (int dy = -r; dy <= r; ++dy)
     {
-      float* row = &t.values_[(cy + dy) * w + cx - r];
+      float* row = &values_[(cy + dy) * w + cx - r];
       const float* krow = &kernel[static_cast<std::size_t>((dy + r) * k)];
       for (int i = 0; i < k; ++i) row[i] = std::max(row[i], krow[i]);
     }
   }
-  return t;
 }
 
 void appendWorldPoints(const linemap::Pose2& laser_pose, const std::vector<Vec2>& laser_points,

@@ -300,25 +300,33 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
   return out;
 }
 
-StructureRuns structureRuns(const std::vector<Vec2>& feet, const std::vector<double>& headings, double cell)
+namespace
 {
-  if (feet.size() != headings.size())
-    throw std::invalid_argument("structure length: " + std::to_string(feet.size()) + " feet but " +
-                                std::to_string(headings.size()) + " headings");
-  if (!(cell > 0.0) || !std::isfinite(cell))
-    throw std::invalid_argument("structure length: cell size " + std::to_string(cell) + " must be positive");
-  const double step = kPi / kHeadingClasses, across = kAcrossShare * cell;
-  struct Keyed
+/// A structure foot's cell: heading class, column along it and cell across it.
+struct Keyed
+{
+  int heading_class;
+  std::int64_t along, across;
+  std::uint32_t index;
+  bool operator<(const Keyed& o) const
   {
-    int heading_class;
-    std::int64_t along, across;
-    std::uint32_t index;
-    bool operator<(const Keyed& o) const
-    {
-      return std::tie(heading_class, along, across, index) <
-             std::tie(o.heading_class, o.along, o.across, o.index);
-    }
-  };
+    return std::tie(heading_class, along, across, index) <
+           std::tie(o.heading_class, o.along, o.across, o.index);
+  }
+};
+
+/// A run of adjacent occupied cells across, in one column.
+struct Run
+{
+  int heading_class;
+  std::int64_t along, low, high;
+};
+
+/// The feet's cells, sorted by heading class, column, then across.
+std::vector<Keyed> keyedFeet(const std::vector<Vec2>& feet, const std::vector<double>& headings, double cell,
+                             double step)
+{
+  const double across = kAcrossShare * cell;
   std::vector<Keyed> keyed(feet.size());
   for (std::size_t i = 0; i < feet.size(); ++i)
   {
@@ -331,15 +339,15 @@ StructureRuns structureRuns(const std::vector<Vec2>& feet, const std::vector<dou
                 floorIndex(u.x() * feet[i].y() - u.y() * feet[i].x(), across), static_cast<std::uint32_t>(i)};
   }
   tbb::parallel_sort(keyed.begin(), keyed.end());
+  return keyed;
+}
 
-  // Runs: adjacent occupied cells across, in one column along the heading class.
-  StructureRuns out;
-  out.run_of.resize(feet.size());
-  struct Run
-  {
-    int heading_class;
-    std::int64_t along, low, high;
-  };
+/// Runs: adjacent occupied cells across, in one column along the heading class; sets out.run_of and
+/// out.width.
+std::vector<Run> findRuns(const std::vector<Keyed>& keyed, const std::vector<double>& headings, double cell,
+                          double step, StructureRuns& out)
+{
+  out.run_of.resize(keyed.size());
   std::vector<Run> runs;
   for (std::size_t b = 0; b < keyed.size();)
   {
@@ -359,8 +367,13 @@ StructureRuns structureRuns(const std::vector<Vec2>& feet, const std::vector<dou
     out.width.push_back(cell / std::cos(0.5 * std::atan2(sin_sum, cos_sum)));
     b = e;
   }
-  // Each run's runs in the column before (same class) touching it across; runs are sorted by class,
-  // column, then across.
+  return runs;
+}
+
+/// Each run's runs in the column before (same class) touching it across; runs are sorted by class,
+/// column, then across.
+void linkColumns(const std::vector<Run>& runs, StructureRuns& out)
+{
   out.before_start.push_back(0);
   std::size_t previous_begin = 0, previous_end = 0;
   for (std::size_t r = 0; r < runs.size();)
@@ -383,6 +396,21 @@ StructureRuns structureRuns(const std::vector<Vec2>& feet, const std::vector<dou
     previous_end = column_end;
     r = column_end;
   }
+}
+}  // namespace
+
+StructureRuns structureRuns(const std::vector<Vec2>& feet, const std::vector<double>& headings, double cell)
+{
+  if (feet.size() != headings.size())
+    throw std::invalid_argument("structure length: " + std::to_string(feet.size()) + " feet but " +
+                                std::to_string(headings.size()) + " headings");
+  if (!(cell > 0.0) || !std::isfinite(cell))
+    throw std::invalid_argument("structure length: cell size " + std::to_string(cell) + " must be positive");
+  const double step = kPi / kHeadingClasses;
+  const std::vector<Keyed> keyed = keyedFeet(feet, headings, cell, step);
+  StructureRuns out;
+  const std::vector<Run> runs = findRuns(keyed, headings, cell, step, out);
+  linkColumns(runs, out);
   return out;
 }
 

@@ -244,7 +244,28 @@ class TruthParser
   GroundTruth parse(const YAML::Node& root) const
   {
     if (!root.IsMap()) fail("(top level)", "expected a mapping", root);
-    const YAML::Node format = require(root, "format", "format");
+    checkFormat(require(root, "format", "format"));
+    GroundTruth t;
+    t.world = require(root, "world", "world").as<std::string>();
+    t.laser = parseLaser(require(root, "laser", "laser"));
+    t.base_to_laser = pose(require(root, "base_to_laser", "base_to_laser"), "base_to_laser");
+    if (root["min_beams"]) t.min_beams = count(root["min_beams"], "min_beams");
+    parseSolids(require(root, "solids", "solids"), t);
+    const YAML::Node walls = require(root, "walls", "walls");
+    if (!walls.IsSequence()) fail("walls", "expected a list", walls);
+    for (std::size_t i = 0; i < walls.size(); ++i)
+      t.walls.push_back(segment(walls[i], "walls[" + std::to_string(i) + "]"));
+    if (const YAML::Node curves = root["curves"]) parseCurves(curves, t);
+    const YAML::Node scans = require(root, "scans", "scans");
+    if (!scans.IsSequence()) fail("scans", "expected a list", scans);
+    for (std::size_t i = 0; i < scans.size(); ++i)
+      t.scans.push_back(parseScan(scans[i], "scans[" + std::to_string(i) + "]", t.walls.size()));
+    return t;
+  }
+
+ private:
+  void checkFormat(const YAML::Node& format) const
+  {
     if (format.IsScalar() && format.Scalar() == "linemap_truth/1")
       fail("format",
            "linemap_truth/1 (thin, undirected walls) is no longer read: simulate the world again to write " +
@@ -255,22 +276,25 @@ class TruthParser
            std::string("expected ") + kTruthFormat + ", got '" + (format.IsScalar() ? format.Scalar() : "") +
                "'",
            format);
-    GroundTruth t;
-    t.world = require(root, "world", "world").as<std::string>();
-    const YAML::Node laser = require(root, "laser", "laser");
-    t.laser.beams = count(require(laser, "beams", "laser/beams"), "laser/beams");
-    t.laser.angle_min = number(require(laser, "angle_min", "laser/angle_min"), "laser/angle_min");
-    t.laser.angle_increment =
-        number(require(laser, "angle_increment", "laser/angle_increment"), "laser/angle_increment");
-    if (laser["range_min"]) t.laser.range_min = number(laser["range_min"], "laser/range_min");
-    t.laser.range_max = number(require(laser, "range_max", "laser/range_max"), "laser/range_max");
-    t.laser.sigma = number(require(laser, "sigma", "laser/sigma"), "laser/sigma");
-    t.laser.spurious = number(require(laser, "spurious", "laser/spurious"), "laser/spurious");
-    if (laser["sigma_slope"]) t.laser.sigma_slope = number(laser["sigma_slope"], "laser/sigma_slope");
-    t.base_to_laser = pose(require(root, "base_to_laser", "base_to_laser"), "base_to_laser");
-    if (root["min_beams"]) t.min_beams = count(root["min_beams"], "min_beams");
+  }
 
-    const YAML::Node solids = require(root, "solids", "solids");
+  TruthLaser parseLaser(const YAML::Node& laser) const
+  {
+    TruthLaser l;
+    l.beams = count(require(laser, "beams", "laser/beams"), "laser/beams");
+    l.angle_min = number(require(laser, "angle_min", "laser/angle_min"), "laser/angle_min");
+    l.angle_increment =
+        number(require(laser, "angle_increment", "laser/angle_increment"), "laser/angle_increment");
+    if (laser["range_min"]) l.range_min = number(laser["range_min"], "laser/range_min");
+    l.range_max = number(require(laser, "range_max", "laser/range_max"), "laser/range_max");
+    l.sigma = number(require(laser, "sigma", "laser/sigma"), "laser/sigma");
+    l.spurious = number(require(laser, "spurious", "laser/spurious"), "laser/spurious");
+    if (laser["sigma_slope"]) l.sigma_slope = number(laser["sigma_slope"], "laser/sigma_slope");
+    return l;
+  }
+
+  void parseSolids(const YAML::Node& solids, GroundTruth& t) const
+  {
     if (!solids.IsSequence()) fail("solids", "expected a list", solids);
     for (std::size_t i = 0; i < solids.size(); ++i)
     {
@@ -283,64 +307,55 @@ class TruthParser
       if (solids[i]["arc"]) w.arc = static_cast<int>(count(solids[i]["arc"], key + "/arc"));
       t.solids.push_back(w);
     }
-
-    const YAML::Node walls = require(root, "walls", "walls");
-    if (!walls.IsSequence()) fail("walls", "expected a list", walls);
-    for (std::size_t i = 0; i < walls.size(); ++i)
-      t.walls.push_back(segment(walls[i], "walls[" + std::to_string(i) + "]"));
-
-    if (const YAML::Node curves = root["curves"])
-    {
-      if (!curves.IsSequence()) fail("curves", "expected a list of lists of face indices", curves);
-      for (std::size_t i = 0; i < curves.size(); ++i)
-      {
-        const std::string key = "curves[" + std::to_string(i) + "]";
-        if (!curves[i].IsSequence()) fail(key, "expected a list of face indices", curves[i]);
-        t.curves.emplace_back();
-        for (std::size_t j = 0; j < curves[i].size(); ++j)
-        {
-          const std::size_t f = count(curves[i][j], key + "[" + std::to_string(j) + "]");
-          if (f >= t.walls.size())
-            fail(key + "[" + std::to_string(j) + "]",
-                 "index " + std::to_string(f) + " is beyond the " + std::to_string(t.walls.size()) + " walls",
-                 curves[i][j]);
-          t.curves.back().push_back(f);
-        }
-      }
-    }
-
-    const YAML::Node scans = require(root, "scans", "scans");
-    if (!scans.IsSequence()) fail("scans", "expected a list", scans);
-    for (std::size_t i = 0; i < scans.size(); ++i)
-    {
-      const std::string key = "scans[" + std::to_string(i) + "]";
-      const YAML::Node s = scans[i];
-      if (!s.IsMap()) fail(key, "expected a mapping with stamp, pose, visible", s);
-      TruthScan ts;
-      ts.stamp = number(require(s, "stamp", key + "/stamp"), key + "/stamp");
-      ts.pose = pose(require(s, "pose", key + "/pose"), key + "/pose");
-      const YAML::Node vis = require(s, "visible", key + "/visible");
-      if (!vis.IsSequence()) fail(key + "/visible", "expected a list", vis);
-      for (std::size_t j = 0; j < vis.size(); ++j)
-      {
-        const std::string vkey = key + "/visible[" + std::to_string(j) + "]";
-        VisibleWall v;
-        v.wall = count(require(vis[j], "wall", vkey + "/wall"), vkey + "/wall");
-        if (v.wall >= t.walls.size())
-          fail(vkey + "/wall",
-               "index " + std::to_string(v.wall) + " is beyond the " + std::to_string(t.walls.size()) +
-                   " walls",
-               vis[j]);
-        v.segment = segment(require(vis[j], "segment", vkey + "/segment"), vkey + "/segment");
-        v.beams = count(require(vis[j], "beams", vkey + "/beams"), vkey + "/beams");
-        ts.visible.push_back(v);
-      }
-      t.scans.push_back(std::move(ts));
-    }
-    return t;
   }
 
- private:
+  /// A face index below `walls`.
+  std::size_t faceIndex(const YAML::Node& n, const std::string& key, std::size_t walls) const
+  {
+    const std::size_t f = count(n, key);
+    if (f >= walls)
+      fail(key, "index " + std::to_string(f) + " is beyond the " + std::to_string(walls) + " walls", n);
+    return f;
+  }
+
+  void parseCurves(const YAML::Node& curves, GroundTruth& t) const
+  {
+    if (!curves.IsSequence()) fail("curves", "expected a list of lists of face indices", curves);
+    for (std::size_t i = 0; i < curves.size(); ++i)
+    {
+      const std::string key = "curves[" + std::to_string(i) + "]";
+      if (!curves[i].IsSequence()) fail(key, "expected a list of face indices", curves[i]);
+      t.curves.emplace_back();
+      for (std::size_t j = 0; j < curves[i].size(); ++j)
+        t.curves.back().push_back(
+            faceIndex(curves[i][j], key + "[" + std::to_string(j) + "]", t.walls.size()));
+    }
+  }
+
+  TruthScan parseScan(const YAML::Node& s, const std::string& key, std::size_t walls) const
+  {
+    if (!s.IsMap()) fail(key, "expected a mapping with stamp, pose, visible", s);
+    TruthScan ts;
+    ts.stamp = number(require(s, "stamp", key + "/stamp"), key + "/stamp");
+    ts.pose = pose(require(s, "pose", key + "/pose"), key + "/pose");
+    const YAML::Node vis = require(s, "visible", key + "/visible");
+    if (!vis.IsSequence()) fail(key + "/visible", "expected a list", vis);
+    for (std::size_t j = 0; j < vis.size(); ++j)
+    {
+      const std::string vkey = key + "/visible[" + std::to_string(j) + "]";
+      VisibleWall v;
+      v.wall = count(require(vis[j], "wall", vkey + "/wall"), vkey + "/wall");
+      if (v.wall >= walls)
+        fail(vkey + "/wall",
+             "index " + std::to_string(v.wall) + " is beyond the " + std::to_string(walls) + " walls",
+             vis[j]);
+      v.segment = segment(require(vis[j], "segment", vkey + "/segment"), vkey + "/segment");
+      v.beams = count(require(vis[j], "beams", vkey + "/beams"), vkey + "/beams");
+      ts.visible.push_back(v);
+    }
+    return ts;
+  }
+
   std::string file_;
 };
 

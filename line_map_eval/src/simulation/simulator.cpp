@@ -214,6 +214,55 @@ World applyOptions(const World& world, const SimulationOptions& o)
   return w;
 }
 
+namespace
+{
+/// The recording's sensor geometry, mounting and source, before any scan.
+void beginRecording(const World& w, Recording& rec)
+{
+  const LaserModel& laser = w.laser;
+  rec.geometry.angle_min = laser.angleMin();
+  rec.geometry.angle_increment = laser.angleIncrement();
+  rec.geometry.beam_count = laser.beams;
+  rec.geometry.range_min = laser.range_min;
+  rec.geometry.range_max = laser.range_max;
+  rec.base_to_laser = laser.mounting;
+  rec.source = "simulated world " + w.name + " (" + w.source + "), seed " + std::to_string(w.seed);
+}
+
+/// The ground truth's sensor, solids, faces and curves, before any scan.
+void beginTruth(const World& w, GroundTruth& gt)
+{
+  const LaserModel& laser = w.laser;
+  gt.world = w.name;
+  gt.laser = {laser.beams,     laser.angleMin(), laser.angleIncrement(), laser.range_min,
+              laser.range_max, laser.sigma,      laser.spurious,         laser.sigma_slope};
+  gt.base_to_laser = laser.mounting;
+  gt.min_beams = w.min_visible_beams;
+  gt.solids = w.walls;
+  const std::vector<WallFace> faces = wallFaces(w.walls);
+  gt.walls = faceSegments(faces);
+  gt.curves = curveFaces(w.walls, faces);
+}
+
+/// The faces one scan sees. Visibility is geometric: beams whose noiseless reading would be valid.
+std::vector<VisibleWall> visibleFaces(const std::vector<RayHit>& hits, const Pose2& laser_pose,
+                                      const World& w, const GroundTruth& gt)
+{
+  const LaserModel& laser = w.laser;
+  std::vector<int> hit_wall(laser.beams);
+  std::vector<double> hit_range(laser.beams);
+  for (std::size_t i = 0; i < laser.beams; ++i)
+  {
+    const bool valid =
+        hits[i].face >= 0 && hits[i].range >= laser.range_min && hits[i].range < laser.range_max;
+    hit_wall[i] = valid ? hits[i].face : -1;
+    hit_range[i] = hits[i].range;
+  }
+  return visibleWallPieces(gt.walls, laser_pose, laser.angleMin(), laser.angleIncrement(), hit_wall,
+                           hit_range, w.min_visible_beams, gt.curves);
+}
+}  // namespace
+
 SimulationResult simulate(const World& input, const SimulationOptions& options)
 {
   SimulationResult res;
@@ -237,28 +286,11 @@ SimulationResult simulate(const World& input, const SimulationOptions& options)
   const std::vector<Pose2> odom = driftOdometry(truth_base, w.odometry, odom_rng);
 
   Recording& rec = res.recording;
-  rec.geometry.angle_min = laser.angleMin();
-  rec.geometry.angle_increment = laser.angleIncrement();
-  rec.geometry.beam_count = laser.beams;
-  rec.geometry.range_min = laser.range_min;
-  rec.geometry.range_max = laser.range_max;
-  rec.base_to_laser = laser.mounting;
-  rec.source = "simulated world " + w.name + " (" + w.source + "), seed " + std::to_string(w.seed);
-
   GroundTruth& gt = res.truth;
-  gt.world = w.name;
-  gt.laser = {laser.beams,     laser.angleMin(), laser.angleIncrement(), laser.range_min,
-              laser.range_max, laser.sigma,      laser.spurious,         laser.sigma_slope};
-  gt.base_to_laser = laser.mounting;
-  gt.min_beams = w.min_visible_beams;
-  gt.solids = w.walls;
-  const std::vector<WallFace> faces = wallFaces(w.walls);
-  gt.walls = faceSegments(faces);
-  gt.curves = curveFaces(w.walls, faces);
+  beginRecording(w, rec);
+  beginTruth(w, gt);
 
   Random laser_rng(w.seed, 1);
-  std::vector<int> hit_wall(laser.beams);
-  std::vector<double> hit_range(laser.beams);
   for (std::size_t k = 0; k < count; ++k)
   {
     const double stamp = options.start_time + static_cast<double>(k) * period;
@@ -272,18 +304,7 @@ SimulationResult simulate(const World& input, const SimulationOptions& options)
     scan.odom = odom[k];
     rec.scans.push_back(std::move(scan));
     rec.keyframes.push_back({k, truth_base[k]});
-
-    // Visibility is geometric: beams whose noiseless reading would be valid.
-    for (std::size_t i = 0; i < laser.beams; ++i)
-    {
-      const bool valid =
-          hits[i].face >= 0 && hits[i].range >= laser.range_min && hits[i].range < laser.range_max;
-      hit_wall[i] = valid ? hits[i].face : -1;
-      hit_range[i] = hits[i].range;
-    }
-    gt.scans.push_back({stamp, laser_pose,
-                        visibleWallPieces(gt.walls, laser_pose, laser.angleMin(), laser.angleIncrement(),
-                                          hit_wall, hit_range, w.min_visible_beams, gt.curves)});
+    gt.scans.push_back({stamp, laser_pose, visibleFaces(hits, laser_pose, w, gt)});
     if (options.on_scan) options.on_scan(k + 1, count);
   }
   return res;

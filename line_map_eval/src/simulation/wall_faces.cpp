@@ -114,9 +114,7 @@ Segment2 joined(const Segment2& a, const Segment2& b)
   const double t0 = u.dot(b.start - a.start), t1 = u.dot(b.end - a.start);
   return {t0 < 0.0 ? b.start : a.start, t1 > a.length() ? b.end : a.end};
 }
-}  // namespace
-
-std::vector<WallFace> wallFaces(const std::vector<Wall>& walls)
+void checkWalls(const std::vector<Wall>& walls)
 {
   for (std::size_t i = 0; i < walls.size(); ++i)
   {
@@ -128,10 +126,13 @@ std::vector<WallFace> wallFaces(const std::vector<Wall>& walls)
       throw std::invalid_argument("wall faces: walls[" + std::to_string(i) + "] has thickness " +
                                   std::to_string(w.thickness) + " (must be finite and >= 0)");
   }
+}
 
-  // Solids, and the candidate faces in clockwise order (outward normal on the left).
-  std::vector<Rectangle> solids(walls.size());
-  std::vector<bool> solid(walls.size(), false);
+/// The solids of the thick walls (`solid` marks them) and the candidate faces in clockwise order
+/// (outward normal on the left).
+std::vector<WallFace> candidateFaces(const std::vector<Wall>& walls, std::vector<Rectangle>& solids,
+                                     std::vector<bool>& solid)
+{
   std::vector<WallFace> candidates;
   for (std::size_t i = 0; i < walls.size(); ++i)
   {
@@ -164,15 +165,20 @@ std::vector<WallFace> wallFaces(const std::vector<Wall>& walls)
       if (!(k == 1 && after != kNone) && !(k == 3 && before != kNone))  // a mitred end has no cap
         candidates.push_back({Segment2(solids[i][k], solids[i][(k + 1) % 4]), i});
   }
+  return candidates;
+}
 
-  // Remove what lies inside other solids.
+/// The candidates without what lies inside other solids.
+std::vector<WallFace> outsideSolids(const std::vector<WallFace>& candidates,
+                                    const std::vector<Rectangle>& solids, const std::vector<bool>& solid)
+{
   std::vector<WallFace> faces;
   std::vector<std::pair<double, double>> removed;
   for (const WallFace& f : candidates)
   {
     const Vec2 p = f.segment.start, d = f.segment.end - f.segment.start;
     removed.clear();
-    for (std::size_t j = 0; j < walls.size(); ++j)
+    for (std::size_t j = 0; j < solids.size(); ++j)
     {
       if (!solid[j] || j == f.wall) continue;
       const auto in = insideInterval(p, d, solids[j]);
@@ -191,9 +197,13 @@ std::vector<WallFace> wallFaces(const std::vector<Wall>& walls)
       if (k < removed.size()) from = std::max(from, removed[k].second);
     }
   }
+  return faces;
+}
 
-  // Join collinear pieces of one direction (a wall continued by another, an end cap flush with a
-  // neighbour's side) until none is left to join.
+/// Joins collinear pieces of one direction (a wall continued by another, an end cap flush with a
+/// neighbour's side) until none is left to join.
+void joinCollinear(std::vector<WallFace>& faces)
+{
   for (bool changed = true; changed;)
   {
     changed = false;
@@ -209,6 +219,17 @@ std::vector<WallFace> wallFaces(const std::vector<Wall>& walls)
         else
           ++j;
   }
+}
+}  // namespace
+
+std::vector<WallFace> wallFaces(const std::vector<Wall>& walls)
+{
+  checkWalls(walls);
+  std::vector<Rectangle> solids(walls.size());
+  std::vector<bool> solid(walls.size(), false);
+  const std::vector<WallFace> candidates = candidateFaces(walls, solids, solid);
+  std::vector<WallFace> faces = outsideSolids(candidates, solids, solid);
+  joinCollinear(faces);
   return faces;
 }
 

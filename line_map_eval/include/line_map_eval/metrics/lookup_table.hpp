@@ -79,6 +79,11 @@ class LookupTable
   std::size_t occupiedCells() const { return occupied_; }
 
  private:
+  /// The distinct cells of the points (window-local indices); sets occupied_.
+  std::vector<std::size_t> hitCells(const std::vector<Vec2>& world_points);
+  /// Raises every cell around the given ones to the kernel (2 r + 1 square) value.
+  void stamp(const std::vector<std::size_t>& cells, const std::vector<float>& kernel, int r);
+
   LookupTableParams params_;
   int x0_ = 0, y0_ = 0, width_ = 0, height_ = 0;
   std::size_t occupied_ = 0;

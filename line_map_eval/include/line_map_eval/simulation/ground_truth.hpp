@@ -44,12 +44,9 @@ struct TruthScan
 struct TruthLaser
 {
   std::size_t beams = 0;
-  double angle_min = 0.0;
-  double angle_increment = 0.0;
-  double range_min = 0.0;
-  double range_max = 0.0;
-  double sigma = 0.0;
-  double spurious = 0.0;
+  double angle_min = 0.0, angle_increment = 0.0;
+  double range_min = 0.0, range_max = 0.0;
+  double sigma = 0.0, spurious = 0.0;
   double sigma_slope = 0.0;  ///< range noise std sigma + sigma_slope r (key absent: 0)
 };
 

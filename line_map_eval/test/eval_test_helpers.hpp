@@ -1,0 +1,51 @@
+// What several line_map_eval tests share: a scratch directory and a check on error messages.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <initializer_list>
+#include <stdexcept>
+#include <string>
+
+namespace line_map_eval::test_helpers
+{
+/// A fresh directory /tmp/PREFIX_XXXXXX, removed with its contents at the end of the scope.
+class TempDir
+{
+ public:
+  explicit TempDir(const std::string& prefix = "line_map_eval_test")
+  {
+    std::string tmpl = "/tmp/" + prefix + "_XXXXXX";
+    const char* d = mkdtemp(&tmpl[0]);
+    if (!d) throw std::runtime_error("mkdtemp failed");
+    path_ = d;
+  }
+  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const std::string& path() const { return path_; }
+  /// The path of `name` inside the directory.
+  std::string file(const std::string& name) const { return path_ + "/" + name; }
+  /// Writes `content` to `name` inside the directory and returns its path.
+  std::string write(const std::string& name, const std::string& content) const
+  {
+    const std::string p = file(name);
+    std::ofstream(p, std::ios::binary) << content;
+    return p;
+  }
+
+ private:
+  std::string path_;
+};
+
+/// Expects `message` to contain every one of `parts`.
+inline void expectMentions(const std::string& message, std::initializer_list<const char*> parts)
+{
+  for (const char* part : parts)
+    EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' in: " << message;
+}
+}  // namespace line_map_eval::test_helpers
