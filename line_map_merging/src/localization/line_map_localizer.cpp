@@ -175,22 +175,12 @@ LocalizerResult LineMapLocalizer::addScan(const LocalizerScan& in)
 {
   const double start = nowMs();
   ++counters_.scans;
-  if (time_jumps_.observe(0.0, in.stamp))
+  if (!acceptStamp(in.stamp))
   {
-    // The clock jumped back (a replayed bag): the odometry before it tells nothing about the motion.
-    ++counters_.time_jumps;
-    last_odom_.reset();
-  }
-  else if (have_stamp_ && !(in.stamp > last_stamp_))
-  {
-    ++counters_.rejected;
     LocalizerResult r = last_;
     r.outcome = LocalizerOutcome::kRejected;
     return r;
   }
-  have_stamp_ = true;
-  last_stamp_ = in.stamp;
-
   LocalizerScan scan;
   scan.stamp = in.stamp;
   scan.sensor = in.sensor.allFinite() ? in.sensor : Vec2::Zero();
@@ -198,81 +188,108 @@ LocalizerResult LineMapLocalizer::addScan(const LocalizerScan& in)
   scan.points.reserve(in.points.size());
   for (const auto& p : in.points)
     if (p.allFinite() && p.squaredNorm() <= max2 && p.squaredNorm() > 0.0) scan.points.push_back(p);
-  std::optional<Pose2> odom = in.odom && finitePose(*in.odom) ? in.odom : std::nullopt;
-  std::optional<Pose2> step, jump;
+  const OdometryMotion motion = odometryMotion(in.odom);
+  const LocalizerResult result =
+      tracking_ ? trackStep(scan, motion.step, motion.jump) : globalStep(scan, motion.step);
+  counters_.last_ms = nowMs() - start;
+  last_ = result;
+  return result;
+}
+
+bool LineMapLocalizer::acceptStamp(double stamp)
+{
+  if (time_jumps_.observe(0.0, stamp))
+  {
+    // The clock jumped back (a replayed bag): the odometry before it tells nothing about the motion.
+    ++counters_.time_jumps;
+    last_odom_.reset();
+  }
+  else if (have_stamp_ && !(stamp > last_stamp_))
+  {
+    ++counters_.rejected;
+    return false;
+  }
+  have_stamp_ = true;
+  last_stamp_ = stamp;
+  return true;
+}
+
+LineMapLocalizer::OdometryMotion LineMapLocalizer::odometryMotion(const std::optional<Pose2>& reading)
+{
+  OdometryMotion motion;
+  std::optional<Pose2> odom = reading && finitePose(*reading) ? reading : std::nullopt;
   if (odom && last_odom_)
   {
     const Pose2 s = last_odom_->inverse() * *odom;
     if (std::hypot(s.x, s.y) <= params_.max_odometry_step && std::fabs(s.theta) <= params_.max_odometry_turn)
-      step = s;
+      motion.step = s;
     else
     {
       ++counters_.odometry_jumps;
-      jump = s;
+      motion.jump = s;
     }
   }
   if (odom) last_odom_ = odom;
+  return motion;
+}
 
+LocalizerResult LineMapLocalizer::trackStep(const LocalizerScan& scan, const std::optional<Pose2>& step,
+                                            const std::optional<Pose2>& jump)
+{
   LocalizerResult result;
-  if (!tracking_)
-    result = globalStep(scan, step);
-  else
+  const Pose2 predicted = step ? pose_ * *step : pose_;
+  const PosePrior prior = odometryPrior(predicted, step);
+  result.pose = predicted;
+  result.covariance = prior.information.inverse();
+  result.outcome = LocalizerOutcome::kPredicted;
+  bool poor = true;
+  if (scan.points.size() < params_.min_points)
+    ++counters_.few_points;
+  else if (!index_.empty())
   {
-    const Pose2 predicted = step ? pose_ * *step : pose_;
-    const PosePrior prior = odometryPrior(predicted, step);
-    result.pose = predicted;
-    result.covariance = prior.information.inverse();
-    result.outcome = LocalizerOutcome::kPredicted;
-    bool poor = true;
-    if (scan.points.size() < params_.min_points)
-      ++counters_.few_points;
-    else if (!index_.empty())
+    SegmentMatch m = track(scan, predicted, prior, true);
+    if (jump) matchAcrossJump(scan, *jump, m);
+    result.score = m.score;
+    result.inlier_share = m.inlier_share;
+    poor = m.inlier_share < params_.lost_inlier_share;
+    if (m.valid && !poor)
     {
-      SegmentMatch m = track(scan, predicted, prior, true);
-      if (jump)
-      {
-        // The odometry jumped: a glitch, or real motion across a gap in the data. Both are searched
-        // widely and the better match wins.
-        for (const Pose2& centre : {pose_ * *jump, pose_})
-        {
-          const auto found =
-              correlativeSearch(global_.fineField(), scan.points, centre, params_.jump_window, 1);
-          if (found.empty()) continue;
-          const SegmentMatch c = matchToSegments(index_, scan.points, found.front().pose, std::nullopt,
-                                                 params_.match, scan.sensor);
-          if (c.valid && c.inlier_share > m.inlier_share) m = c;
-        }
-      }
-      result.score = m.score;
-      result.inlier_share = m.inlier_share;
-      poor = m.inlier_share < params_.lost_inlier_share;
-      if (m.valid && !poor)
-      {
-        result.pose = m.pose;
-        result.covariance = m.covariance;
-        result.outcome = LocalizerOutcome::kTracked;
-      }
+      result.pose = m.pose;
+      result.covariance = m.covariance;
+      result.outcome = LocalizerOutcome::kTracked;
     }
-    pose_ = result.pose;
-    result.localized = true;
-    // A scan without points says nothing about being lost; a poor one does, once it persists.
-    if (scan.points.size() >= params_.min_points) poor_in_row_ = poor ? poor_in_row_ + 1 : 0;
-    if (result.outcome == LocalizerOutcome::kTracked)
-      ++counters_.tracked;
-    else
-      ++counters_.predicted;
-    if (poor_in_row_ >= params_.lost_scans && !index_.empty())
-    {
-      ++counters_.lost;
-      startGlobalLocalization();
-      result.localized = false;
-    }
-    else if (scan.points.size() >= params_.min_points && !index_.empty())
-      challengeTrack(scan, step, result);
   }
-  counters_.last_ms = nowMs() - start;
-  last_ = result;
+  pose_ = result.pose;
+  result.localized = true;
+  // A scan without points says nothing about being lost; a poor one does, once it persists.
+  if (scan.points.size() >= params_.min_points) poor_in_row_ = poor ? poor_in_row_ + 1 : 0;
+  if (result.outcome == LocalizerOutcome::kTracked)
+    ++counters_.tracked;
+  else
+    ++counters_.predicted;
+  if (poor_in_row_ >= params_.lost_scans && !index_.empty())
+  {
+    ++counters_.lost;
+    startGlobalLocalization();
+    result.localized = false;
+  }
+  else if (scan.points.size() >= params_.min_points && !index_.empty())
+    challengeTrack(scan, step, result);
   return result;
+}
+
+void LineMapLocalizer::matchAcrossJump(const LocalizerScan& scan, const Pose2& jump, SegmentMatch& best) const
+{
+  // The odometry jumped: a glitch, or real motion across a gap in the data. Both are searched
+  // widely and the better match wins.
+  for (const Pose2& centre : {pose_ * jump, pose_})
+  {
+    const auto found = correlativeSearch(global_.fineField(), scan.points, centre, params_.jump_window, 1);
+    if (found.empty()) continue;
+    const SegmentMatch c =
+        matchToSegments(index_, scan.points, found.front().pose, std::nullopt, params_.match, scan.sensor);
+    if (c.valid && c.inlier_share > best.inlier_share) best = c;
+  }
 }
 
 LocalizerResult LineMapLocalizer::globalStep(const LocalizerScan& scan, const std::optional<Pose2>& step)

@@ -512,19 +512,31 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
     path_at_closure_ = keyframes_[k].path;
     return;
   }
-  // It disagrees with the estimate. A large disagreement is the drift a closure is for, or a false
-  // match: it must be corroborated by a second closure, from another keyframe, implying the same
-  // correction of the current pose (a false match rarely repeats itself consistently).
-  const Pose2 implied = graph_.node(j) * match.pose;  // where this closure puts keyframe k
   std::vector<std::size_t> added{edge};
-  if (size > params_.loop_corroborate_xy || std::fabs(disagreement.theta) > params_.loop_corroborate_theta)
+  if (!admitDisagreeing(j, k, e, match.pose, size, disagreement.theta, added)) return;
+  if (!optimizeKeeping(added)) return;
+  counters_.loops_accepted += added.size();
+  counters_.loops_degenerate += shape.degenerate ? 1 : 0;
+  graph_optimized_ = true;
+  path_at_closure_ = keyframes_[k].path;
+}
+
+bool LaserSlam::admitDisagreeing(std::size_t j, std::size_t k, const PoseGraphEdge& e, const Pose2& relative,
+                                 double size, double theta_error, std::vector<std::size_t>& added)
+{
+  // A large disagreement is the drift a closure is for, or a false match: it must be corroborated by a
+  // second closure, from another keyframe, implying the same correction of the current pose (a false
+  // match rarely repeats itself consistently).
+  const std::size_t edge = added.front();
+  const Pose2 implied = graph_.node(j) * relative;  // where this closure puts keyframe k
+  if (size > params_.loop_corroborate_xy || std::fabs(theta_error) > params_.loop_corroborate_theta)
   {
     if (!corroborates(k, implied))
     {
       graph_.removeEdge(edge);
       pending_ = PendingClosure{e, implied, k};
       ++counters_.loops_pending;
-      return;
+      return false;
     }
     // Both go in, under a loss wide enough for the correction they agree on.
     const double scale = std::max(params_.loop_loss_scale, 2.0 * size / params_.loop_sigma_xy);
@@ -537,11 +549,7 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
   else if (params_.loop_scale_by_disagreement > 0.0)
     graph_.setLossScale(edge, std::max(params_.loop_loss_scale,
                                        params_.loop_scale_by_disagreement * size / params_.loop_sigma_xy));
-  if (!optimizeKeeping(added)) return;
-  counters_.loops_accepted += added.size();
-  counters_.loops_degenerate += shape.degenerate ? 1 : 0;
-  graph_optimized_ = true;
-  path_at_closure_ = keyframes_[k].path;
+  return true;
 }
 
 bool LaserSlam::corroborates(std::size_t k, const Pose2& implied) const
