@@ -119,11 +119,7 @@ class Incremental : public Extractor
   PrefixSums prefix_;
 };
 
-std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)
-{
-  return std::make_unique<Incremental>(ps);
-}
-const ExtractorRegistration registration("incremental", 50, &make);
+const ExtractorRegistration registration("incremental", 50, &makeExtractorOf<Incremental>);
 }  // namespace
 
 }  // namespace line_extraction

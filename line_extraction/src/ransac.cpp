@@ -158,10 +158,7 @@ void RansacExtractor::extractRange(const PreparedScan& scan, PointRange range, E
 
 namespace
 {
-const ExtractorRegistration kRegistration("ransac", 80,
-                                          [](const linemap::ParamSet& params) {
-                                            return std::unique_ptr<Extractor>(new RansacExtractor(params));
-                                          });
+const ExtractorRegistration kRegistration("ransac", 80, &makeExtractorOf<RansacExtractor>);
 }  // namespace
 
 }  // namespace line_extraction

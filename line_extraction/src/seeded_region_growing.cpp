@@ -154,11 +154,7 @@ class SeededRegionGrowing : public Extractor
   PrefixSums prefix_;
 };
 
-std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)
-{
-  return std::make_unique<SeededRegionGrowing>(ps);
-}
-const ExtractorRegistration registration("srg", 10, &make);
+const ExtractorRegistration registration("srg", 10, &makeExtractorOf<SeededRegionGrowing>);
 }  // namespace
 
 }  // namespace line_extraction

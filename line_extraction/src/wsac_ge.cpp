@@ -225,10 +225,7 @@ class WsacGeExtractor : public Extractor
   std::vector<int> run_start_, run_last_, run_count_;
 };
 
-const ExtractorRegistration kRegistration("wsac_ge", 100,
-                                          [](const linemap::ParamSet& params) {
-                                            return std::unique_ptr<Extractor>(new WsacGeExtractor(params));
-                                          });
+const ExtractorRegistration kRegistration("wsac_ge", 100, &makeExtractorOf<WsacGeExtractor>);
 
 }  // namespace
 }  // namespace line_extraction
