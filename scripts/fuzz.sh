@@ -43,7 +43,7 @@ if [ "${FUZZ_CAMPAIGN:-0}" = 1 ]; then
   case "${ASAN_OPTIONS:-}" in *malloc_context_size*) ;; *) export ASAN_OPTIONS="malloc_context_size=5${ASAN_OPTIONS:+:$ASAN_OPTIONS}" ;; esac
 fi
 CXXFLAGS=(-std=c++17 "${OPT[@]}" -g $SAN -I line_extraction/include -I line_map_merging/include
-  -I line_map_eval/include -I /usr/include/eigen3 -DLINEMAP_FUZZING)
+  -I line_map_eval/include -I line_extraction/fuzz -I /usr/include/eigen3 -DLINEMAP_FUZZING)
 export ASAN_OPTIONS="halt_on_error=1:print_stacktrace=1:detect_leaks=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
 

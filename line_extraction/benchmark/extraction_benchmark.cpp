@@ -376,25 +376,27 @@ std::pair<std::string, std::string> splitPair(const std::string& arg, const std:
   return {arg.substr(0, eq), arg.substr(eq + 1)};
 }
 
+/// `v` as a number >= 0; the error names `option`.
+double number(const std::string& option, const std::string& v)
+{
+  std::size_t used = 0;
+  double x = 0.0;
+  try
+  {
+    x = std::stod(v, &used);
+  }
+  catch (const std::exception&)
+  {
+    used = 0;
+  }
+  if (used != v.size() || !(x >= 0.0))
+    throw std::invalid_argument(option + ": '" + v + "' is not a number >= 0");
+  return x;
+}
+
 Options parseArgs(int argc, char** argv)
 {
   Options o;
-  auto number = [](const std::string& option, const std::string& v)
-  {
-    std::size_t used = 0;
-    double x = 0.0;
-    try
-    {
-      x = std::stod(v, &used);
-    }
-    catch (const std::exception&)
-    {
-      used = 0;
-    }
-    if (used != v.size() || !(x >= 0.0))
-      throw std::invalid_argument(option + ": '" + v + "' is not a number >= 0");
-    return x;
-  };
   for (int i = 1; i < argc; ++i)
   {
     const std::string a = argv[i];

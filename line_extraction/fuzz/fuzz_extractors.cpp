@@ -10,6 +10,7 @@
 #include <cstring>
 #include <vector>
 
+#include "fuzz_check.hpp"
 #include "line_extraction/extractor.hpp"
 #include "line_extraction/line_extractor.hpp"
 #include "linemap/params.hpp"
@@ -27,37 +28,9 @@ double fuzzDouble(FuzzedDataProvider& in, double lo, double hi)
   return v;
 }
 
-// A violated property: name it, then abort so that libFuzzer keeps the input.
-#define check(ok)                                                                       \
-  do                                                                                    \
-  {                                                                                     \
-    if (!(ok))                                                                          \
-    {                                                                                   \
-      std::fprintf(stderr, "property violated: %s (%s:%d)\n", #ok, __FILE__, __LINE__); \
-      std::abort();                                                                     \
-    }                                                                                   \
-  } while (false)
-}  // namespace
-
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
+// Ranges: runs of a wall-like linear ramp (so the algorithms find lines) mixed with raw floats.
+std::vector<float> fuzzRanges(FuzzedDataProvider& in)
 {
-  FuzzedDataProvider in(data, size);
-  const auto& names = line_extraction::extractorNames();
-  linemap::ParamSet params;
-  params.set("algorithm", names[in.ConsumeIntegralInRange<std::size_t>(0, names.size() - 1)]);
-  params.set("clustering", in.ConsumeBool() ? "true" : "false");
-  params.set("remove_isolated", in.ConsumeBool() ? "true" : "false");
-  params.set("merge", in.ConsumeBool() ? "true" : "false");
-  params.set("min_points", std::to_string(in.ConsumeIntegralInRange<int>(2, 8)));
-
-  line_extraction::ScanInput scan;
-  scan.angle_min = fuzzDouble(in, -M_PI, M_PI);
-  scan.angle_increment = fuzzDouble(in, 1e-4, 0.1);
-  scan.range_min = fuzzDouble(in, 0.0, 1.0);
-  scan.range_max = fuzzDouble(in, 0.5, 100.0);
-  const bool with_intensities = in.ConsumeIntegralInRange<int>(0, 15) == 0;
-
-  // Ranges: runs of a wall-like linear ramp (so the algorithms find lines) mixed with raw floats.
   const std::size_t count = in.ConsumeIntegralInRange<std::size_t>(0, 1100);
   std::vector<float> ranges;
   ranges.reserve(count);
@@ -84,6 +57,29 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         ranges.push_back(start + step * static_cast<float>(i) + ((i % 2) ? noise : -noise));
     }
   }
+  return ranges;
+}
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
+{
+  FuzzedDataProvider in(data, size);
+  const auto& names = line_extraction::extractorNames();
+  linemap::ParamSet params;
+  params.set("algorithm", names[in.ConsumeIntegralInRange<std::size_t>(0, names.size() - 1)]);
+  params.set("clustering", in.ConsumeBool() ? "true" : "false");
+  params.set("remove_isolated", in.ConsumeBool() ? "true" : "false");
+  params.set("merge", in.ConsumeBool() ? "true" : "false");
+  params.set("min_points", std::to_string(in.ConsumeIntegralInRange<int>(2, 8)));
+
+  line_extraction::ScanInput scan;
+  scan.angle_min = fuzzDouble(in, -M_PI, M_PI);
+  scan.angle_increment = fuzzDouble(in, 1e-4, 0.1);
+  scan.range_min = fuzzDouble(in, 0.0, 1.0);
+  scan.range_max = fuzzDouble(in, 0.5, 100.0);
+  const bool with_intensities = in.ConsumeIntegralInRange<int>(0, 15) == 0;
+
+  std::vector<float> ranges = fuzzRanges(in);
   scan.ranges = ranges.empty() ? nullptr : ranges.data();
   scan.count = ranges.size();
   std::vector<float> intensities;

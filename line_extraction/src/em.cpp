@@ -289,9 +289,7 @@ class EmExtractor : public Extractor
   std::vector<int> poor_, assignment_, members_;
 };
 
-const ExtractorRegistration kRegistration("em", 90,
-                                          [](const linemap::ParamSet& params)
-                                          { return std::unique_ptr<Extractor>(new EmExtractor(params)); });
+const ExtractorRegistration kRegistration("em", 90, &makeExtractorOf<EmExtractor>);
 
 }  // namespace
 }  // namespace line_extraction

@@ -195,9 +195,7 @@ void HoughExtractor::takeLine(const PreparedScan& scan, int cell, int votes, Ext
 
 namespace
 {
-const ExtractorRegistration kRegistration("hough", 70,
-                                          [](const linemap::ParamSet& params)
-                                          { return std::unique_ptr<Extractor>(new HoughExtractor(params)); });
+const ExtractorRegistration kRegistration("hough", 70, &makeExtractorOf<HoughExtractor>);
 }  // namespace
 
 }  // namespace line_extraction

@@ -115,11 +115,7 @@ class Iepf : public Extractor
   PrefixSums prefix_;
 };
 
-std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)
-{
-  return std::make_unique<Iepf>(ps);
-}
-const ExtractorRegistration registration("iepf", 30, &make);
+const ExtractorRegistration registration("iepf", 30, &makeExtractorOf<Iepf>);
 }  // namespace
 
 }  // namespace line_extraction

@@ -34,7 +34,6 @@ class Incremental : public Extractor
     segments_.clear();
     if (range.size() <= 0) return;
     prefix_.build(scan, range);
-    const auto& pts = scan.points;
     const double max_gap2 = max_gap_ * max_gap_;
     int i = range.begin;
     while (i + seed_points_ <= range.end)
@@ -55,34 +54,7 @@ class Incremental : public Extractor
         ++i;
         continue;
       }
-      int end = i + seed_points_;
-      int step = step_;
-      while (end < range.end)
-      {
-        // The block stops before the first gap.
-        int block_end = std::min(end + step, range.end);
-        for (int k = end; k < block_end; ++k)
-          if (scan.gapBefore(k, max_gap2)) block_end = k;
-        if (block_end == end) break;
-        LineSums grown = sums;
-        for (int k = end; k < block_end; ++k) grown.add(pts[k]);
-        LineNormal candidate;
-        if (fitNormal(grown, candidate) && allNear(scan, candidate, end, block_end) &&
-            candidate.distance(pts[i]) <= scan.tolerance(i, threshold_))
-        {
-          sums = grown;
-          line = candidate;
-          end = block_end;
-        }
-        else if (step > 1)
-        {
-          step = 1;
-        }
-        else
-        {
-          break;
-        }
-      }
+      const int end = grow(scan, range, i, sums);
       segments_.push_back({i, end});
       i = end;
     }
@@ -96,6 +68,43 @@ class Incremental : public Extractor
   }
 
  private:
+  /// The end of the segment seeded at i (its sums given), grown by blocks of `step` points
+  /// while the refitted line stays near every point and the seed's first one; single points once a
+  /// block fails.
+  int grow(const PreparedScan& scan, PointRange range, int i, LineSums sums) const
+  {
+    const auto& pts = scan.points;
+    const double max_gap2 = max_gap_ * max_gap_;
+    int end = i + seed_points_;
+    int step = step_;
+    while (end < range.end)
+    {
+      // The block stops before the first gap.
+      int block_end = std::min(end + step, range.end);
+      for (int k = end; k < block_end; ++k)
+        if (scan.gapBefore(k, max_gap2)) block_end = k;
+      if (block_end == end) break;
+      LineSums grown = sums;
+      for (int k = end; k < block_end; ++k) grown.add(pts[k]);
+      LineNormal candidate;
+      if (fitNormal(grown, candidate) && allNear(scan, candidate, end, block_end) &&
+          candidate.distance(pts[i]) <= scan.tolerance(i, threshold_))
+      {
+        sums = grown;
+        end = block_end;
+      }
+      else if (step > 1)
+      {
+        step = 1;
+      }
+      else
+      {
+        break;
+      }
+    }
+    return end;
+  }
+
   bool allNear(const PreparedScan& scan, const LineNormal& line, int begin, int end) const
   {
     for (int k = begin; k < end; ++k)
@@ -110,11 +119,7 @@ class Incremental : public Extractor
   PrefixSums prefix_;
 };
 
-std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)
-{
-  return std::make_unique<Incremental>(ps);
-}
-const ExtractorRegistration registration("incremental", 50, &make);
+const ExtractorRegistration registration("incremental", 50, &makeExtractorOf<Incremental>);
 }  // namespace
 
 }  // namespace line_extraction

@@ -109,11 +109,7 @@ class LineRegression : public Extractor
   ExtractionResult lines_;
 };
 
-std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)
-{
-  return std::make_unique<LineRegression>(ps);
-}
-const ExtractorRegistration registration("line_regression", 60, &make);
+const ExtractorRegistration registration("line_regression", 60, &makeExtractorOf<LineRegression>);
 }  // namespace
 
 }  // namespace line_extraction

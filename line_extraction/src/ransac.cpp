@@ -86,6 +86,34 @@ RansacExtractor::RansacExtractor(const linemap::ParamSet& params)
   if (min_inliers_ < 2) throw linemap::ParameterError("parameter 'ransac/min_inliers' must be >= 2");
 }
 
+int RansacExtractor::bestSample(const PreparedScan& scan, Vec2& best_normal, double& best_offset)
+{
+  const int n = static_cast<int>(remaining_.size());
+  int best_count = 0;
+  for (int t = 0; t < iterations_; ++t)
+  {
+    const int a = randomBelow(rng_, n);
+    int b = randomBelow(rng_, n - 1);
+    if (b >= a) ++b;
+    const Vec2& pa = scan.points[remaining_[a]];
+    const Vec2 d = scan.points[remaining_[b]] - pa;
+    const double len = d.norm();
+    if (len < 1e-6) continue;
+    const Vec2 normal(-d.y() / len, d.x() / len);
+    const double offset = normal.dot(pa);
+    int count = 0;
+    for (int idx : remaining_)
+      count += std::abs(normal.dot(scan.points[idx]) - offset) <= scan.tolerance(idx, inlier_distance_);
+    if (count > best_count)
+    {
+      best_count = count;
+      best_normal = normal;
+      best_offset = offset;
+    }
+  }
+  return best_count;
+}
+
 void RansacExtractor::extractRange(const PreparedScan& scan, PointRange range, ExtractionResult& out)
 {
   rng_.seed(seed_);
@@ -96,31 +124,9 @@ void RansacExtractor::extractRange(const PreparedScan& scan, PointRange range, E
 
   while (static_cast<int>(remaining_.size()) >= min_inliers)
   {
-    const int n = static_cast<int>(remaining_.size());
-    int best_count = 0;
     Vec2 best_normal = Vec2::Zero();
     double best_offset = 0.0;
-    for (int t = 0; t < iterations_; ++t)
-    {
-      const int a = randomBelow(rng_, n);
-      int b = randomBelow(rng_, n - 1);
-      if (b >= a) ++b;
-      const Vec2& pa = scan.points[remaining_[a]];
-      const Vec2 d = scan.points[remaining_[b]] - pa;
-      const double len = d.norm();
-      if (len < 1e-6) continue;
-      const Vec2 normal(-d.y() / len, d.x() / len);
-      const double offset = normal.dot(pa);
-      int count = 0;
-      for (int idx : remaining_)
-        count += std::abs(normal.dot(scan.points[idx]) - offset) <= scan.tolerance(idx, inlier_distance_);
-      if (count > best_count)
-      {
-        best_count = count;
-        best_normal = normal;
-        best_offset = offset;
-      }
-    }
+    const int best_count = bestSample(scan, best_normal, best_offset);
     if (best_count < min_inliers) break;
 
     // TLS refit on the consensus set, then take the inliers of the refitted line.
@@ -152,10 +158,7 @@ void RansacExtractor::extractRange(const PreparedScan& scan, PointRange range, E
 
 namespace
 {
-const ExtractorRegistration kRegistration("ransac", 80,
-                                          [](const linemap::ParamSet& params) {
-                                            return std::unique_ptr<Extractor>(new RansacExtractor(params));
-                                          });
+const ExtractorRegistration kRegistration("ransac", 80, &makeExtractorOf<RansacExtractor>);
 }  // namespace
 
 }  // namespace line_extraction

@@ -38,7 +38,6 @@ class SeededRegionGrowing : public Extractor
     if (range.size() < seed_points_) return;
     prefix_.build(scan, range);
     const auto& pts = scan.points;
-    const double max_gap2 = max_gap_ * max_gap_;
     int i = range.begin;
     while (i + seed_points_ <= range.end)
     {
@@ -49,42 +48,9 @@ class SeededRegionGrowing : public Extractor
         i = bad;
         continue;
       }
-      LineSums sums = prefix_.sums(i, i + seed_points_);
-      int fitted = seed_points_;  // points in the last fit
-      int end = i + seed_points_;
-      // Forward growth. Refitting after every point is what the method asks for;
-      // refitting once the segment has grown by half gives the same decisions on
-      // real walls at a fraction of the cost (a line from n points moves little
-      // when n/2 more points within line_distance of it are added).
-      while (end < range.end && !scan.gapBefore(end, max_gap2) &&
-             line.distance(pts[end]) <= scan.tolerance(end, line_distance_))
-      {
-        sums.add(pts[end++]);
-        if (2.0 * (sums.n - fitted) >= fitted)
-        {
-          fitNormal(sums, line);
-          fitted = static_cast<int>(sums.n);
-        }
-      }
-      if (sums.n != fitted)
-      {
-        fitNormal(sums, line);
-        fitted = static_cast<int>(sums.n);
-      }
-      // Backward growth.
-      int begin = i;
-      while (begin > range.begin && !scan.gapBefore(begin, max_gap2) &&
-             line.distance(pts[begin - 1]) <= scan.tolerance(begin - 1, line_distance_))
-      {
-        sums.add(pts[--begin]);
-        if (2.0 * (sums.n - fitted) >= fitted)
-        {
-          fitNormal(sums, line);
-          fitted = static_cast<int>(sums.n);
-        }
-      }
-      segments_.push_back({begin, end});
-      i = end;
+      const PointRange grown = grow(scan, range, i, line);
+      segments_.push_back(grown);
+      i = grown.end;
     }
     resolveOverlaps(scan, segments_, &prefix_);
     for (const PointRange& s : segments_)
@@ -100,6 +66,46 @@ class SeededRegionGrowing : public Extractor
   }
 
  private:
+  /// The seed [i, i + seed_points) on `line`, grown forward then backward while the next point lies
+  /// within line_distance of the line and no gap intervenes.
+  PointRange grow(const PreparedScan& scan, PointRange range, int i, LineNormal& line) const
+  {
+    const auto& pts = scan.points;
+    const double max_gap2 = max_gap_ * max_gap_;
+    LineSums sums = prefix_.sums(i, i + seed_points_);
+    int fitted = seed_points_;  // points in the last fit
+    int end = i + seed_points_;
+    // Forward growth. Refitting after every point is what the method asks for;
+    // refitting once the segment has grown by half gives the same decisions on
+    // real walls at a fraction of the cost (a line from n points moves little
+    // when n/2 more points within line_distance of it are added).
+    while (end < range.end && !scan.gapBefore(end, max_gap2) &&
+           line.distance(pts[end]) <= scan.tolerance(end, line_distance_))
+      absorb(sums, pts[end++], line, fitted);
+    if (sums.n != fitted)
+    {
+      fitNormal(sums, line);
+      fitted = static_cast<int>(sums.n);
+    }
+    // Backward growth.
+    int begin = i;
+    while (begin > range.begin && !scan.gapBefore(begin, max_gap2) &&
+           line.distance(pts[begin - 1]) <= scan.tolerance(begin - 1, line_distance_))
+      absorb(sums, pts[--begin], line, fitted);
+    return {begin, end};
+  }
+
+  /// Adds `p`, refitting `line` once the points have grown by half since the last fit (`fitted`).
+  static void absorb(LineSums& sums, const Vec2& p, LineNormal& line, int& fitted)
+  {
+    sums.add(p);
+    if (2.0 * (sums.n - fitted) >= fitted)
+    {
+      fitNormal(sums, line);
+      fitted = static_cast<int>(sums.n);
+    }
+  }
+
   /// -1 when [i, i + seed_points) is a seed (its line in `line`), otherwise the
   /// index at which the next seed should start.
   int seedFailure(const PreparedScan& scan, int i, LineNormal& line) const
@@ -148,11 +154,7 @@ class SeededRegionGrowing : public Extractor
   PrefixSums prefix_;
 };
 
-std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)
-{
-  return std::make_unique<SeededRegionGrowing>(ps);
-}
-const ExtractorRegistration registration("srg", 10, &make);
+const ExtractorRegistration registration("srg", 10, &makeExtractorOf<SeededRegionGrowing>);
 }  // namespace
 
 }  // namespace line_extraction

@@ -78,11 +78,7 @@ class Smsm : public Extractor
   ExtractionResult lines_;
 };
 
-std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)
-{
-  return std::make_unique<Smsm>(ps);
-}
-const ExtractorRegistration registration("smsm", 40, &make);
+const ExtractorRegistration registration("smsm", 40, &makeExtractorOf<Smsm>);
 }  // namespace
 
 }  // namespace line_extraction

@@ -186,11 +186,7 @@ class SplitAndMerge : public Extractor
   std::vector<int> members_;
 };
 
-std::unique_ptr<Extractor> make(const linemap::ParamSet& ps)
-{
-  return std::make_unique<SplitAndMerge>(ps);
-}
-const ExtractorRegistration registration("split_merge", 20, &make);
+const ExtractorRegistration registration("split_merge", 20, &makeExtractorOf<SplitAndMerge>);
 }  // namespace
 
 }  // namespace line_extraction

@@ -109,27 +109,7 @@ class WsacGeExtractor : public Extractor
   double evaluate(const PreparedScan& scan, const std::vector<Line>& lines, std::vector<int>& assignment)
   {
     const std::size_t k_count = lines.size();
-    assignment.assign(n_, -1);
-    support_.resize(n_);
-    for (int i = 0; i < n_; ++i)
-    {
-      const Vec2& p = scan.points[begin_ + i];
-      const double limit = scan.tolerance(begin_ + i, tukey_c_);
-      double best = limit;
-      for (std::size_t k = 0; k < k_count; ++k)
-      {
-        const double d = std::abs(lines[k].normal.dot(p) - lines[k].offset);
-        if (d < best)
-        {
-          best = d;
-          assignment[i] = static_cast<int>(k);
-        }
-      }
-      const double u = best / limit;
-      const double h = (1.0 - u * u) * (1.0 - u * u);
-      support_[i] = h * h;
-    }
-
+    assignNearest(scan, lines, assignment);
     // Runs per line in one pass: a run ends where the gap to the line's previous point is too large.
     run_start_.assign(k_count, -1);
     run_last_.assign(k_count, -1);
@@ -168,6 +148,32 @@ class WsacGeExtractor : public Extractor
     }
     for (std::size_t k = 0; k < k_count; ++k) close(k);
     return score;
+  }
+
+  /// Each point's nearest line within tukey_c (-1: none) and its Tukey support in support_.
+  void assignNearest(const PreparedScan& scan, const std::vector<Line>& lines, std::vector<int>& assignment)
+  {
+    const std::size_t k_count = lines.size();
+    assignment.assign(n_, -1);
+    support_.resize(n_);
+    for (int i = 0; i < n_; ++i)
+    {
+      const Vec2& p = scan.points[begin_ + i];
+      const double limit = scan.tolerance(begin_ + i, tukey_c_);
+      double best = limit;
+      for (std::size_t k = 0; k < k_count; ++k)
+      {
+        const double d = std::abs(lines[k].normal.dot(p) - lines[k].offset);
+        if (d < best)
+        {
+          best = d;
+          assignment[i] = static_cast<int>(k);
+        }
+      }
+      const double u = best / limit;
+      const double h = (1.0 - u * u) * (1.0 - u * u);
+      support_[i] = h * h;
+    }
   }
 
   /// A random point without a segment and a random partner within `window` beams, refined by TLS.
@@ -219,10 +225,7 @@ class WsacGeExtractor : public Extractor
   std::vector<int> run_start_, run_last_, run_count_;
 };
 
-const ExtractorRegistration kRegistration("wsac_ge", 100,
-                                          [](const linemap::ParamSet& params) {
-                                            return std::unique_ptr<Extractor>(new WsacGeExtractor(params));
-                                          });
+const ExtractorRegistration kRegistration("wsac_ge", 100, &makeExtractorOf<WsacGeExtractor>);
 
 }  // namespace
 }  // namespace line_extraction

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "fuzz_check.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
 
 namespace
@@ -18,17 +19,6 @@ const std::string& tempPath()
   static const std::string path = "/tmp/linemap_fuzz_carmen_" + std::to_string(::getpid());
   return path;
 }
-
-// A violated property: name it, then abort so that libFuzzer keeps the input.
-#define check(ok)                                                                       \
-  do                                                                                    \
-  {                                                                                     \
-    if (!(ok))                                                                          \
-    {                                                                                   \
-      std::fprintf(stderr, "property violated: %s (%s:%d)\n", #ok, __FILE__, __LINE__); \
-      std::abort();                                                                     \
-    }                                                                                   \
-  } while (false)
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)

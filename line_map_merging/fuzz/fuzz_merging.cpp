@@ -62,6 +62,64 @@ void checkMap(const line_map_merging::Merger& merger)
   check(keyframes.size() == merger.keyframeCount());
   for (std::size_t i = 1; i < keyframes.size(); ++i) check(keyframes[i - 1].index < keyframes[i].index);
 }
+
+/// A keyframe of wild segments: merged or rejected one by one, or refused whole leaving the map as it was.
+void addKeyframe(FuzzedDataProvider& in, line_map_merging::Merger& merger, int step)
+{
+  line_map_merging::Keyframe kf;
+  kf.index = in.ConsumeIntegralInRange<std::uint64_t>(0, 12);
+  kf.stamp = in.ConsumeIntegralInRange<int>(0, 7) == 0 ? coord(in) : step * 0.1;
+  kf.pose = pose(in);
+  if (in.ConsumeIntegralInRange<int>(0, 7) == 0) kf.mount = pose(in);
+  const int n = in.ConsumeIntegralInRange<int>(0, 12);
+  for (int k = 0; k < n; ++k)
+  {
+    linemap::Vec2 a(coord(in), coord(in));
+    linemap::Vec2 b = in.ConsumeBool() ? a : linemap::Vec2(coord(in), coord(in));
+    kf.segments.emplace_back(a, b);
+  }
+  const auto before = merger.segmentCount();
+  const auto leaves_before = merger.leafCount();
+  try
+  {
+    const auto r = merger.addKeyframe(kf);
+    check(r.merged + r.rejected == kf.segments.size());
+  }
+  catch (const std::invalid_argument&)
+  {
+    check(merger.segmentCount() == before && merger.leafCount() == leaves_before);
+  }
+}
+
+/// New poses for some keyframes, known or not.
+void adjust(FuzzedDataProvider& in, line_map_merging::Merger& merger)
+{
+  std::vector<std::pair<std::uint64_t, linemap::Pose2>> poses;
+  const int n = in.ConsumeIntegralInRange<int>(0, 8);
+  for (int k = 0; k < n; ++k) poses.emplace_back(in.ConsumeIntegralInRange<std::uint64_t>(0, 14), pose(in));
+  try
+  {
+    const auto r = merger.adjust(poses);
+    check(r.moved + r.unknown <= poses.size());
+  }
+  catch (const std::invalid_argument&)
+  {
+    // A non-finite pose refused by name.
+  }
+}
+
+/// The leaves of a map segment (as many as it merged) and of any id.
+void readLeaves(FuzzedDataProvider& in, line_map_merging::Merger& merger)
+{
+  const auto map = merger.map();
+  if (!map.empty())
+  {
+    const auto& m = map[in.ConsumeIntegralInRange<std::size_t>(0, map.size() - 1)];
+    const auto leaves = merger.leaves(m.id);
+    if (merger.hasProvenance()) check(leaves.size() == m.merged_count);
+  }
+  merger.leaves(in.ConsumeIntegral<std::uint64_t>());
+}
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
@@ -95,66 +153,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       case 1:
       case 2:
       case 3:
-      {
-        line_map_merging::Keyframe kf;
-        kf.index = in.ConsumeIntegralInRange<std::uint64_t>(0, 12);
-        kf.stamp = in.ConsumeIntegralInRange<int>(0, 7) == 0 ? coord(in) : step * 0.1;
-        kf.pose = pose(in);
-        if (in.ConsumeIntegralInRange<int>(0, 7) == 0) kf.mount = pose(in);
-        const int n = in.ConsumeIntegralInRange<int>(0, 12);
-        for (int k = 0; k < n; ++k)
-        {
-          linemap::Vec2 a(coord(in), coord(in));
-          linemap::Vec2 b = in.ConsumeBool() ? a : linemap::Vec2(coord(in), coord(in));
-          kf.segments.emplace_back(a, b);
-        }
-        const auto before = merger->segmentCount();
-        const auto leaves_before = merger->leafCount();
-        try
-        {
-          const auto r = merger->addKeyframe(kf);
-          check(r.merged + r.rejected == kf.segments.size());
-        }
-        catch (const std::invalid_argument&)
-        {
-          check(merger->segmentCount() == before && merger->leafCount() == leaves_before);
-        }
+        addKeyframe(in, *merger, step);
         break;
-      }
       case 4:
       case 5:
-      {
-        std::vector<std::pair<std::uint64_t, linemap::Pose2>> poses;
-        const int n = in.ConsumeIntegralInRange<int>(0, 8);
-        for (int k = 0; k < n; ++k)
-          poses.emplace_back(in.ConsumeIntegralInRange<std::uint64_t>(0, 14), pose(in));
-        try
-        {
-          const auto r = merger->adjust(poses);
-          check(r.moved + r.unknown <= poses.size());
-        }
-        catch (const std::invalid_argument&)
-        {
-          // A non-finite pose refused by name.
-        }
+        adjust(in, *merger);
         break;
-      }
       case 6:
       case 7:
         checkMap(*merger);
         break;
       case 8:
-      {
-        const auto map = merger->map();
-        if (!map.empty())
-        {
-          const auto& m = map[in.ConsumeIntegralInRange<std::size_t>(0, map.size() - 1)];
-          const auto leaves = merger->leaves(m.id);
-          if (merger->hasProvenance()) check(leaves.size() == m.merged_count);
-        }
-        merger->leaves(in.ConsumeIntegral<std::uint64_t>());
+        readLeaves(in, *merger);
         break;
-      }
       default:
         if (in.ConsumeIntegralInRange<int>(0, 3) == 0) merger->reset();
         check(merger->segmentCount() <= merger->leafCount() || !merger->hasProvenance());

@@ -8,17 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "line_map_merging/mergers/cae_rlsm.hpp"
+#include "cae_test.hpp"
 #include "line_map_merging/mergers/crossing_pairs.hpp"
 #include "synthetic_world.hpp"
-
-using line_map_merging::CaeParams;
-using line_map_merging::CaeRlsm;
-using line_map_merging::Keyframe;
-using line_map_merging::MapSegment;
-using linemap::Pose2;
-using linemap::Segment2;
-using linemap::Vec2;
 
 namespace
 {
@@ -101,18 +93,18 @@ void expectChain(const CaeRlsm& cae, std::size_t leaves)
   EXPECT_EQ(cae.leafCount(), leaves);
 }
 
+/// `m` runs from `start` to `end`, to rounding.
+void expectEnds(const MapSegment& m, const Vec2& start, const Vec2& end)
+{
+  EXPECT_NEAR((m.segment.start - start).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((m.segment.end - end).norm(), 0.0, 1e-9);
+}
+
 /// A believed trajectory off the truth: heading drifting by 0.1 deg per keyframe, y by 1 cm.
 std::vector<Pose2> drifted()
 {
   std::vector<Pose2> out;
   for (int i = 0; i <= 24; ++i) out.emplace_back(0.5 * i, 2.0 + 0.01 * i, 0.1 * i * linemap::kPi / 180.0);
-  return out;
-}
-
-std::vector<std::pair<std::uint64_t, Pose2>> poses(const std::vector<Pose2>& p)
-{
-  std::vector<std::pair<std::uint64_t, Pose2>> out;
-  for (std::size_t i = 0; i < p.size(); ++i) out.emplace_back(i, p[i]);
   return out;
 }
 }  // namespace
@@ -148,7 +140,7 @@ TEST(CrossingResolution, ChainAfterMpGmaWithAChangedTrajectory)
     CaeRlsm cae(params);
     const Walk w = walk(drifted());
     for (const Keyframe& k : w.keyframes) cae.addKeyframe(k);
-    const auto result = cae.adjust(poses(w.truth));
+    const auto result = cae.adjust(indexedPoses(w.truth));
     EXPECT_EQ(result.moved, w.truth.size());
     if (mode < 2) expectChain(cae, w.leaves);
     // The paper's MP-GMA keeps the groups formed on the drifted poses: no chain to expect, but no
@@ -178,7 +170,7 @@ TEST(CrossingResolution, MapFileKeepsTheCutSegments)
   }
   expectChain(loaded, w.leaves);
   // Re-fused from the loaded provenance at unchanged poses, the chain forms again.
-  loaded.adjust(poses(w.truth));
+  loaded.adjust(indexedPoses(w.truth));
   expectChain(loaded, w.leaves);
   std::remove(path.c_str());
 }
@@ -190,20 +182,12 @@ TEST(CrossingResolution, WallThroughAnotherLosesItsOvershoot)
   // overshoot (4 x 0.3 m against 4 x 2 m, 4 x 2 m and 4 x 3 m), is cut at (2, 0): a T.
   CaeRlsm cae;
   for (int i = 0; i < 4; ++i)
-  {
-    Keyframe k;
-    k.index = i;
-    k.stamp = i;
-    k.pose = Pose2(0.0, 0.0, 0.0);
-    k.segments = {Segment2(Vec2(0, 0), Vec2(4, 0)), Segment2(Vec2(2, -0.3), Vec2(2, 3))};
-    cae.addKeyframe(k);
-  }
+    cae.addKeyframe(synthetic::keyframeOf(
+        i, Pose2(), {Segment2(Vec2(0, 0), Vec2(4, 0)), Segment2(Vec2(2, -0.3), Vec2(2, 3))}));
   const auto map = cae.map();
   ASSERT_EQ(map.size(), 2u);
-  EXPECT_NEAR((map[0].segment.start - Vec2(0, 0)).norm(), 0.0, 1e-9);
-  EXPECT_NEAR((map[0].segment.end - Vec2(4, 0)).norm(), 0.0, 1e-9);
-  EXPECT_NEAR((map[1].segment.start - Vec2(2, 0)).norm(), 0.0, 1e-9);
-  EXPECT_NEAR((map[1].segment.end - Vec2(2, 3)).norm(), 0.0, 1e-9);
+  expectEnds(map[0], Vec2(0, 0), Vec2(4, 0));
+  expectEnds(map[1], Vec2(2, 0), Vec2(2, 3));
   EXPECT_EQ(map[0].merged_count + map[1].merged_count, 8u);
 }
 
@@ -217,19 +201,14 @@ TEST(CrossingResolution, FacesFittedAcrossEachOtherLoseTheWeakerArm)
   CaeRlsm cae;
   for (int i = 0; i < 4; ++i)
   {
-    Keyframe k;
-    k.index = i;
-    k.stamp = i;
-    k.segments = {Segment2(Vec2(0, 0), Vec2(4, 0))};
-    if (i < 2) k.segments.push_back(Segment2(Vec2(3, 0.05), Vec2(0, -0.1)));
-    cae.addKeyframe(k);
+    std::vector<Segment2> seen = {Segment2(Vec2(0, 0), Vec2(4, 0))};
+    if (i < 2) seen.push_back(Segment2(Vec2(3, 0.05), Vec2(0, -0.1)));
+    cae.addKeyframe(synthetic::keyframeOf(i, Pose2(), seen));
   }
   const auto map = cae.map();
   ASSERT_EQ(map.size(), 2u);
-  EXPECT_NEAR((map[0].segment.start - Vec2(0, 0)).norm(), 0.0, 1e-9);
-  EXPECT_NEAR((map[0].segment.end - Vec2(4, 0)).norm(), 0.0, 1e-9);
-  EXPECT_NEAR((map[1].segment.start - Vec2(2, 0)).norm(), 0.0, 1e-9);
-  EXPECT_NEAR((map[1].segment.end - Vec2(0, -0.1)).norm(), 0.0, 1e-9);
+  expectEnds(map[0], Vec2(0, 0), Vec2(4, 0));
+  expectEnds(map[1], Vec2(2, 0), Vec2(0, -0.1));
   EXPECT_EQ(map[1].merged_count, 2u);
 }
 

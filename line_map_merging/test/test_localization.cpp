@@ -194,6 +194,15 @@ struct Drive
     s.odom = start.inverse() * truth(i);
     return s;
   }
+  /// Distance of `pose` from the truth of scan i.
+  double miss(const Pose2& pose, int i) const { return std::hypot(pose.x - truth(i).x, pose.y - truth(i).y); }
+  /// The result of the last of scans 0 .. count - 1 fed to `localizer`.
+  LocalizerResult feed(LineMapLocalizer& localizer, int count) const
+  {
+    LocalizerResult last;
+    for (int i = 0; i < count; ++i) last = localizer.addScan(scan(i));
+    return last;
+  }
 };
 }  // namespace
 
@@ -206,7 +215,7 @@ TEST(LineMapLocalizer, TracksFromTheInitialPose)
   {
     const auto r = localizer.addScan(drive.scan(i));
     EXPECT_EQ(r.outcome, LocalizerOutcome::kTracked);
-    EXPECT_LT(std::hypot(r.pose.x - drive.truth(i).x, r.pose.y - drive.truth(i).y), 0.01) << i;
+    EXPECT_LT(drive.miss(r.pose, i), 0.01) << i;
     EXPECT_LT(std::fabs(r.pose.theta - drive.truth(i).theta), 0.2 * kDeg) << i;
   }
   EXPECT_EQ(localizer.counters().lost, 0u);
@@ -228,7 +237,7 @@ TEST(LineMapLocalizer, NewMapKeepsTheTrack)
   {
     const auto r = localizer.addScan(drive.scan(i));
     EXPECT_EQ(r.outcome, LocalizerOutcome::kTracked) << i;
-    EXPECT_LT(std::hypot(r.pose.x - drive.truth(i).x, r.pose.y - drive.truth(i).y), 0.01) << i;
+    EXPECT_LT(drive.miss(r.pose, i), 0.01) << i;
   }
   LineMapLocalizer unposed(first_half);
   unposed.setMap(lRoom());
@@ -254,7 +263,7 @@ TEST(LineMapLocalizer, GlobalLocalizationWithoutAnInitialPose)
   // Accepted after accept_travel (2 m = 20 scans) at the earliest.
   EXPECT_GE(*recovered, 19);
   EXPECT_TRUE(last.localized);
-  EXPECT_LT(std::hypot(last.pose.x - drive.truth(69).x, last.pose.y - drive.truth(69).y), 0.01);
+  EXPECT_LT(drive.miss(last.pose, 69), 0.01);
   EXPECT_LT(std::fabs(last.pose.theta), 0.2 * kDeg);
 }
 
@@ -268,12 +277,11 @@ TEST(LineMapLocalizer, KidnappedRobotIsRecovered)
   LineMapLocalizer localizer(lRoom(), params);
   // The robot believes itself in the upper arm, facing down.
   localizer.setPose({2.0, 6.5, -1.6});
-  LocalizerResult last;
-  for (int i = 0; i < 70; ++i) last = localizer.addScan(drive.scan(i));
+  const LocalizerResult last = drive.feed(localizer, 70);
   EXPECT_EQ(localizer.counters().lost, 1u);
   EXPECT_EQ(localizer.counters().recovered, 1u);
   EXPECT_TRUE(last.localized);
-  EXPECT_LT(std::hypot(last.pose.x - drive.truth(69).x, last.pose.y - drive.truth(69).y), 0.01);
+  EXPECT_LT(drive.miss(last.pose, 69), 0.01);
 }
 
 TEST(LineMapLocalizer, DoubtedTrackIsReplacedByABetterRival)
@@ -283,12 +291,11 @@ TEST(LineMapLocalizer, DoubtedTrackIsReplacedByABetterRival)
   const Drive drive{lRoom()};
   LineMapLocalizer localizer(lRoom());
   localizer.setPose({2.0, 6.5, -1.6});
-  LocalizerResult last;
-  for (int i = 0; i < 70; ++i) last = localizer.addScan(drive.scan(i));
+  const LocalizerResult last = drive.feed(localizer, 70);
   EXPECT_EQ(localizer.counters().lost, 0u);
   EXPECT_EQ(localizer.counters().replaced, 1u);
   EXPECT_TRUE(last.localized);
-  EXPECT_LT(std::hypot(last.pose.x - drive.truth(69).x, last.pose.y - drive.truth(69).y), 0.01);
+  EXPECT_LT(drive.miss(last.pose, 69), 0.01);
   EXPECT_LT(std::fabs(last.pose.theta), 0.2 * kDeg);
 }
 
@@ -313,7 +320,7 @@ TEST(LineMapLocalizer, BadInput)
   broken.odom = Pose2(std::nan(""), 0.0, 0.0);
   r = localizer.addScan(broken);
   EXPECT_EQ(r.outcome, LocalizerOutcome::kTracked);
-  EXPECT_LT(std::hypot(r.pose.x - drive.truth(2).x, r.pose.y - drive.truth(2).y), 0.01);
+  EXPECT_LT(drive.miss(r.pose, 2), 0.01);
   EXPECT_EQ(localizer.addScan(drive.scan(1)).outcome, LocalizerOutcome::kRejected);
   // A pose far outside the map: nothing matches; after lost_scans scans global localization starts.
   localizer.setPose({1000.0, -1000.0, 0.0});

@@ -6,16 +6,8 @@
 #include <cstdio>
 #include <random>
 
-#include "line_map_merging/mergers/cae_rlsm.hpp"
+#include "cae_test.hpp"
 #include "synthetic_world.hpp"
-
-using line_map_merging::CaeParams;
-using line_map_merging::CaeRlsm;
-using line_map_merging::Keyframe;
-using line_map_merging::MapSegment;
-using linemap::Pose2;
-using linemap::Segment2;
-using linemap::Vec2;
 
 namespace
 {
@@ -37,11 +29,14 @@ LoopData makeLoop(std::uint32_t seed)
   return d;
 }
 
-std::vector<std::pair<std::uint64_t, Pose2>> truePoses(const LoopData& d)
+/// Merges the keyframes of `d` into `merger` on their true poses.
+void mergeOnTruePoses(const LoopData& d, CaeRlsm& merger)
 {
-  std::vector<std::pair<std::uint64_t, Pose2>> poses;
-  for (std::size_t i = 0; i < d.truth.size(); ++i) poses.emplace_back(i, d.truth[i]);
-  return poses;
+  for (Keyframe k : d.keyframes)
+  {
+    k.pose = d.truth[k.index];
+    merger.addKeyframe(k);
+  }
 }
 
 /// Largest endpoint distance between each segment of `a` and its best match in `b` (same heading).
@@ -72,7 +67,7 @@ TEST(MpGma, EverySegmentIsTheFusionOfItsLeavesUnderTheNewPoses)
   CaeRlsm merger(paper);
   for (const Keyframe& k : d.keyframes) merger.addKeyframe(k);
   const auto before = merger.map();
-  const auto result = merger.adjust(truePoses(d));
+  const auto result = merger.adjust(indexedPoses(d.truth));
   EXPECT_EQ(result.moved, d.truth.size());
   EXPECT_EQ(result.unknown, 0u);
   const auto after = merger.map();
@@ -96,11 +91,7 @@ TEST(MpGma, ConsistentAdjustmentEqualsTheMapBuiltOnTheTruePoses)
 {
   const LoopData d = makeLoop(4);
   CaeRlsm reference;
-  for (Keyframe k : d.keyframes)
-  {
-    k.pose = d.truth[k.index];
-    reference.addKeyframe(k);
-  }
+  mergeOnTruePoses(d, reference);
   const auto ref = reference.map();
   EXPECT_EQ(ref.size(), 8u) << "one segment per corridor wall";
 
@@ -108,7 +99,7 @@ TEST(MpGma, ConsistentAdjustmentEqualsTheMapBuiltOnTheTruePoses)
   for (const Keyframe& k : d.keyframes) merger.addKeyframe(k);
   const std::size_t drifted_count = merger.segmentCount();
   EXPECT_GT(drifted_count, ref.size()) << "the drift should have broken the loop";
-  const auto result = merger.adjust(truePoses(d));
+  const auto result = merger.adjust(indexedPoses(d.truth));
   const auto adjusted = merger.map();
   ASSERT_EQ(adjusted.size(), ref.size()) << "split " << result.split << ", merged " << result.merged;
   std::size_t leaves = 0;
@@ -124,7 +115,7 @@ TEST(MpGma, ConsistentAdjustmentEqualsTheMapBuiltOnTheTruePoses)
   paper.consistent_adjustment = false;
   CaeRlsm plain(paper);
   for (const Keyframe& k : d.keyframes) plain.addKeyframe(k);
-  plain.adjust(truePoses(d));
+  plain.adjust(indexedPoses(d.truth));
   std::printf("paper (no consistency pass): %zu segments\n", plain.segmentCount());
   EXPECT_GT(plain.segmentCount(), ref.size());
 }
@@ -141,7 +132,7 @@ TEST(MpGma, UnknownKeyframesAreCountedAndThreadCountDoesNotMatter)
     a.addKeyframe(k);
     b.addKeyframe(k);
   }
-  auto poses = truePoses(d);
+  auto poses = indexedPoses(d.truth);
   poses.emplace_back(999999, Pose2(1, 2, 3));
   const auto ra = a.adjust(poses);
   b.adjust(poses);
@@ -192,7 +183,7 @@ TEST(MpGma, AdjustingBackToTheOldPosesRestoresTheGrouping)
   CaeRlsm merger;
   for (const Keyframe& k : d.keyframes) merger.addKeyframe(k);
   const std::size_t leaves = merger.leafCount();
-  merger.adjust(truePoses(d));
+  merger.adjust(indexedPoses(d.truth));
   std::vector<std::pair<std::uint64_t, Pose2>> back;
   for (std::size_t i = 0; i < d.drifted.size(); ++i) back.emplace_back(i, d.drifted[i]);
   merger.adjust(back);
@@ -251,15 +242,11 @@ TEST(MpGma, RegroupGivesExactlyTheTruePoseMapAndKeepsIds)
   // same computation as merging on them, so the maps are identical (not only within 1 mm).
   const LoopData d = makeLoop(6);
   CaeRlsm reference;
-  for (Keyframe k : d.keyframes)
-  {
-    k.pose = d.truth[k.index];
-    reference.addKeyframe(k);
-  }
+  mergeOnTruePoses(d, reference);
   CaeRlsm merger;
   ASSERT_TRUE(merger.params().regroup_on_adjust);
   for (const Keyframe& k : d.keyframes) merger.addKeyframe(k);
-  merger.adjust(truePoses(d));
+  merger.adjust(indexedPoses(d.truth));
   const auto ref = reference.map(), adjusted = merger.map();
   ASSERT_EQ(adjusted.size(), ref.size());
   EXPECT_EQ(maxEndpointDifference(adjusted, ref), 0.0);

@@ -58,6 +58,14 @@ std::pair<double, double> keyframeError(const Drive& run, const OnlineMapper& m)
 // Relative odometry over the two scans to the nearest node: heading off by at most 2 kDrift, position
 // by at most 0.05 * (kDrift + 2 kDrift) = 1.5 mm.
 constexpr double kPosTol = 0.002, kAngleTol = 2.0 * kDrift + 1e-9;
+
+/// Every keyframe of `m` on the truth within kPosTol and kAngleTol.
+void expectKeyframesOnTheTruth(const Drive& run, const OnlineMapper& m)
+{
+  const auto error = keyframeError(run, m);
+  EXPECT_LT(error.first, kPosTol);
+  EXPECT_LT(error.second, kAngleTol);
+}
 }  // namespace
 
 TEST(OnlineMapper, KeyframeGateAndCounters)
@@ -81,9 +89,7 @@ TEST(OnlineMapper, TrajectoryNodesThatAreNoKeyframesCorrectEveryKeyframe)
   ASSERT_GT(before.first, 1.0);  // the drift the trajectory must remove
   ASSERT_TRUE(m->addTrajectory(run.nodes()));
   EXPECT_EQ(m->counters().unmatched_poses, 0u);
-  const auto after = keyframeError(run, *m);
-  EXPECT_LT(after.first, kPosTol);
-  EXPECT_LT(after.second, kAngleTol);
+  expectKeyframesOnTheTruth(run, *m);
   // The map lies on the wall y = 1 again.
   for (const MapSegment& s : m->merger().map())
   {
@@ -112,9 +118,7 @@ TEST(OnlineMapperMapToOdom, JumpsOfMapToOdomDoNotMoveTheCorrectedKeyframes)
   for (int i = 0; i < kScans; ++i)
     m->addScan(run.scan(i, i < 40 ? Pose2() : i < 80 ? Pose2(3.0, -2.0, 0.7) : Pose2(-5.0, 4.0, -2.5)));
   ASSERT_TRUE(m->addTrajectory(run.nodes()));
-  const auto after = keyframeError(run, *m);
-  EXPECT_LT(after.first, kPosTol);
-  EXPECT_LT(after.second, kAngleTol);
+  expectKeyframesOnTheTruth(run, *m);
 }
 
 TEST(OnlineMapperBursts, ATrajectoryAfterEveryScanEndsOnTheTruth)
@@ -138,9 +142,7 @@ TEST(OnlineMapperBursts, ATrajectoryAfterEveryScanEndsOnTheTruth)
   for (int k = 0; k < 5; ++k) m->addTrajectory(run.nodes());
   EXPECT_GT(m->counters().adjustments, 100u);
   EXPECT_GT(m->merger().keyframeCount(), static_cast<std::size_t>(kScans / 5));
-  const auto after = keyframeError(run, *m);
-  EXPECT_LT(after.first, kPosTol);
-  EXPECT_LT(after.second, kAngleTol);
+  expectKeyframesOnTheTruth(run, *m);
 }
 
 TEST(OnlineMapperReplay, AReplayAfterTheClockJumpedBackAddsNothing)

@@ -5,15 +5,9 @@
 #include <limits>
 #include <random>
 
-#include "line_map_merging/mergers/cae_rlsm.hpp"
+#include "cae_test.hpp"
 #include "synthetic_world.hpp"
 
-using line_map_merging::CaeParams;
-using line_map_merging::CaeRlsm;
-using line_map_merging::Keyframe;
-using linemap::Pose2;
-using linemap::Segment2;
-using linemap::Vec2;
 using synthetic::keyframeOf;
 
 namespace

@@ -92,6 +92,21 @@ TEST(ScanMatcher, CorridorKeepsThePriorAlongItsAxis)
   EXPECT_NEAR(refined.pose.x, prior.x, 0.03);
 }
 
+namespace
+{
+/// The translation shape of a refinement at `pose` of a scan of `walls` (beams, range) in the field
+/// of `map`, started at the truth.
+line_map_merging::TranslationShape shapeAt(const std::vector<Vec2>& map,
+                                           const std::vector<linemap::Segment2>& walls, const Pose2& pose,
+                                           int beams, double range)
+{
+  const LikelihoodGrid field(map, 0.025, 0.04, 0.5);
+  const auto match = refineMatch(field, slam_world::scan(walls, pose, beams, range), pose, pose,
+                                 RefinementParams{2.0, 2.0, 30});
+  return line_map_merging::translationShape(match.curvature, 0.1, 1e-3);
+}
+}  // namespace
+
 // The refinement's curvature says what the scan determines: in a corridor along x, nothing along
 // x; in the room with boxes and a niche, both directions.
 TEST(ScanMatcher, CurvatureShapesTheTranslation)
@@ -103,11 +118,7 @@ TEST(ScanMatcher, CurvatureShapesTheTranslation)
     map.push_back({x, 0.0});
     map.push_back({x, 2.0});
   }
-  const LikelihoodGrid corridor(map, 0.025, 0.04, 0.5);
-  const Pose2 truth(0.0, 1.0, 0.0);
-  const auto in_corridor = refineMatch(corridor, slam_world::scan(walls, truth, 180, 8.0), truth, truth,
-                                       RefinementParams{2.0, 2.0, 30});
-  const auto corridor_shape = line_map_merging::translationShape(in_corridor.curvature, 0.1, 1e-3);
+  const auto corridor_shape = shapeAt(map, walls, Pose2(0.0, 1.0, 0.0), 180, 8.0);
   // Beams end within 8 m on walls of 100 m: along x the score changes by interpolation ripple only,
   // two orders of magnitude below across.
   EXPECT_LT(corridor_shape.ratio, 0.01);
@@ -122,11 +133,7 @@ TEST(ScanMatcher, CurvatureShapesTheTranslation)
   std::vector<Vec2> room_points;
   for (const auto& w : room_walls)
     for (double t = 0.0; t <= 1.0; t += 0.005) room_points.push_back(w.start + t * (w.end - w.start));
-  const LikelihoodGrid room(room_points, 0.025, 0.04, 0.5);
-  const Pose2 inside(6.0, 4.0, 0.3);
-  const auto in_room = refineMatch(room, slam_world::scan(room_walls, inside, 360, 20.0), inside, inside,
-                                   RefinementParams{2.0, 2.0, 30});
-  const auto room_shape = line_map_merging::translationShape(in_room.curvature, 0.1, 1e-3);
+  const auto room_shape = shapeAt(room_points, room_walls, Pose2(6.0, 4.0, 0.3), 360, 20.0);
   EXPECT_GT(room_shape.ratio, 0.1);
   EXPECT_FALSE(room_shape.degenerate);
   EXPECT_NEAR(room_shape.norm(Vec2(0.3, 0.4)), 0.5, 1e-9);  // isotropic: the plain length

@@ -9,15 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "line_map_merging/mergers/cae_rlsm.hpp"
-
-using line_map_merging::CaeParams;
-using line_map_merging::CaeRlsm;
-using line_map_merging::Keyframe;
-using line_map_merging::MapSegment;
-using linemap::Pose2;
-using linemap::Segment2;
-using linemap::Vec2;
+#include "cae_test.hpp"
 
 namespace
 {

@@ -21,4 +21,11 @@ struct ExtractorRegistration
   ExtractorRegistration(const char* name, int order, ExtractorFactory make);
 };
 
+/// The factory of an algorithm whose constructor takes the parameters: `&makeExtractorOf<MyAlgorithm>`.
+template <typename T>
+std::unique_ptr<Extractor> makeExtractorOf(const linemap::ParamSet& params)
+{
+  return std::make_unique<T>(params);
+}
+
 }  // namespace line_extraction

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <string>
 
 #include "linemap/params.hpp"
@@ -41,6 +42,13 @@ inline int intParamAtLeast(const linemap::ParamSet& ps, const std::string& key, 
     throw linemap::ParameterError("parameter '" + key + "' must be >= " + std::to_string(minimum) + ", got " +
                                   std::to_string(v));
   return v;
+}
+
+/// A count >= minimum.
+inline std::size_t countParam(const linemap::ParamSet& ps, const std::string& key, std::size_t fallback,
+                              int minimum)
+{
+  return static_cast<std::size_t>(intParamAtLeast(ps, key, static_cast<int>(fallback), minimum));
 }
 
 /// The pipeline's point noise "range_sigma" [m], used by the algorithms' covariances.

@@ -60,6 +60,9 @@ class RansacExtractor : public Extractor
   void extractRange(const PreparedScan& scan, PointRange range, ExtractionResult& out) override;
 
  private:
+  /// Of iterations_ lines through two random remaining points, the one with the most remaining points
+  /// within inlier_distance: its count, normal and offset (count 0 and the inputs kept if none).
+  int bestSample(const PreparedScan& scan, Vec2& best_normal, double& best_offset);
   RunSettings runs_;
   int iterations_;
   double inlier_distance_;

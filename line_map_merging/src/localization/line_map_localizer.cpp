@@ -6,10 +6,13 @@
 #include <cmath>
 #include <sstream>
 
+#include "line_extraction/param_checks.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
 
 namespace line_map_merging
 {
+using line_extraction::countParam;
+using line_extraction::positiveParam;
 using linemap::Pose2;
 using linemap::Vec2;
 
@@ -21,25 +24,11 @@ double nowMs()
       .count();
 }
 
-double positive(const linemap::ParamSet& p, const std::string& key, double fallback)
-{
-  const double v = p.getDouble(key, fallback);
-  if (!(v > 0.0) || !std::isfinite(v)) throw linemap::ParameterError(key + " must be a positive number");
-  return v;
-}
-
 double share(const linemap::ParamSet& p, const std::string& key, double fallback)
 {
   const double v = p.getDouble(key, fallback);
   if (!(v >= 0.0 && v <= 1.0)) throw linemap::ParameterError(key + " must lie in [0, 1]");
   return v;
-}
-
-std::size_t count(const linemap::ParamSet& p, const std::string& key, std::size_t fallback, int min)
-{
-  const int v = p.getInt(key, static_cast<int>(fallback));
-  if (v < min) throw linemap::ParameterError(key + " must be >= " + std::to_string(min));
-  return static_cast<std::size_t>(v);
 }
 
 bool finitePose(const Pose2& p)
@@ -57,49 +46,49 @@ bool samePlace(const Pose2& a, const Pose2& b, double distance, double angle)
 LocalizerParams LocalizerParams::fromParams(const linemap::ParamSet& p)
 {
   LocalizerParams s;
-  s.max_range = positive(p, "scan/max_range", s.max_range);
-  s.min_points = count(p, "scan/min_points", s.min_points, 3);
-  s.match.max_distance = positive(p, "match/max_distance", s.match.max_distance);
-  s.match.refine_distance = positive(p, "match/refine_distance", s.match.refine_distance);
-  s.match.loss_scale = positive(p, "match/loss_scale", s.match.loss_scale);
-  s.match.point_sigma = positive(p, "match/point_sigma", s.match.point_sigma);
-  s.match.inlier_distance = positive(p, "match/inlier_distance", s.match.inlier_distance);
-  s.match.max_iterations = static_cast<int>(count(p, "match/max_iterations", s.match.max_iterations, 1));
+  s.max_range = positiveParam(p, "scan/max_range", s.max_range);
+  s.min_points = countParam(p, "scan/min_points", s.min_points, 3);
+  s.match.max_distance = positiveParam(p, "match/max_distance", s.match.max_distance);
+  s.match.refine_distance = positiveParam(p, "match/refine_distance", s.match.refine_distance);
+  s.match.loss_scale = positiveParam(p, "match/loss_scale", s.match.loss_scale);
+  s.match.point_sigma = positiveParam(p, "match/point_sigma", s.match.point_sigma);
+  s.match.inlier_distance = positiveParam(p, "match/inlier_distance", s.match.inlier_distance);
+  s.match.max_iterations = static_cast<int>(countParam(p, "match/max_iterations", s.match.max_iterations, 1));
   s.match.check_free_side = p.getBool("match/check_free_side", s.match.check_free_side);
-  s.index_cell = positive(p, "match/index_cell", s.index_cell);
-  s.odom_sigma_xy = positive(p, "odometry/sigma_xy", s.odom_sigma_xy);
+  s.index_cell = positiveParam(p, "match/index_cell", s.index_cell);
+  s.odom_sigma_xy = positiveParam(p, "odometry/sigma_xy", s.odom_sigma_xy);
   s.odom_sigma_xy_per_m = p.getNonNegative("odometry/sigma_xy_per_m", s.odom_sigma_xy_per_m);
-  s.odom_sigma_theta = positive(p, "odometry/sigma_theta", s.odom_sigma_theta);
+  s.odom_sigma_theta = positiveParam(p, "odometry/sigma_theta", s.odom_sigma_theta);
   s.odom_sigma_theta_per_rad = p.getNonNegative("odometry/sigma_theta_per_rad", s.odom_sigma_theta_per_rad);
   s.odom_sigma_theta_per_m = p.getNonNegative("odometry/sigma_theta_per_m", s.odom_sigma_theta_per_m);
-  s.no_odom_sigma_xy = positive(p, "odometry/no_odometry_sigma_xy", s.no_odom_sigma_xy);
-  s.no_odom_sigma_theta = positive(p, "odometry/no_odometry_sigma_theta", s.no_odom_sigma_theta);
-  s.max_odometry_step = positive(p, "odometry/max_step", s.max_odometry_step);
-  s.max_odometry_turn = positive(p, "odometry/max_turn", s.max_odometry_turn);
-  s.time_jump_tolerance = positive(p, "odometry/time_jump_tolerance", s.time_jump_tolerance);
+  s.no_odom_sigma_xy = positiveParam(p, "odometry/no_odometry_sigma_xy", s.no_odom_sigma_xy);
+  s.no_odom_sigma_theta = positiveParam(p, "odometry/no_odometry_sigma_theta", s.no_odom_sigma_theta);
+  s.max_odometry_step = positiveParam(p, "odometry/max_step", s.max_odometry_step);
+  s.max_odometry_turn = positiveParam(p, "odometry/max_turn", s.max_odometry_turn);
+  s.time_jump_tolerance = positiveParam(p, "odometry/time_jump_tolerance", s.time_jump_tolerance);
   s.retry_inlier_share = share(p, "tracking/retry_inlier_share", s.retry_inlier_share);
   s.retry_window.linear = p.getNonNegative("tracking/retry_linear", s.retry_window.linear);
   s.retry_window.angular = p.getNonNegative("tracking/retry_angular", s.retry_window.angular);
   s.lost_inlier_share = share(p, "tracking/lost_inlier_share", s.lost_inlier_share);
-  s.lost_scans = count(p, "tracking/lost_scans", s.lost_scans, 1);
+  s.lost_scans = countParam(p, "tracking/lost_scans", s.lost_scans, 1);
   s.doubt_share = share(p, "tracking/doubt_share", s.doubt_share);
-  s.doubt_research_every = count(p, "tracking/doubt_research_every", s.doubt_research_every, 1);
-  s.doubt_hypotheses = count(p, "tracking/doubt_hypotheses", s.doubt_hypotheses, 1);
-  s.global.coarse_resolution = positive(p, "global/coarse_resolution", s.global.coarse_resolution);
-  s.global.coarse_sigma = positive(p, "global/coarse_sigma", s.global.coarse_sigma);
-  s.global.coarse_angular_step = positive(p, "global/coarse_angular_step", s.global.coarse_angular_step);
-  s.global.fine_resolution = positive(p, "global/fine_resolution", s.global.fine_resolution);
-  s.global.fine_sigma = positive(p, "global/fine_sigma", s.global.fine_sigma);
-  s.global.max_points = count(p, "global/max_points", s.global.max_points, 3);
-  s.global.candidates = count(p, "global/candidates", s.global.candidates, 1);
+  s.doubt_research_every = countParam(p, "tracking/doubt_research_every", s.doubt_research_every, 1);
+  s.doubt_hypotheses = countParam(p, "tracking/doubt_hypotheses", s.doubt_hypotheses, 1);
+  s.global.coarse_resolution = positiveParam(p, "global/coarse_resolution", s.global.coarse_resolution);
+  s.global.coarse_sigma = positiveParam(p, "global/coarse_sigma", s.global.coarse_sigma);
+  s.global.coarse_angular_step = positiveParam(p, "global/coarse_angular_step", s.global.coarse_angular_step);
+  s.global.fine_resolution = positiveParam(p, "global/fine_resolution", s.global.fine_resolution);
+  s.global.fine_sigma = positiveParam(p, "global/fine_sigma", s.global.fine_sigma);
+  s.global.max_points = countParam(p, "global/max_points", s.global.max_points, 3);
+  s.global.candidates = countParam(p, "global/candidates", s.global.candidates, 1);
   s.hypothesis_min_share = share(p, "global/hypothesis_min_share", s.hypothesis_min_share);
-  s.hypotheses = count(p, "global/hypotheses", s.hypotheses, 1);
-  s.research_every = count(p, "global/research_every", s.research_every, 1);
+  s.hypotheses = countParam(p, "global/hypotheses", s.hypotheses, 1);
+  s.research_every = countParam(p, "global/research_every", s.research_every, 1);
   s.accept_share = share(p, "global/accept_share", s.accept_share);
   s.accept_margin = share(p, "global/accept_margin", s.accept_margin);
   s.accept_travel = p.getNonNegative("global/accept_travel", s.accept_travel);
   s.accept_turn = p.getNonNegative("global/accept_turn", s.accept_turn);
-  s.accept_scans = count(p, "global/accept_scans", s.accept_scans, 1);
+  s.accept_scans = countParam(p, "global/accept_scans", s.accept_scans, 1);
   return s;
 }
 
@@ -175,22 +164,12 @@ LocalizerResult LineMapLocalizer::addScan(const LocalizerScan& in)
 {
   const double start = nowMs();
   ++counters_.scans;
-  if (time_jumps_.observe(0.0, in.stamp))
+  if (!acceptStamp(in.stamp))
   {
-    // The clock jumped back (a replayed bag): the odometry before it tells nothing about the motion.
-    ++counters_.time_jumps;
-    last_odom_.reset();
-  }
-  else if (have_stamp_ && !(in.stamp > last_stamp_))
-  {
-    ++counters_.rejected;
     LocalizerResult r = last_;
     r.outcome = LocalizerOutcome::kRejected;
     return r;
   }
-  have_stamp_ = true;
-  last_stamp_ = in.stamp;
-
   LocalizerScan scan;
   scan.stamp = in.stamp;
   scan.sensor = in.sensor.allFinite() ? in.sensor : Vec2::Zero();
@@ -198,81 +177,108 @@ LocalizerResult LineMapLocalizer::addScan(const LocalizerScan& in)
   scan.points.reserve(in.points.size());
   for (const auto& p : in.points)
     if (p.allFinite() && p.squaredNorm() <= max2 && p.squaredNorm() > 0.0) scan.points.push_back(p);
-  std::optional<Pose2> odom = in.odom && finitePose(*in.odom) ? in.odom : std::nullopt;
-  std::optional<Pose2> step, jump;
+  const OdometryMotion motion = odometryMotion(in.odom);
+  const LocalizerResult result =
+      tracking_ ? trackStep(scan, motion.step, motion.jump) : globalStep(scan, motion.step);
+  counters_.last_ms = nowMs() - start;
+  last_ = result;
+  return result;
+}
+
+bool LineMapLocalizer::acceptStamp(double stamp)
+{
+  if (time_jumps_.observe(0.0, stamp))
+  {
+    // The clock jumped back (a replayed bag): the odometry before it tells nothing about the motion.
+    ++counters_.time_jumps;
+    last_odom_.reset();
+  }
+  else if (have_stamp_ && !(stamp > last_stamp_))
+  {
+    ++counters_.rejected;
+    return false;
+  }
+  have_stamp_ = true;
+  last_stamp_ = stamp;
+  return true;
+}
+
+LineMapLocalizer::OdometryMotion LineMapLocalizer::odometryMotion(const std::optional<Pose2>& reading)
+{
+  OdometryMotion motion;
+  std::optional<Pose2> odom = reading && finitePose(*reading) ? reading : std::nullopt;
   if (odom && last_odom_)
   {
     const Pose2 s = last_odom_->inverse() * *odom;
     if (std::hypot(s.x, s.y) <= params_.max_odometry_step && std::fabs(s.theta) <= params_.max_odometry_turn)
-      step = s;
+      motion.step = s;
     else
     {
       ++counters_.odometry_jumps;
-      jump = s;
+      motion.jump = s;
     }
   }
   if (odom) last_odom_ = odom;
+  return motion;
+}
 
+LocalizerResult LineMapLocalizer::trackStep(const LocalizerScan& scan, const std::optional<Pose2>& step,
+                                            const std::optional<Pose2>& jump)
+{
   LocalizerResult result;
-  if (!tracking_)
-    result = globalStep(scan, step);
-  else
+  const Pose2 predicted = step ? pose_ * *step : pose_;
+  const PosePrior prior = odometryPrior(predicted, step);
+  result.pose = predicted;
+  result.covariance = prior.information.inverse();
+  result.outcome = LocalizerOutcome::kPredicted;
+  bool poor = true;
+  if (scan.points.size() < params_.min_points)
+    ++counters_.few_points;
+  else if (!index_.empty())
   {
-    const Pose2 predicted = step ? pose_ * *step : pose_;
-    const PosePrior prior = odometryPrior(predicted, step);
-    result.pose = predicted;
-    result.covariance = prior.information.inverse();
-    result.outcome = LocalizerOutcome::kPredicted;
-    bool poor = true;
-    if (scan.points.size() < params_.min_points)
-      ++counters_.few_points;
-    else if (!index_.empty())
+    SegmentMatch m = track(scan, predicted, prior, true);
+    if (jump) matchAcrossJump(scan, *jump, m);
+    result.score = m.score;
+    result.inlier_share = m.inlier_share;
+    poor = m.inlier_share < params_.lost_inlier_share;
+    if (m.valid && !poor)
     {
-      SegmentMatch m = track(scan, predicted, prior, true);
-      if (jump)
-      {
-        // The odometry jumped: a glitch, or real motion across a gap in the data. Both are searched
-        // widely and the better match wins.
-        for (const Pose2& centre : {pose_ * *jump, pose_})
-        {
-          const auto found =
-              correlativeSearch(global_.fineField(), scan.points, centre, params_.jump_window, 1);
-          if (found.empty()) continue;
-          const SegmentMatch c = matchToSegments(index_, scan.points, found.front().pose, std::nullopt,
-                                                 params_.match, scan.sensor);
-          if (c.valid && c.inlier_share > m.inlier_share) m = c;
-        }
-      }
-      result.score = m.score;
-      result.inlier_share = m.inlier_share;
-      poor = m.inlier_share < params_.lost_inlier_share;
-      if (m.valid && !poor)
-      {
-        result.pose = m.pose;
-        result.covariance = m.covariance;
-        result.outcome = LocalizerOutcome::kTracked;
-      }
+      result.pose = m.pose;
+      result.covariance = m.covariance;
+      result.outcome = LocalizerOutcome::kTracked;
     }
-    pose_ = result.pose;
-    result.localized = true;
-    // A scan without points says nothing about being lost; a poor one does, once it persists.
-    if (scan.points.size() >= params_.min_points) poor_in_row_ = poor ? poor_in_row_ + 1 : 0;
-    if (result.outcome == LocalizerOutcome::kTracked)
-      ++counters_.tracked;
-    else
-      ++counters_.predicted;
-    if (poor_in_row_ >= params_.lost_scans && !index_.empty())
-    {
-      ++counters_.lost;
-      startGlobalLocalization();
-      result.localized = false;
-    }
-    else if (scan.points.size() >= params_.min_points && !index_.empty())
-      challengeTrack(scan, step, result);
   }
-  counters_.last_ms = nowMs() - start;
-  last_ = result;
+  pose_ = result.pose;
+  result.localized = true;
+  // A scan without points says nothing about being lost; a poor one does, once it persists.
+  if (scan.points.size() >= params_.min_points) poor_in_row_ = poor ? poor_in_row_ + 1 : 0;
+  if (result.outcome == LocalizerOutcome::kTracked)
+    ++counters_.tracked;
+  else
+    ++counters_.predicted;
+  if (poor_in_row_ >= params_.lost_scans && !index_.empty())
+  {
+    ++counters_.lost;
+    startGlobalLocalization();
+    result.localized = false;
+  }
+  else if (scan.points.size() >= params_.min_points && !index_.empty())
+    challengeTrack(scan, step, result);
   return result;
+}
+
+void LineMapLocalizer::matchAcrossJump(const LocalizerScan& scan, const Pose2& jump, SegmentMatch& best) const
+{
+  // The odometry jumped: a glitch, or real motion across a gap in the data. Both are searched
+  // widely and the better match wins.
+  for (const Pose2& centre : {pose_ * jump, pose_})
+  {
+    const auto found = correlativeSearch(global_.fineField(), scan.points, centre, params_.jump_window, 1);
+    if (found.empty()) continue;
+    const SegmentMatch c =
+        matchToSegments(index_, scan.points, found.front().pose, std::nullopt, params_.match, scan.sensor);
+    if (c.valid && c.inlier_share > best.inlier_share) best = c;
+  }
 }
 
 LocalizerResult LineMapLocalizer::globalStep(const LocalizerScan& scan, const std::optional<Pose2>& step)

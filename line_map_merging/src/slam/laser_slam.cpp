@@ -5,12 +5,15 @@
 #include <cmath>
 #include <sstream>
 
+#include "line_extraction/param_checks.hpp"
 #include "linemap/small_helpers.hpp"
 
 namespace line_map_merging
 {
 namespace
 {
+using line_extraction::countParam;
+using line_extraction::positiveParam;
 using linemap::Pose2;
 using linemap::Vec2;
 
@@ -26,19 +29,6 @@ void readWindow(const linemap::ParamSet& p, const std::string& block, SearchWind
     throw linemap::ParameterError(block + "/linear, /angular must be >= 0 and /angular_step > 0");
 }
 
-std::size_t getCount(const linemap::ParamSet& p, const std::string& key, std::size_t fallback, int min)
-{
-  const int v = p.getInt(key, static_cast<int>(fallback));
-  if (v < min) throw linemap::ParameterError(key + " must be >= " + std::to_string(min));
-  return static_cast<std::size_t>(v);
-}
-
-double getPositive(const linemap::ParamSet& p, const std::string& key, double fallback)
-{
-  const double v = p.getDouble(key, fallback);
-  if (!(v > 0.0) || !std::isfinite(v)) throw linemap::ParameterError(key + " must be a positive number");
-  return v;
-}
 /// The closure edge j -> k measured by a loop match, its information shaped by the match's.
 PoseGraphEdge loopEdge(std::size_t j, std::size_t k, const Pose2& measurement, const TranslationShape& shape,
                        const LaserSlamParams& params)
@@ -59,54 +49,54 @@ PoseGraphEdge loopEdge(std::size_t j, std::size_t k, const Pose2& measurement, c
 LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
 {
   LaserSlamParams s;
-  s.max_range = getPositive(p, "front_end/max_range", s.max_range);
-  s.min_points = getCount(p, "front_end/min_points", s.min_points, 3);
-  s.resolution = getPositive(p, "front_end/resolution", s.resolution);
-  s.sigma = getPositive(p, "front_end/sigma", s.sigma);
+  s.max_range = positiveParam(p, "front_end/max_range", s.max_range);
+  s.min_points = countParam(p, "front_end/min_points", s.min_points, 3);
+  s.resolution = positiveParam(p, "front_end/resolution", s.resolution);
+  s.sigma = positiveParam(p, "front_end/sigma", s.sigma);
   readWindow(p, "front_end/window", s.window);
   readWindow(p, "front_end/window_no_odometry", s.window_no_odometry);
   s.refinement.translation_weight =
       p.getDouble("front_end/refinement/translation_weight", s.refinement.translation_weight);
   s.refinement.rotation_weight =
       p.getDouble("front_end/refinement/rotation_weight", s.refinement.rotation_weight);
-  s.refinement.max_iterations = static_cast<int>(getCount(
+  s.refinement.max_iterations = static_cast<int>(countParam(
       p, "front_end/refinement/max_iterations", static_cast<std::size_t>(s.refinement.max_iterations), 1));
   s.min_score = p.getDouble("front_end/min_score", s.min_score);
   s.filter_distance = p.getDouble("front_end/filter_distance", s.filter_distance);
   s.filter_angle = p.getDouble("front_end/filter_angle", s.filter_angle);
-  s.keyframe_distance = getPositive(p, "front_end/keyframe_distance", s.keyframe_distance);
-  s.keyframe_angle = getPositive(p, "front_end/keyframe_angle", s.keyframe_angle);
-  s.local_map_keyframes = getCount(p, "front_end/local_map_keyframes", s.local_map_keyframes, 1);
-  s.max_odometry_step = getPositive(p, "front_end/max_odometry_step", s.max_odometry_step);
-  s.max_odometry_turn = getPositive(p, "front_end/max_odometry_turn", s.max_odometry_turn);
-  s.time_jump_tolerance = getPositive(p, "front_end/time_jump_tolerance", s.time_jump_tolerance);
-  s.edge_sigma_xy = getPositive(p, "graph/edge_sigma_xy", s.edge_sigma_xy);
-  s.edge_sigma_theta = getPositive(p, "graph/edge_sigma_theta", s.edge_sigma_theta);
-  s.odometry_sigma_xy = getPositive(p, "graph/odometry_sigma_xy", s.odometry_sigma_xy);
-  s.odometry_sigma_theta = getPositive(p, "graph/odometry_sigma_theta", s.odometry_sigma_theta);
-  s.loop_sigma_xy = getPositive(p, "graph/loop_sigma_xy", s.loop_sigma_xy);
-  s.loop_sigma_theta = getPositive(p, "graph/loop_sigma_theta", s.loop_sigma_theta);
-  s.loop_loss_scale = getPositive(p, "graph/loop_loss_scale", s.loop_loss_scale);
+  s.keyframe_distance = positiveParam(p, "front_end/keyframe_distance", s.keyframe_distance);
+  s.keyframe_angle = positiveParam(p, "front_end/keyframe_angle", s.keyframe_angle);
+  s.local_map_keyframes = countParam(p, "front_end/local_map_keyframes", s.local_map_keyframes, 1);
+  s.max_odometry_step = positiveParam(p, "front_end/max_odometry_step", s.max_odometry_step);
+  s.max_odometry_turn = positiveParam(p, "front_end/max_odometry_turn", s.max_odometry_turn);
+  s.time_jump_tolerance = positiveParam(p, "front_end/time_jump_tolerance", s.time_jump_tolerance);
+  s.edge_sigma_xy = positiveParam(p, "graph/edge_sigma_xy", s.edge_sigma_xy);
+  s.edge_sigma_theta = positiveParam(p, "graph/edge_sigma_theta", s.edge_sigma_theta);
+  s.odometry_sigma_xy = positiveParam(p, "graph/odometry_sigma_xy", s.odometry_sigma_xy);
+  s.odometry_sigma_theta = positiveParam(p, "graph/odometry_sigma_theta", s.odometry_sigma_theta);
+  s.loop_sigma_xy = positiveParam(p, "graph/loop_sigma_xy", s.loop_sigma_xy);
+  s.loop_sigma_theta = positiveParam(p, "graph/loop_sigma_theta", s.loop_sigma_theta);
+  s.loop_loss_scale = positiveParam(p, "graph/loop_loss_scale", s.loop_loss_scale);
   s.loop_min_path = p.getDouble("loop/min_path", s.loop_min_path);
-  s.loop_radius = getPositive(p, "loop/radius", s.loop_radius);
+  s.loop_radius = positiveParam(p, "loop/radius", s.loop_radius);
   s.loop_radius_growth = p.getDouble("loop/radius_growth", s.loop_radius_growth);
-  s.loop_max_radius = getPositive(p, "loop/max_radius", s.loop_max_radius);
-  s.loop_angle = getPositive(p, "loop/angle", s.loop_angle);
+  s.loop_max_radius = positiveParam(p, "loop/max_radius", s.loop_max_radius);
+  s.loop_angle = positiveParam(p, "loop/angle", s.loop_angle);
   s.loop_angle_growth = p.getDouble("loop/angle_growth", s.loop_angle_growth);
-  s.loop_max_angle = getPositive(p, "loop/max_angle", s.loop_max_angle);
-  s.loop_resolution = getPositive(p, "loop/resolution", s.loop_resolution);
-  s.loop_angular_step = getPositive(p, "loop/angular_step", s.loop_angular_step);
-  s.loop_submap_keyframes = getCount(p, "loop/submap_keyframes", s.loop_submap_keyframes, 0);
-  s.loop_candidates = getCount(p, "loop/candidates", s.loop_candidates, 0);
-  s.loop_every = getCount(p, "loop/every", s.loop_every, 1);
+  s.loop_max_angle = positiveParam(p, "loop/max_angle", s.loop_max_angle);
+  s.loop_resolution = positiveParam(p, "loop/resolution", s.loop_resolution);
+  s.loop_angular_step = positiveParam(p, "loop/angular_step", s.loop_angular_step);
+  s.loop_submap_keyframes = countParam(p, "loop/submap_keyframes", s.loop_submap_keyframes, 0);
+  s.loop_candidates = countParam(p, "loop/candidates", s.loop_candidates, 0);
+  s.loop_every = countParam(p, "loop/every", s.loop_every, 1);
   s.loop_min_score = p.getDouble("loop/min_score", s.loop_min_score);
-  s.loop_max_error_xy = getPositive(p, "loop/max_error_xy", s.loop_max_error_xy);
-  s.loop_max_error_theta = getPositive(p, "loop/max_error_theta", s.loop_max_error_theta);
+  s.loop_max_error_xy = positiveParam(p, "loop/max_error_xy", s.loop_max_error_xy);
+  s.loop_max_error_theta = positiveParam(p, "loop/max_error_theta", s.loop_max_error_theta);
   s.loop_corroborate_xy = p.getDouble("loop/corroborate_xy", s.loop_corroborate_xy);
   s.loop_corroborate_theta = p.getDouble("loop/corroborate_theta", s.loop_corroborate_theta);
   s.loop_agreement_xy = p.getDouble("loop/agreement_xy", s.loop_agreement_xy);
   s.loop_agreement_theta = p.getDouble("loop/agreement_theta", s.loop_agreement_theta);
-  s.loop_pending_keyframes = getCount(p, "loop/pending_keyframes", s.loop_pending_keyframes, 1);
+  s.loop_pending_keyframes = countParam(p, "loop/pending_keyframes", s.loop_pending_keyframes, 1);
   s.loop_ambiguity_distance = p.getDouble("loop/ambiguity_distance", s.loop_ambiguity_distance);
   s.loop_ambiguity_ratio = p.getDouble("loop/ambiguity_ratio", s.loop_ambiguity_ratio);
   s.loop_scale_by_disagreement = p.getDouble("loop/scale_by_disagreement", s.loop_scale_by_disagreement);
@@ -512,19 +502,31 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
     path_at_closure_ = keyframes_[k].path;
     return;
   }
-  // It disagrees with the estimate. A large disagreement is the drift a closure is for, or a false
-  // match: it must be corroborated by a second closure, from another keyframe, implying the same
-  // correction of the current pose (a false match rarely repeats itself consistently).
-  const Pose2 implied = graph_.node(j) * match.pose;  // where this closure puts keyframe k
   std::vector<std::size_t> added{edge};
-  if (size > params_.loop_corroborate_xy || std::fabs(disagreement.theta) > params_.loop_corroborate_theta)
+  if (!admitDisagreeing(j, k, e, match.pose, size, disagreement.theta, added)) return;
+  if (!optimizeKeeping(added)) return;
+  counters_.loops_accepted += added.size();
+  counters_.loops_degenerate += shape.degenerate ? 1 : 0;
+  graph_optimized_ = true;
+  path_at_closure_ = keyframes_[k].path;
+}
+
+bool LaserSlam::admitDisagreeing(std::size_t j, std::size_t k, const PoseGraphEdge& e, const Pose2& relative,
+                                 double size, double theta_error, std::vector<std::size_t>& added)
+{
+  // A large disagreement is the drift a closure is for, or a false match: it must be corroborated by a
+  // second closure, from another keyframe, implying the same correction of the current pose (a false
+  // match rarely repeats itself consistently).
+  const std::size_t edge = added.front();
+  const Pose2 implied = graph_.node(j) * relative;  // where this closure puts keyframe k
+  if (size > params_.loop_corroborate_xy || std::fabs(theta_error) > params_.loop_corroborate_theta)
   {
     if (!corroborates(k, implied))
     {
       graph_.removeEdge(edge);
       pending_ = PendingClosure{e, implied, k};
       ++counters_.loops_pending;
-      return;
+      return false;
     }
     // Both go in, under a loss wide enough for the correction they agree on.
     const double scale = std::max(params_.loop_loss_scale, 2.0 * size / params_.loop_sigma_xy);
@@ -537,11 +539,7 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
   else if (params_.loop_scale_by_disagreement > 0.0)
     graph_.setLossScale(edge, std::max(params_.loop_loss_scale,
                                        params_.loop_scale_by_disagreement * size / params_.loop_sigma_xy));
-  if (!optimizeKeeping(added)) return;
-  counters_.loops_accepted += added.size();
-  counters_.loops_degenerate += shape.degenerate ? 1 : 0;
-  graph_optimized_ = true;
-  path_at_closure_ = keyframes_[k].path;
+  return true;
 }
 
 bool LaserSlam::corroborates(std::size_t k, const Pose2& implied) const

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "silent_solve.hpp"
+
 namespace line_map_merging
 {
 namespace
@@ -95,13 +97,8 @@ OptimizationStats PoseGraph::optimize()
                              nodes_[e.from].data(), nodes_[e.to].data());
   }
   problem.SetParameterBlockConstant(nodes_[0].data());
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  options.max_num_iterations = params_.max_iterations;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  const ceres::Solver::Summary summary =
+      solveSilently(problem, ceres::SPARSE_NORMAL_CHOLESKY, params_.max_iterations);
   for (auto& n : nodes_) n[2] = linemap::normalizeAngle(n[2]);
   stats.iterations = static_cast<int>(summary.iterations.size());
   stats.initial_cost = summary.initial_cost;

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "silent_solve.hpp"
+
 namespace line_map_merging
 {
 namespace
@@ -200,13 +202,7 @@ MatchResult refineMatch(const LikelihoodGrid& grid, const std::vector<linemap::V
   problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorCost, 3, 3>(
                                new PriorCost(prior, params.translation_weight, params.rotation_weight)),
                            nullptr, pose);
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = params.max_iterations;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  solveSilently(problem, ceres::DENSE_QR, params.max_iterations);
   result.pose = {pose[0], pose[1], linemap::normalizeAngle(pose[2])};
   result.curvature = scoreCurvature(field, grid, points, result.pose);
   double sum = 0.0;

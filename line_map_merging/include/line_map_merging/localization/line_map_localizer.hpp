@@ -142,6 +142,19 @@ class LineMapLocalizer
     SegmentMatch last;
   };
   PosePrior odometryPrior(const linemap::Pose2& predicted, const std::optional<linemap::Pose2>& step) const;
+  /// The odometry's motion since the last scan: a plausible `step`, or an implausible `jump`.
+  struct OdometryMotion
+  {
+    std::optional<linemap::Pose2> step, jump;
+  };
+  /// Counts a clock jump back (forgetting the odometry); false for a stamp that is not new.
+  bool acceptStamp(double stamp);
+  OdometryMotion odometryMotion(const std::optional<linemap::Pose2>& reading);
+  /// One scan while tracking: matched near the odometry's prediction; lost after lost_scans poor ones.
+  LocalizerResult trackStep(const LocalizerScan& scan, const std::optional<linemap::Pose2>& step,
+                            const std::optional<linemap::Pose2>& jump);
+  /// Replaces `best` by a match found by wide searches around the jumped and the unmoved pose, if better.
+  void matchAcrossJump(const LocalizerScan& scan, const linemap::Pose2& jump, SegmentMatch& best) const;
   SegmentMatch track(const LocalizerScan& scan, const linemap::Pose2& predicted, const PosePrior& prior,
                      bool allow_retry);
   LocalizerResult globalStep(const LocalizerScan& scan, const std::optional<linemap::Pose2>& step);

@@ -28,8 +28,9 @@
 
 namespace YAML
 {
+class Emitter;
 class Node;
-}
+}  // namespace YAML
 
 namespace line_map_merging
 {
@@ -179,6 +180,8 @@ class CaeRlsm : public Merger
   void resolveAllCrossings();
 
   // The parts of load() (map_file.cpp), on a fresh state; each throws MapFileError naming the field.
+  /// The map file's "segments": every node with its leaves, by id.
+  void emitSegments(YAML::Emitter& out) const;
   void loadKeyframes(const std::string& path, const YAML::Node& root);
   void loadSegments(const std::string& path, const YAML::Node& root);
   LeafRecord readLeaf(const std::string& path, const YAML::Node& leaf) const;

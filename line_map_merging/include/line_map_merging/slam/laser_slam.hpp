@@ -206,6 +206,11 @@ class LaserSlam
   std::vector<std::size_t> loopCandidates(std::size_t k, double radius) const;
   /// One closure of keyframe k against candidate j: matched, checked, added and optimised, or not.
   void tryLoop(std::size_t j, std::size_t k, double radius, double angle);
+  /// A closure (edge `added[0]`, `relative` pose of k from j) that disagrees with the estimate by
+  /// `size` and `theta_error`: sets its loss, adds a corroborating pending closure to `added`, or
+  /// leaves it pending (removed from the graph; false).
+  bool admitDisagreeing(std::size_t j, std::size_t k, const PoseGraphEdge& e, const linemap::Pose2& relative,
+                        double size, double theta_error, std::vector<std::size_t>& added);
   /// Whether the pending closure implies the same correction of keyframe k as one putting it at
   /// `implied`.
   bool corroborates(std::size_t k, const linemap::Pose2& implied) const;

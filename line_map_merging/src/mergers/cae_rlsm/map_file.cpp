@@ -177,6 +177,22 @@ CaeParams readParams(const std::string& path, const YAML::Node& p, CaeParams par
   return params;
 }
 
+/// The parameters a map file records: those that shape how a loaded map goes on adjusting.
+void emitParams(YAML::Emitter& out, const CaeParams& params)
+{
+  out << YAML::BeginMap;
+  out << YAML::Key << "max_angle" << YAML::Value << params.fusion.max_angle;
+  out << YAML::Key << "max_distance" << YAML::Value << params.fusion.max_distance;
+  out << YAML::Key << "min_overlap" << YAML::Value << params.fusion.min_overlap;
+  out << YAML::Key << "consistent_adjustment" << YAML::Value << params.consistent_adjustment;
+  out << YAML::Key << "weighting" << YAML::Value
+      << (params.fusion.weighting == FusionWeighting::length ? "length" : "count");
+  out << YAML::Key << "map_merge" << YAML::Value << params.map_merge;
+  out << YAML::Key << "absorb_contained" << YAML::Value << params.absorb_contained;
+  out << YAML::Key << "regroup_on_adjust" << YAML::Value << params.regroup_on_adjust;
+  out << YAML::EndMap;
+}
+
 }  // namespace
 
 void CaeRlsm::save(const std::string& path) const
@@ -186,17 +202,8 @@ void CaeRlsm::save(const std::string& path) const
   out << YAML::BeginMap;
   out << YAML::Key << "format_version" << YAML::Value << kFormatVersion;
   out << YAML::Key << "method" << YAML::Value << name();
-  out << YAML::Key << "parameters" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "max_angle" << YAML::Value << params_.fusion.max_angle;
-  out << YAML::Key << "max_distance" << YAML::Value << params_.fusion.max_distance;
-  out << YAML::Key << "min_overlap" << YAML::Value << params_.fusion.min_overlap;
-  out << YAML::Key << "consistent_adjustment" << YAML::Value << params_.consistent_adjustment;
-  out << YAML::Key << "weighting" << YAML::Value
-      << (params_.fusion.weighting == FusionWeighting::length ? "length" : "count");
-  out << YAML::Key << "map_merge" << YAML::Value << params_.map_merge;
-  out << YAML::Key << "absorb_contained" << YAML::Value << params_.absorb_contained;
-  out << YAML::Key << "regroup_on_adjust" << YAML::Value << params_.regroup_on_adjust;
-  out << YAML::EndMap;
+  out << YAML::Key << "parameters" << YAML::Value;
+  emitParams(out, params_);
   out << YAML::Key << "next_id" << YAML::Value << next_id_;
   out << YAML::Key << "keyframe_count" << YAML::Value << keyframes_.size();
   out << YAML::Key << "segment_count" << YAML::Value << nodes_.size();
@@ -210,6 +217,15 @@ void CaeRlsm::save(const std::string& path) const
   }
   out << YAML::EndSeq;
 
+  emitSegments(out);
+  out << YAML::Key << "end_of_map" << YAML::Value << true;  // a file cut at a line boundary lacks it
+  out << YAML::EndMap;
+  if (!out.good()) throw MapFileError("map file '" + path + "': cannot encode: " + out.GetLastError());
+  writeFileAtomically(path, std::string(out.c_str()) + "\n");
+}
+
+void CaeRlsm::emitSegments(YAML::Emitter& out) const
+{
   // Every node, the ones map() withholds (single_view_min_length) included: the file is the whole state.
   std::vector<std::uint64_t> ids;
   ids.reserve(nodes_.size());
@@ -235,10 +251,6 @@ void CaeRlsm::save(const std::string& path) const
     out << YAML::EndSeq << YAML::EndMap;
   }
   out << YAML::EndSeq;
-  out << YAML::Key << "end_of_map" << YAML::Value << true;  // a file cut at a line boundary lacks it
-  out << YAML::EndMap;
-  if (!out.good()) throw MapFileError("map file '" + path + "': cannot encode: " + out.GetLastError());
-  writeFileAtomically(path, std::string(out.c_str()) + "\n");
 }
 
 void CaeRlsm::load(const std::string& path)

@@ -1,5 +1,5 @@
-// The property check of the merging fuzz targets: a violated property is named, then the target
-// aborts so that libFuzzer keeps the input.
+// The property check of every fuzz target (scripts/fuzz.sh puts this folder on the include path): a
+// violated property is named, then the target aborts so that libFuzzer keeps the input.
 #pragma once
 
 #include <cstdio>
