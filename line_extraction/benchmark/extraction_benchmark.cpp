@@ -32,6 +32,7 @@
 
 #include "line_extraction/line_extractor.hpp"
 #include "line_extraction/segment_matching.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace
 {
@@ -379,19 +380,9 @@ std::pair<std::string, std::string> splitPair(const std::string& arg, const std:
 /// `v` as a number >= 0; the error names `option`.
 double number(const std::string& option, const std::string& v)
 {
-  std::size_t used = 0;
-  double x = 0.0;
-  try
-  {
-    x = std::stod(v, &used);
-  }
-  catch (const std::exception&)
-  {
-    used = 0;
-  }
-  if (used != v.size() || !(x >= 0.0))
-    throw std::invalid_argument(option + ": '" + v + "' is not a number >= 0");
-  return x;
+  const std::optional<double> x = linemap::toNumber(v);
+  if (!x || !(*x >= 0.0)) throw std::invalid_argument(option + ": '" + v + "' is not a number >= 0");
+  return *x;
 }
 
 Options parseArgs(int argc, char** argv)

@@ -4,19 +4,17 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "linemap/small_helpers.hpp"
+
 namespace linemap
 {
 double ParamSet::getDouble(const std::string& key, double fallback) const
 {
   auto it = values_.find(key);
   if (it == values_.end()) return fallback;
-  const char* begin = it->second.c_str();
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(begin, &end);
-  if (end == begin || *end != '\0' || errno == ERANGE)
-    throw ParameterError("parameter '" + key + "': '" + it->second + "' is not a number");
-  return v;
+  const std::optional<double> v = toNumber(it->second);
+  if (!v) throw ParameterError("parameter '" + key + "': '" + it->second + "' is not a number");
+  return *v;
 }
 
 double ParamSet::getNonNegative(const std::string& key, double fallback) const

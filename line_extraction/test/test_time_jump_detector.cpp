@@ -49,3 +49,12 @@ TEST(SmallHelpers, MedianAndBaseName)
   EXPECT_EQ(linemap::fileStem("/logs/intel.clf.bz2"), "intel");
   EXPECT_EQ(linemap::fileStem("/worlds/.hidden"), ".hidden");
 }
+
+TEST(SmallHelpers, ToNumberTakesOnlyAWholeNumberInRange)
+{
+  EXPECT_DOUBLE_EQ(*linemap::toNumber("0.25"), 0.25);
+  EXPECT_DOUBLE_EQ(*linemap::toNumber("-3e2"), -300.0);
+  EXPECT_TRUE(std::isinf(*linemap::toNumber("inf")));
+  for (const char* bad : {"", "x", "1.5m", "0.5 ", "1e999", "--1"})
+    EXPECT_FALSE(linemap::toNumber(bad).has_value()) << "'" << bad << "'";
+}

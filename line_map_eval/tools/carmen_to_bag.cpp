@@ -13,6 +13,7 @@
 #include "line_map_eval/datasets/bag_writer.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_eval/datasets/carmen_recording.hpp"
+#include "linemap/small_helpers.hpp"
 #include "tool_main.hpp"
 
 namespace
@@ -70,19 +71,10 @@ std::size_t parseCount(const std::string& option, const std::string& value, std:
 
 double parsePositive(const std::string& option, const std::string& value)
 {
-  std::size_t used = 0;
-  double v = 0.0;
-  try
-  {
-    v = std::stod(value, &used);
-  }
-  catch (const std::exception&)
-  {
-    used = 0;
-  }
-  if (used != value.size() || !(v > 0.0))
+  const std::optional<double> v = linemap::toNumber(value);
+  if (!v || !(*v > 0.0))
     throw std::invalid_argument(option + " needs a positive number, got '" + value + "'");
-  return v;
+  return *v;
 }
 
 std::vector<std::string> split(const std::string& s, char sep)

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "line_map_eval/batch/map_export.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace
 {
@@ -21,10 +22,9 @@ void usage(std::ostream& out)
 
 double parseNumber(const std::string& option, const std::string& value)
 {
-  char* end = nullptr;
-  const double v = std::strtod(value.c_str(), &end);
-  if (value.empty() || *end != '\0') throw std::invalid_argument(option + " '" + value + "' is not a number");
-  return v;
+  const std::optional<double> v = linemap::toNumber(value);
+  if (!v) throw std::invalid_argument(option + " '" + value + "' is not a number");
+  return *v;
 }
 }  // namespace
 

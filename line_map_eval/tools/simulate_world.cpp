@@ -19,6 +19,7 @@
 #include "line_map_eval/datasets/world.hpp"
 #include "line_map_eval/simulation/ground_truth.hpp"
 #include "line_map_eval/simulation/simulator.hpp"
+#include "linemap/small_helpers.hpp"
 
 namespace
 {
@@ -68,9 +69,9 @@ unsigned long long parseCount(const std::string& option, const char* text, unsig
 
 double parseNumber(const std::string& option, const char* text, double min, double max)
 {
-  char* end = nullptr;
-  const double v = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !std::isfinite(v) || v < min || v > max)
+  const std::optional<double> parsed = linemap::toNumber(text);
+  const double v = parsed.value_or(NAN);
+  if (!std::isfinite(v) || v < min || v > max)
   {
     std::ostringstream range;
     range << "[" << min << ", " << max << "]";

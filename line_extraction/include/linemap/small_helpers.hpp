@@ -1,9 +1,13 @@
-// Small helpers every package needs once: elapsed time, the median, a path's file name and stem.
+// Small helpers every package needs once: elapsed time, the median, a path's file name and stem, a
+// number from text.
 #pragma once
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,5 +44,17 @@ inline std::string fileStem(const std::string& path)
   const std::string name = baseName(path);
   const std::size_t dot = name.find('.');
   return dot == std::string::npos || dot == 0 ? name : name.substr(0, dot);
+}
+
+/// `text` as a number when the whole of it is one (strtod's syntax: "inf" and "nan" too), nothing when
+/// it is empty, has anything after the number, or is out of the double's range.
+inline std::optional<double> toNumber(const std::string& text)
+{
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(begin, &end);
+  if (text.empty() || end == begin || *end != '\0' || errno == ERANGE) return std::nullopt;
+  return v;
 }
 }  // namespace linemap
