@@ -6,6 +6,7 @@
 #include <random>
 
 #include "cae_test.hpp"
+#include "segment_checks.hpp"
 #include "synthetic_world.hpp"
 
 using synthetic::keyframeOf;
@@ -97,19 +98,7 @@ TEST(OtmIlsm, OneSegmentBridgingTheTwoEndsOfALoopMergesAllThree)
 TEST(OtmIlsm, BadInputIsCountedOrRejectedWithoutChangingTheMap)
 {
   CaeRlsm merger;
-  Keyframe k = keyframeOf(7, Pose2(), {Segment2(Vec2(0, 0), Vec2(1, 0))});
-  k.segments.push_back(Segment2(Vec2(1, 1), Vec2(1, 1)));  // zero length
-  k.segments.push_back(Segment2(Vec2(std::numeric_limits<double>::quiet_NaN(), 0), Vec2(1, 0)));
-  const auto r = merger.addKeyframe(k);
-  EXPECT_EQ(r.merged, 1u);
-  EXPECT_EQ(r.rejected, 2u);
-  EXPECT_THROW(merger.addKeyframe(k), std::invalid_argument);  // duplicate index
-  Keyframe nan_pose = keyframeOf(8, Pose2(), {Segment2(Vec2(0, 3), Vec2(1, 3))});
-  nan_pose.pose.theta = std::numeric_limits<double>::infinity();
-  EXPECT_THROW(merger.addKeyframe(nan_pose), std::invalid_argument);
-  EXPECT_EQ(merger.segmentCount(), 1u);
-  EXPECT_EQ(merger.keyframeCount(), 1u);
-  EXPECT_EQ(merger.leafCount(), 1u);
+  expectBadInputRejected(merger);
 }
 
 TEST(OtmIlsm, SpatialIndexAndLinearSearchGiveIdenticalMaps)

@@ -127,19 +127,7 @@ TEST(OtoIlsm, IdsStayStableAndResetRestartsThem)
 TEST(OtoIlsm, BadInputIsCountedOrRejectedWithoutChangingTheMap)
 {
   OtoIlsm oto(countWeighting());
-  Keyframe k = keyframeOf(7, Pose2(), {Segment2(Vec2(0, 0), Vec2(1, 0))});
-  k.segments.push_back(Segment2(Vec2(1, 1), Vec2(1, 1)));
-  k.segments.push_back(Segment2(Vec2(std::numeric_limits<double>::quiet_NaN(), 0), Vec2(1, 0)));
-  const auto r = oto.addKeyframe(k);
-  EXPECT_EQ(r.merged, 1u);
-  EXPECT_EQ(r.rejected, 2u);
-  EXPECT_THROW(oto.addKeyframe(k), std::invalid_argument);
-  Keyframe bad = keyframeOf(8, Pose2(), {Segment2(Vec2(0, 3), Vec2(1, 3))});
-  bad.pose.x = std::numeric_limits<double>::infinity();
-  EXPECT_THROW(oto.addKeyframe(bad), std::invalid_argument);
-  EXPECT_EQ(oto.segmentCount(), 1u);
-  EXPECT_EQ(oto.keyframeCount(), 1u);
-  EXPECT_EQ(oto.leafCount(), 1u);
+  expectBadInputRejected(oto);
 }
 
 TEST(OtoIlsm, FactoryBuildsEveryNamedMergerAndRejectsUnknownNames)
