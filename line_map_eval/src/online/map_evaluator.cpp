@@ -72,10 +72,9 @@ bool MapEvaluator::gateAccepts(const std::map<double, linemap::Pose2>& stored,
 {
   if (stored.empty() || stamp > stored.rbegin()->first) return gate.accept(pose);
   // Within the stored time span: a replay after the clock jumped back, or a scan that the tf filter
-  // let through late (19 % of the soak test's Intel scans came after a newer one). The live gate
-  // holds whatever came last, where the last pass ended or the replay started, and would begin a
-  // chain of keyframes of its own beside the stored one (the soak test stored 447 scans, then 58
-  // more in the first replay). Stored only where the stored frames leave a gap: the gate would
+  // let through late (common on a loaded machine). The live gate holds whatever came last, where the
+  // last pass ended or the replay started, and would begin a chain of keyframes of its own beside
+  // the stored one. Stored only where the stored frames leave a gap: the gate would
   // admit it after the stored frame before it and before the one after it.
   const auto next = stored.upper_bound(stamp);
   line_map_merging::KeyframeGate check(params_.gate);
