@@ -134,21 +134,20 @@ bool MapEvaluator::addSegments(double stamp, const linemap::Pose2& laser_pose,
 
 std::size_t MapEvaluator::applyTrajectory(const std::vector<std::pair<double, linemap::Pose2>>& laser_poses)
 {
-  // As the merger (OnlineMapper::addTrajectory): at the first trajectory, frames stored on tf are
-  // dropped when their scans are all still held, and the nodes choose again from the start.
-  // Only a trajectory that names scans seen starts it (OnlineMapper::addTrajectory).
-  const bool names_scans = std::any_of(
-      laser_poses.begin(), laser_poses.end(),
-      [&](const auto& n) { return history_.at(n.first, params_.stamp_tolerance, 0.0).has_value(); });
+  // The merger's keyframe policy (NodeKeyframes), on both stores.
+  const bool names_scans =
+      params_.keyframe_source != line_map_merging::KeyframeSource::kTf &&
+      std::any_of(laser_poses.begin(), laser_poses.end(),
+                  [&](const auto& n)
+                  { return history_.at(n.first, params_.stamp_tolerance, 0.0).has_value(); });
   auto rebuild = [&](line_map_merging::NodeKeyframes<Frame>& nodes, std::vector<Frame>& frames,
                      std::map<double, linemap::Pose2>& stamps)
   {
-    if (params_.keyframe_source == line_map_merging::KeyframeSource::kTf || nodes.active() || !names_scans ||
-        stamps.empty() || nodes.oldestHeld() > stamps.begin()->first)
+    if (!nodes.rebuildAtFirstTrajectory(
+            names_scans, stamps.empty() ? std::nullopt : std::optional<double>(stamps.begin()->first)))
       return;
     frames.clear();
     stamps.clear();
-    nodes.activate(-INFINITY, std::nullopt);
     table_dirty_ = true;
   };
   rebuild(scan_nodes_, scans_, scan_stamps_);
@@ -163,17 +162,16 @@ std::size_t MapEvaluator::applyTrajectory(const std::vector<std::pair<double, li
     table_dirty_ = true;
   }
   if (params_.keyframe_source == line_map_merging::KeyframeSource::kTf) return nc.unmatched;
-  // A back end is present: its nodes choose the stored frames from the newest stored one on, as the
-  // merger's keyframes (the gate measures from the newest stored frame where it now is).
+  // The nodes take over from the newest stored frame on (the gate measures from that frame where it
+  // now is).
   auto activate = [&](line_map_merging::NodeKeyframes<Frame>& nodes, const std::vector<Frame>& frames)
   {
-    if (nodes.active() || !names_scans) return;
     const auto newest = std::max_element(frames.begin(), frames.end(),
                                          [](const Frame& a, const Frame& b) { return a.stamp < b.stamp; });
     if (newest == frames.end())
-      nodes.activate(-INFINITY, std::nullopt);
+      nodes.takeOver(names_scans, -INFINITY, std::nullopt);
     else
-      nodes.activate(newest->stamp, newest->pose);
+      nodes.takeOver(names_scans, newest->stamp, newest->pose);
   };
   activate(scan_nodes_, scans_);
   activate(segment_nodes_, segments_);

@@ -166,32 +166,26 @@ bool OnlineMapper::addTrajectory(const std::vector<StampedPose>& base_poses)
     ++counters_.ignored_trajectories;
     return false;
   }
-  // A back end is present: its nodes choose the keyframes. At its first trajectory, when every scan
-  // since the first keyframe is still held, the map is made again from the nodes alone, so that no
-  // keyframe is corrected between nodes (a better map than keeping the tf keyframes); otherwise the nodes
-  // take over after the newest keyframe. Only a trajectory that names scans seen does: one before any scan,
-  // or of another sensor's stamps, would leave the scans held for nodes that never come.
+  // A back end is present: its nodes choose the keyframes (NodeKeyframes' policy).
   const bool names_scans =
       params_.keyframe_source != KeyframeSource::kTf && !nodes_.active() &&
       std::any_of(nodes.begin(), nodes.end(),
                   [&](const StampedPose& n)
                   { return history_.at(n.first, params_.stamp_tolerance, 0.0).has_value(); });
-  bool rebuilt = false;
-  if (names_scans && !keyframe_order_.empty() &&
-      nodes_.oldestHeld() <= *std::min_element(keyframe_order_.begin(), keyframe_order_.end()))
+  const std::optional<double> oldest =
+      keyframe_order_.empty()
+          ? std::nullopt
+          : std::optional<double>(*std::min_element(keyframe_order_.begin(), keyframe_order_.end()));
+  const bool rebuilt = nodes_.rebuildAtFirstTrajectory(names_scans, oldest);
+  if (rebuilt)
   {
     clearKeyframes();
     ++counters_.rebuilds;
-    nodes_.activate(-INFINITY, std::nullopt);
-    rebuilt = true;
   }
   const bool adjusted = adjustTo(nodes);
   if (params_.keyframe_source == KeyframeSource::kTf) return adjusted;
-  if (!nodes_.active())
-  {
-    if (!names_scans) return adjusted;
-    nodes_.activate(newestKeyframeStamp(), gate_.reference());
-  }
+  nodes_.takeOver(names_scans, newestKeyframeStamp(), gate_.reference());
+  if (!nodes_.active()) return adjusted;
   const bool merged = mergeNodes(nodes_.addTrajectory(nodes));
   return merged || adjusted || rebuilt;
 }

@@ -1,8 +1,8 @@
 // Keyframes chosen by a SLAM back end: once a trajectory has been received, the scans whose stamps are
 // nodes of it become keyframes, posed by their node, and no other scan does. A keyframe between two
 // nodes has no pose of its own and must be corrected from its neighbours (trajectory_anchor.hpp); on
-// the first 4000 Intel scans that correction cost about 10 points of quality against the keyframes
-// at their own corrected poses. So recent scans are held (by stamp, bounded in time) until the
+// a real log that correction costs map quality against the keyframes at their own corrected poses.
+// So recent scans are held (by stamp, bounded in time) until the
 // trajectory tells which of them are nodes; a node whose scan has not arrived yet waits for it, so
 // the result does not depend on whether a trajectory or the scans of its nodes come first.
 // Header-only: the merger holds segment sets, the evaluator scan points and segment sets.
@@ -106,6 +106,28 @@ class NodeKeyframes
   std::size_t held() const { return buffer_.size(); }
   /// Stamp of the oldest scan held (infinite when none): whether the scans since then are all held.
   double oldestHeld() const { return buffer_.empty() ? INFINITY : buffer_.begin()->first; }
+
+  // The policy at a back end's trajectory, one for every store of keyframes (the merger's keyframes,
+  // the evaluator's scans and segment sets). Only a trajectory that names scans seen (`names_scans`)
+  // hands the choice to the nodes: one before any scan, or of another sensor's stamps, would leave
+  // the scans held for nodes that never come.
+
+  /// At the first such trajectory, when every scan since the store's oldest keyframe
+  /// (`oldest_stored`, nothing for an empty store) is still held, the store is made again from the
+  /// nodes alone, so that no keyframe is corrected between nodes: true when the caller is to empty
+  /// its store; the nodes then choose from the start.
+  bool rebuildAtFirstTrajectory(bool names_scans, const std::optional<double>& oldest_stored)
+  {
+    if (active_ || !names_scans || !oldest_stored || oldestHeld() > *oldest_stored) return false;
+    activate(-INFINITY, std::nullopt);
+    return true;
+  }
+  /// Otherwise the nodes take over after the store's newest keyframe (`newest_stored`, -inf for
+  /// none), their gate measuring from `reference`.
+  void takeOver(bool names_scans, double newest_stored, const std::optional<linemap::Pose2>& reference)
+  {
+    if (!active_ && names_scans) activate(newest_stored, reference);
+  }
   std::size_t waiting() const { return waiting_.size(); }
   std::size_t unmatched() const { return unmatched_; }  ///< nodes whose scan never came
   std::size_t gated() const { return gated_; }          ///< nodes the gate thinned out
