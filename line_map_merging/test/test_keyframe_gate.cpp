@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "line_map_merging/online/keyframe_gate.hpp"
+#include "line_map_merging/online/node_keyframes.hpp"
 
 using line_map_merging::KeyframeGate;
 using line_map_merging::KeyframeGateParams;
@@ -58,5 +59,35 @@ TEST(KeyframeGate, ParametersAndReset)
   catch (const linemap::ParameterError& e)
   {
     EXPECT_NE(std::string(e.what()).find("keyframe_distance"), std::string::npos);
+  }
+}
+
+// The policy at a back end's trajectory (the merger's and the evaluator's stores follow it).
+TEST(NodeKeyframes, FirstTrajectoryRebuildsOnlyWhenEveryScanSinceTheOldestKeyframeIsHeld)
+{
+  using Nodes = line_map_merging::NodeKeyframes<int>;
+  const KeyframeGateParams gate;
+  {
+    Nodes nodes(gate, 0.01, 100.0);
+    nodes.addScan(1.0, 1);  // held since 1 s; the store's oldest keyframe is at 1 s
+    EXPECT_FALSE(nodes.rebuildAtFirstTrajectory(false, 1.0));  // names no scan seen
+    EXPECT_FALSE(nodes.active());
+    EXPECT_FALSE(nodes.rebuildAtFirstTrajectory(true, std::nullopt));  // an empty store
+    EXPECT_TRUE(nodes.rebuildAtFirstTrajectory(true, 1.0));
+    EXPECT_TRUE(nodes.active());
+    EXPECT_FALSE(nodes.rebuildAtFirstTrajectory(true, 1.0));  // only at the first trajectory
+    // Rebuilt from the start: the node at the held scan makes it a keyframe.
+    EXPECT_EQ(nodes.addTrajectory({{1.0, Pose2(0, 0, 0)}}).size(), 1u);
+  }
+  {
+    Nodes nodes(gate, 0.01, 100.0);
+    nodes.addScan(2.0, 2);  // the scans before the keyframe at 1 s are gone
+    EXPECT_FALSE(nodes.rebuildAtFirstTrajectory(true, 1.0));
+    nodes.takeOver(false, 1.5, std::nullopt);
+    EXPECT_FALSE(nodes.active());
+    nodes.takeOver(true, 2.0, Pose2(0, 0, 0));  // after the newest keyframe, at 2 s
+    EXPECT_TRUE(nodes.active());
+    EXPECT_DOUBLE_EQ(nodes.horizon(), 2.0);
+    EXPECT_TRUE(nodes.addTrajectory({{2.0, Pose2(0, 0, 0)}}).empty());  // done with: a keyframe exists
   }
 }
