@@ -267,36 +267,42 @@ TEST(LineMapLocalizer, GlobalLocalizationWithoutAnInitialPose)
   EXPECT_LT(std::fabs(last.pose.theta), 0.2 * kDeg);
 }
 
-TEST(LineMapLocalizer, KidnappedRobotIsRecovered)
+namespace
+{
+/// The robot believes itself in the upper arm, facing down, and drives 70 scans: it must end
+/// localized at its true pose.
+LocalizerResult driveFromTheWrongArm(LineMapLocalizer& localizer)
 {
   const Drive drive{lRoom()};
+  localizer.setPose({2.0, 6.5, -1.6});
+  const LocalizerResult last = drive.feed(localizer, 70);
+  EXPECT_TRUE(last.localized);
+  EXPECT_LT(drive.miss(last.pose, 69), 0.01);
+  EXPECT_LT(std::fabs(last.pose.theta), 0.2 * kDeg);
+  return last;
+}
+}  // namespace
+
+TEST(LineMapLocalizer, KidnappedRobotIsRecovered)
+{
   // The synthetic map is complete: a tracked scan has all its points on it, a wrong pose in a room
   // this plain (two arms of equal width) still a half.
   LocalizerParams params;
   params.lost_inlier_share = 0.8;
   LineMapLocalizer localizer(lRoom(), params);
-  // The robot believes itself in the upper arm, facing down.
-  localizer.setPose({2.0, 6.5, -1.6});
-  const LocalizerResult last = drive.feed(localizer, 70);
+  driveFromTheWrongArm(localizer);
   EXPECT_EQ(localizer.counters().lost, 1u);
   EXPECT_EQ(localizer.counters().recovered, 1u);
-  EXPECT_TRUE(last.localized);
-  EXPECT_LT(drive.miss(last.pose, 69), 0.01);
 }
 
 TEST(LineMapLocalizer, DoubtedTrackIsReplacedByABetterRival)
 {
   // The wrong pose of the kidnapping above under the default parameters: it keeps matching half the
   // points, too many to be lost, too few to go unchallenged.
-  const Drive drive{lRoom()};
   LineMapLocalizer localizer(lRoom());
-  localizer.setPose({2.0, 6.5, -1.6});
-  const LocalizerResult last = drive.feed(localizer, 70);
+  driveFromTheWrongArm(localizer);
   EXPECT_EQ(localizer.counters().lost, 0u);
   EXPECT_EQ(localizer.counters().replaced, 1u);
-  EXPECT_TRUE(last.localized);
-  EXPECT_LT(drive.miss(last.pose, 69), 0.01);
-  EXPECT_LT(std::fabs(last.pose.theta), 0.2 * kDeg);
 }
 
 TEST(LineMapLocalizer, BadInput)
