@@ -200,7 +200,7 @@ TEST(GroundTruthMetrics, SeenPartsAreTheUnionOfLongEnoughPieces)
   line_map_eval::GroundTruth truth;
   truth.walls = {Segment2(Vec2(0, 0), Vec2(10, 0)), Segment2(Vec2(0, 5), Vec2(0, 0))};
   const auto piece = [](std::size_t wall, double x0, double y0, double x1, double y1) {
-    return line_map_eval::VisibleWall{wall, Segment2(Vec2(x0, y0), Vec2(x1, y1)), 10};
+    return line_map_eval::VisibleWall{wall, Segment2(Vec2(x0, y0), Vec2(x1, y1)), 10, {}};
   };
   truth.scans.resize(2);
   truth.scans[0].visible = {piece(0, 1, 0, 3, 0), piece(1, 0, 4, 0, 3.7)};  // the second: 0.3 m

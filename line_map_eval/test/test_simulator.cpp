@@ -11,6 +11,7 @@
 
 #include "eval_test_helpers.hpp"
 #include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/metrics/ground_truth_metrics.hpp"
 #include "line_map_eval/simulation/ground_truth.hpp"
 #include "line_map_eval/simulation/simulator.hpp"
 
@@ -383,6 +384,57 @@ TEST(GroundTruth, HandComputedVisiblePieces)
   EXPECT_EQ(count(57), 3u);
   EXPECT_EQ(count(58), 1u);
   EXPECT_EQ(count(68), 0u);
+}
+
+TEST(GroundTruth, AWallHiddenBehindAPillarIsSeenInRuns)
+{
+  // Laser at the origin facing +y, 181 beams at 1 deg. Wall y = 10 from x = -12 to 12; a thin
+  // pillar y = 5 from x = -1 to 1 hides it for |x| <= 2 at y = 10 (beams within atan(1/5) = 11.3 deg
+  // of the axis hit the pillar first: beams 79..101, 23 of them).
+  LaserModel laser;
+  laser.beams = 181;
+  laser.range_max = 30.0;
+  const Pose2 pose(0.0, 0.0, kPi / 2);
+  const std::vector<Segment2> faces = {Segment2(Vec2(12, 10), Vec2(-12, 10)),
+                                       Segment2(Vec2(1, 5), Vec2(-1, 5))};
+  const auto hits = castScan(faces, pose, laser);
+  std::vector<int> wall;
+  std::vector<double> range;
+  for (const auto& h : hits)
+  {
+    wall.push_back(h.face);
+    range.push_back(h.range);
+  }
+  const auto vis = visibleWallPieces(faces, pose, laser.angleMin(), laser.angleIncrement(), wall, range, 5);
+  ASSERT_EQ(vis.size(), 2u);
+  EXPECT_EQ(vis[0].wall, 0u);
+  EXPECT_EQ(vis[0].beams, 101u - 23u);  // the wall is hit within 50 deg of the axis: beams 40..140
+  // The hull runs from x = 10 / tan(40 deg) to its mirror; the runs stop at the pillar's shadow, the
+  // last beam beside it 12 deg off the axis: x = +-10 tan(12 deg).
+  const double far = 10.0 / std::tan(40.0 * kPi / 180);
+  EXPECT_NEAR(vis[0].segment.start.x(), far, 1e-9);
+  EXPECT_NEAR(vis[0].segment.end.x(), -far, 1e-9);
+  ASSERT_EQ(vis[0].runs.size(), 2u);
+  const double edge = 10.0 * std::tan(12.0 * kPi / 180);
+  EXPECT_NEAR(vis[0].runs[0].start.x(), far, 1e-9);
+  EXPECT_NEAR(vis[0].runs[0].end.x(), edge, 1e-9);
+  EXPECT_NEAR(vis[0].runs[1].start.x(), -edge, 1e-9);
+  EXPECT_NEAR(vis[0].runs[1].end.x(), -far, 1e-9);
+  EXPECT_EQ(vis[1].wall, 1u);
+  EXPECT_TRUE(vis[1].runs.empty());  // one run: the hull
+
+  // Only the runs are seen, not the shadow between them; the file keeps them.
+  line_map_eval::GroundTruth truth;
+  truth.walls = faces;
+  truth.scans.resize(1);
+  truth.scans[0].visible = vis;
+  const SeenParts seen = line_map_eval::seenParts(truth, 0.6, 10);
+  ASSERT_EQ(seen[0].size(), 2u);
+  EXPECT_NEAR(seen[0][0].second - seen[0][0].first, far - edge, 1e-9);
+  EXPECT_NEAR(seen[0][1].first - seen[0][0].second, 2.0 * edge, 1e-9);
+  TempFile file("runs_truth.yaml");
+  writeGroundTruth(truth, file.path);
+  EXPECT_TRUE(readGroundTruth(file.path).scans[0].visible == vis);
 }
 
 TEST(GroundTruth, FileRoundTripAndPiecesOnTheirWalls)

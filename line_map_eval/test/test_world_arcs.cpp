@@ -166,7 +166,7 @@ TEST(Curves, SightsJoinConsecutiveFacesOfACurve)
                                     Segment2(Vec2(2, 0.05), Vec2(3, 0.15)),
                                     Segment2(Vec2(3, 0.15), Vec2(4, 0.3)), Segment2(Vec2(0, 5), Vec2(4, 5))};
   const std::vector<std::vector<std::size_t>> curves{{0, 1, 2, 3}};
-  const auto piece = [&](std::size_t w) { return VisibleWall{w, faces[w], 3}; };
+  const auto piece = [&](std::size_t w) { return VisibleWall{w, faces[w], 3, {}}; };
   // Faces 0, 1 and 3 visible (2 hidden): the runs {0, 1} and {3}; face 4 alone.
   const auto groups = sights(faces, {piece(0), piece(1), piece(3), piece(4)}, curves);
   ASSERT_EQ(groups.size(), 3u);
@@ -179,7 +179,8 @@ TEST(Curves, SightsJoinConsecutiveFacesOfACurve)
   // A closed curve (a square ring of faces): the last and first faces are consecutive.
   const std::vector<Segment2> ring{Segment2(Vec2(0, 0), Vec2(1, 0)), Segment2(Vec2(1, 0), Vec2(1, 1)),
                                    Segment2(Vec2(1, 1), Vec2(0, 1)), Segment2(Vec2(0, 1), Vec2(0, 0))};
-  const auto seam = sights(ring, {VisibleWall{0, ring[0], 3}, VisibleWall{3, ring[3], 3}}, {{0, 1, 2, 3}});
+  const auto seam =
+      sights(ring, {VisibleWall{0, ring[0], 3, {}}, VisibleWall{3, ring[3], 3, {}}}, {{0, 1, 2, 3}});
   ASSERT_EQ(seam.size(), 1u);
   EXPECT_EQ(seam[0].size(), 2u);
   EXPECT_THROW(sights(ring, {}, {{0, 9}}), std::invalid_argument);
@@ -192,8 +193,8 @@ TEST(Curves, ACurveIsSeenAsAWholeAndItsJointsAreNoWallEnds)
   GroundTruth truth;
   truth.walls = {Segment2(Vec2(0, 0), Vec2(1, 0)), Segment2(Vec2(1, 0), Vec2(2, 0.05))};
   TruthScan scan;
-  scan.visible = {VisibleWall{0, Segment2(Vec2(0.5, 0), Vec2(1, 0)), 6},
-                  VisibleWall{1, Segment2(Vec2(1, 0), Vec2(1.5, 0.025)), 6}};
+  scan.visible = {VisibleWall{0, Segment2(Vec2(0.5, 0), Vec2(1, 0)), 6, {}},
+                  VisibleWall{1, Segment2(Vec2(1, 0), Vec2(1.5, 0.025)), 6, {}}};
   truth.scans = {scan};
   EXPECT_TRUE(seenParts(truth, 0.6, 10)[0].empty());
   truth.curves = {{0, 1}};

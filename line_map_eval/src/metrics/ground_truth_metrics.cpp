@@ -136,36 +136,43 @@ void GroundTruthParams::validate() const
 SeenParts seenParts(const GroundTruth& truth, double min_piece_length, std::size_t min_piece_beams)
 {
   SeenParts seen(truth.walls.size());
-  std::vector<std::pair<double, double>> interval;
+  // Per visible piece, the intervals along its face that runs of consecutive beams hit.
+  std::vector<std::vector<std::pair<double, double>>> intervals;
   for (std::size_t k = 0; k < truth.scans.size(); ++k)
   {
     const auto& visible = truth.scans[k].visible;
-    interval.clear();
-    for (const VisibleWall& v : visible)
+    intervals.assign(visible.size(), {});
+    for (std::size_t i = 0; i < visible.size(); ++i)
     {
+      const VisibleWall& v = visible[i];
       if (v.wall >= truth.walls.size())
         throw std::invalid_argument("ground truth: scans[" + std::to_string(k) + "] sees wall " +
                                     std::to_string(v.wall) + " of " + std::to_string(truth.walls.size()));
       const Segment2& face = truth.walls[v.wall];
       const double length = face.length();
       const Vec2 u = (face.end - face.start) / length;
-      double a = u.dot(v.segment.start - face.start), b = u.dot(v.segment.end - face.start);
-      if (a > b) std::swap(a, b);
-      interval.emplace_back(std::clamp(a, 0.0, length), std::clamp(b, 0.0, length));
+      for (const Segment2& run : v.runs.empty() ? std::vector<Segment2>{v.segment} : v.runs)
+      {
+        double a = u.dot(run.start - face.start), b = u.dot(run.end - face.start);
+        if (a > b) std::swap(a, b);
+        intervals[i].emplace_back(std::clamp(a, 0.0, length), std::clamp(b, 0.0, length));
+      }
     }
-    // A sight (a piece, or the pieces of a curve seen together) is long and dense enough as a whole.
+    // A sight (a piece, or the pieces of a curve seen together) is long and dense enough as a whole;
+    // its length is what its runs saw, not the parts hidden between them.
     for (const auto& sight : sights(truth.walls, visible, truth.curves))
     {
       double length = 0.0;
       std::size_t beams = 0;
       for (const std::size_t i : sight)
       {
-        length += interval[i].second - interval[i].first;
+        for (const auto& [from, to] : intervals[i]) length += to - from;
         beams += visible[i].beams;
       }
       if (length < min_piece_length || beams < min_piece_beams) continue;
       for (const std::size_t i : sight)
-        if (interval[i].second > interval[i].first) seen[visible[i].wall].push_back(interval[i]);
+        for (const auto& interval : intervals[i])
+          if (interval.second > interval.first) seen[visible[i].wall].push_back(interval);
     }
   }
   for (auto& parts : seen)

@@ -31,6 +31,8 @@ std::vector<VisibleWall> visibleWallPieces(const std::vector<Segment2>& walls, c
     double t_min = std::numeric_limits<double>::infinity();
     double t_max = -std::numeric_limits<double>::infinity();
     std::size_t beams = 0;
+    std::size_t last_beam = 0;
+    std::vector<std::pair<double, double>> runs;  ///< [t_from, t_to] per run of consecutive beams
   };
   std::map<std::size_t, Span> spans;  // ordered by wall index
   const Vec2 origin = laser_pose.translation();
@@ -47,13 +49,25 @@ std::vector<VisibleWall> visibleWallPieces(const std::vector<Segment2>& walls, c
     Span& s = spans[w];
     s.t_min = std::min(s.t_min, t);
     s.t_max = std::max(s.t_max, t);
+    if (s.beams == 0 || s.last_beam + 1 != i)
+      s.runs.emplace_back(t, t);
+    else
+      s.runs.back() = {std::min(s.runs.back().first, t), std::max(s.runs.back().second, t)};
+    s.last_beam = i;
     ++s.beams;
   }
   std::vector<VisibleWall> all;
   for (const auto& [w, s] : spans)
   {
-    const Vec2 d = walls[w].end - walls[w].start;
-    all.push_back({w, Segment2(walls[w].start + s.t_min * d, walls[w].start + s.t_max * d), s.beams});
+    const Vec2 a = walls[w].start, d = walls[w].end - a;
+    VisibleWall v{w, Segment2(a + s.t_min * d, a + s.t_max * d), s.beams, {}};
+    if (s.runs.size() > 1)
+    {
+      auto runs = s.runs;
+      std::sort(runs.begin(), runs.end());
+      for (const auto& [from, to] : runs) v.runs.emplace_back(a + from * d, a + to * d);
+    }
+    all.push_back(std::move(v));
   }
   std::vector<bool> keep(all.size(), false);
   for (const auto& sight : sights(walls, all, curves))
@@ -351,6 +365,12 @@ class TruthParser
              vis[j]);
       v.segment = segment(require(vis[j], "segment", vkey + "/segment"), vkey + "/segment");
       v.beams = count(require(vis[j], "beams", vkey + "/beams"), vkey + "/beams");
+      if (const YAML::Node runs = vis[j]["runs"])
+      {
+        if (!runs.IsSequence()) fail(vkey + "/runs", "expected a list of segments", runs);
+        for (std::size_t r = 0; r < runs.size(); ++r)
+          v.runs.push_back(segment(runs[r], vkey + "/runs[" + std::to_string(r) + "]"));
+      }
       ts.visible.push_back(v);
     }
     return ts;
@@ -404,9 +424,19 @@ void writeGroundTruth(const GroundTruth& t, const std::string& path)
     out << "    pose: " << list({s.pose.x, s.pose.y, s.pose.theta}) << "\n";
     out << "    visible:" << (s.visible.empty() ? " []" : "") << "\n";
     for (const auto& v : s.visible)
-      out << "      - {wall: " << v.wall << ", segment: "
-          << list({v.segment.start.x(), v.segment.start.y(), v.segment.end.x(), v.segment.end.y()})
-          << ", beams: " << v.beams << "}\n";
+    {
+      const auto coordinates = [](const Segment2& g) {
+        return list({g.start.x(), g.start.y(), g.end.x(), g.end.y()});
+      };
+      out << "      - {wall: " << v.wall << ", segment: " << coordinates(v.segment) << ", beams: " << v.beams;
+      if (!v.runs.empty())
+      {
+        out << ", runs: [";
+        for (std::size_t r = 0; r < v.runs.size(); ++r) out << (r ? ", " : "") << coordinates(v.runs[r]);
+        out << "]";
+      }
+      out << "}\n";
+    }
   }
   out.flush();
   if (!out) throw std::runtime_error(path + ": writing the ground truth file failed");

@@ -8,6 +8,7 @@
 // linemap_truth/1 `walls` were the world's thin, undirected walls; such files are refused.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -26,11 +27,17 @@ struct VisibleWall
   std::size_t wall = 0;
   linemap::Segment2 segment;
   std::size_t beams = 0;  ///< beams whose true ray ends on this face
+  /// The pieces of `segment` hit by runs of consecutive beams, along the face, when there is more
+  /// than one: between two runs the face hides behind something nearer (a pillar) and is not seen
+  /// by this scan. Empty: `segment` is one run.
+  std::vector<linemap::Segment2> runs;
 
   bool operator==(const VisibleWall& o) const
   {
-    return wall == o.wall && segment.start == o.segment.start && segment.end == o.segment.end &&
-           beams == o.beams;
+    const auto same = [](const linemap::Segment2& a, const linemap::Segment2& b)
+    { return a.start == b.start && a.end == b.end; };
+    return wall == o.wall && same(segment, o.segment) && beams == o.beams &&
+           std::equal(runs.begin(), runs.end(), o.runs.begin(), o.runs.end(), same);
   }
 };
 
@@ -69,7 +76,8 @@ struct GroundTruth
 /// The wall pieces one scan sees: `hit_wall[i]` is the wall (face) beam i's noiseless ray ends
 /// on (-1: none or beyond range) and `hit_range[i]` its true range; beam i points at
 /// laser_pose.theta + angle_min + i * angle_increment. A wall hit by >= min_beams beams is
-/// listed with the span between its extreme hit points, sorted by wall index. A face of one of
+/// listed with the span between its extreme hit points and, when beams of nearer walls interrupt
+/// it, the runs of consecutive beams that hit it; sorted by wall index. A face of one of
 /// `curves` counts with its sight (sights()): its pieces are listed when together hit by >= min_beams.
 std::vector<VisibleWall> visibleWallPieces(const std::vector<linemap::Segment2>& walls,
                                            const linemap::Pose2& laser_pose, double angle_min,
