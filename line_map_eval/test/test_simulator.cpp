@@ -342,6 +342,23 @@ TEST(PathFollower, LapTimeAndPosesInClosedForm)
   EXPECT_NEAR(sim.recording.scans[1].stamp - sim.recording.scans[0].stamp, w.path.scan_period, 1e-12);
 }
 
+namespace
+{
+/// The face pieces one noiseless scan from `pose` sees.
+std::vector<VisibleWall> castVisiblePieces(const std::vector<Segment2>& faces, const Pose2& pose,
+                                           const LaserModel& laser, std::size_t min_beams)
+{
+  std::vector<int> wall;
+  std::vector<double> range;
+  for (const auto& h : castScan(faces, pose, laser))
+  {
+    wall.push_back(h.face);
+    range.push_back(h.range);
+  }
+  return visibleWallPieces(faces, pose, laser.angleMin(), laser.angleIncrement(), wall, range, min_beams);
+}
+}  // namespace
+
 TEST(GroundTruth, HandComputedVisiblePieces)
 {
   // Laser at (1, 2) facing +x, 181 beams at 1 deg from -90 to 90 deg in the 4 x 4 room.
@@ -351,15 +368,7 @@ TEST(GroundTruth, HandComputedVisiblePieces)
   laser.beams = 181;
   const Pose2 pose(1.0, 2.0, 0.0);
   const auto walls = squareRoom();
-  const auto hits = castScan(walls, pose, laser);
-  std::vector<int> wall;
-  std::vector<double> range;
-  for (const auto& h : hits)
-  {
-    wall.push_back(h.face);
-    range.push_back(h.range);
-  }
-  const auto vis = visibleWallPieces(walls, pose, laser.angleMin(), laser.angleIncrement(), wall, range, 5);
+  const auto vis = castVisiblePieces(walls, pose, laser, 5);
   ASSERT_EQ(vis.size(), 3u);
   const double d33 = 3.0 * std::tan(33.0 * kPi / 180), x34 = 1.0 + 2.0 / std::tan(34.0 * kPi / 180);
   EXPECT_EQ(vis[0].wall, 0u);
@@ -377,10 +386,7 @@ TEST(GroundTruth, HandComputedVisiblePieces)
 
   // The threshold is inclusive: 57 keeps the three walls, 58 only the 67-beam one, 68 none.
   const auto count = [&](std::size_t min_beams)
-  {
-    return visibleWallPieces(walls, pose, laser.angleMin(), laser.angleIncrement(), wall, range, min_beams)
-        .size();
-  };
+  { return castVisiblePieces(walls, pose, laser, min_beams).size(); };
   EXPECT_EQ(count(57), 3u);
   EXPECT_EQ(count(58), 1u);
   EXPECT_EQ(count(68), 0u);
@@ -397,15 +403,7 @@ TEST(GroundTruth, AWallHiddenBehindAPillarIsSeenInRuns)
   const Pose2 pose(0.0, 0.0, kPi / 2);
   const std::vector<Segment2> faces = {Segment2(Vec2(12, 10), Vec2(-12, 10)),
                                        Segment2(Vec2(1, 5), Vec2(-1, 5))};
-  const auto hits = castScan(faces, pose, laser);
-  std::vector<int> wall;
-  std::vector<double> range;
-  for (const auto& h : hits)
-  {
-    wall.push_back(h.face);
-    range.push_back(h.range);
-  }
-  const auto vis = visibleWallPieces(faces, pose, laser.angleMin(), laser.angleIncrement(), wall, range, 5);
+  const auto vis = castVisiblePieces(faces, pose, laser, 5);
   ASSERT_EQ(vis.size(), 2u);
   EXPECT_EQ(vis[0].wall, 0u);
   EXPECT_EQ(vis[0].beams, 101u - 23u);  // the wall is hit within 50 deg of the axis: beams 40..140
