@@ -131,6 +131,7 @@ void LaserSlam::reset()
   path_ = path_at_closure_ = 0.0;
   chain_matched_ = true;
   pending_.reset();
+  closures_.clear();
   time_jumps_.reset();
 }
 
@@ -474,7 +475,14 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
   ++counters_.loop_attempts;
   const Pose2 guess = graph_.node(j).inverse() * graph_.node(k);
   const auto found = matchLoop(j, k, guess, radius, angle);
-  if (!found || found->first.score < params_.loop_min_score)
+  if (!found)
+  {
+    ++counters_.loops_rejected_score;
+    return;
+  }
+  const std::size_t attempt = closures_.size();
+  closures_.push_back({j, k, ClosureOutcome::kRejectedScore, found->first.score});
+  if (found->first.score < params_.loop_min_score)
   {
     ++counters_.loops_rejected_score;
     return;
@@ -482,6 +490,7 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
   if (params_.loop_ambiguity_distance > 0.0 && found->second >= params_.loop_ambiguity_ratio)
   {
     ++counters_.loops_ambiguous;
+    closures_[attempt].outcome = ClosureOutcome::kAmbiguous;
     return;
   }
   const MatchResult& match = found->first;
@@ -498,13 +507,24 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
     // the next optimisation.
     ++counters_.loops_accepted;
     ++counters_.loops_consistent;
+    closures_[attempt].outcome = ClosureOutcome::kAccepted;
     counters_.loops_degenerate += shape.degenerate ? 1 : 0;
     path_at_closure_ = keyframes_[k].path;
     return;
   }
   std::vector<std::size_t> added{edge};
-  if (!admitDisagreeing(j, k, e, match.pose, size, disagreement.theta, added)) return;
-  if (!optimizeKeeping(added)) return;
+  const std::optional<std::size_t> pending_attempt =
+      pending_ ? std::optional<std::size_t>(pending_->attempt) : std::nullopt;
+  if (!admitDisagreeing(j, k, e, match.pose, size, disagreement.theta, added))
+  {
+    closures_[attempt].outcome = ClosureOutcome::kPending;
+    return;
+  }
+  const bool kept = optimizeKeeping(added);
+  const ClosureOutcome outcome = kept ? ClosureOutcome::kAccepted : ClosureOutcome::kRejectedGraph;
+  closures_[attempt].outcome = outcome;
+  if (added.size() > 1 && pending_attempt) closures_[*pending_attempt].outcome = outcome;  // corroborated
+  if (!kept) return;
   counters_.loops_accepted += added.size();
   counters_.loops_degenerate += shape.degenerate ? 1 : 0;
   graph_optimized_ = true;
@@ -524,7 +544,7 @@ bool LaserSlam::admitDisagreeing(std::size_t j, std::size_t k, const PoseGraphEd
     if (!corroborates(k, implied))
     {
       graph_.removeEdge(edge);
-      pending_ = PendingClosure{e, implied, k};
+      pending_ = PendingClosure{e, implied, k, closures_.size() - 1};
       ++counters_.loops_pending;
       return false;
     }
