@@ -1,4 +1,5 @@
-// Figures: every format is written, the PNG has the laid-out size and the endpoint colours.
+// Figures: every format is written, the PNG has the laid-out size and the endpoint colours; a SLAM
+// run's layers.
 #include <cairo.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -10,6 +11,7 @@
 #include <string>
 
 #include "line_map_eval/batch/figures.hpp"
+#include "line_map_eval/batch/slam_figure.hpp"
 
 using line_map_eval::drawComparison;
 using line_map_eval::drawLookupTable;
@@ -267,4 +269,94 @@ TEST(Figures, StrayScanPointsDoNotStretchTheFrame)
   f.segments.push_back(Segment2(Vec2(0.0, 0.0), Vec2(30.0, 0.0)));
   l = layoutFigure({&f}, style);
   EXPECT_GE(l.max_x, 30.0);
+}
+
+namespace
+{
+// A SLAM run around three sides of a 2 m square: keyframes at (0,0), (2,0), (2,2), (0,2), each scan a
+// half circle of 2 m; closure 3 -> 0 accepted, 2 -> 0 rejected; relation 1 -> 3 off by 0.5 m, 0 -> 1
+// by 0.1 m.
+struct SquareRun
+{
+  line_map_eval::Recording recording;
+  line_map_eval::SlamRecordingResult slam;
+  std::vector<line_map_eval::RelationResidual> residuals;
+  SquareRun()
+  {
+    recording.geometry = {-linemap::kPi / 2, linemap::kPi / 180, 181, 0.0, 10.0};
+    const std::vector<linemap::Pose2> poses = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}};
+    for (std::size_t i = 0; i < poses.size(); ++i)
+    {
+      line_map_eval::RecordedScan s;
+      s.stamp = static_cast<double>(i);
+      s.ranges.assign(181, 2.0f);
+      recording.scans.push_back(s);
+      slam.scan_poses.push_back(poses[i]);
+      slam.keyframes.push_back({i, poses[i]});
+    }
+    using line_map_merging::ClosureOutcome;
+    slam.closures = {{0, 3, ClosureOutcome::kAccepted, 0.7}, {0, 2, ClosureOutcome::kRejectedScore, 0.3}};
+    residuals = {{0, poses[1], poses[3], 0.5, 0.0}, {1, poses[0], poses[1], 0.1, 0.0}};
+  }
+};
+}  // namespace
+
+// The SLAM run's layers: an accepted closure green, a rejected one orange, a relation above 0.3 m red,
+// the one below it not drawn; the legend names the run's layers with their counts, not the map's.
+TEST(Figures, SlamRunLayers)
+{
+  const SquareRun run;
+  MapFigure f = line_map_eval::slamFigure(run.recording, run.slam, &run.residuals, "square - laser SLAM");
+  EXPECT_EQ(f.scan_points.size(), 4u * 181u);
+  EXPECT_EQ(f.trajectory.size(), 4u);
+  ASSERT_EQ(f.accepted_closures.size(), 1u);
+  ASSERT_EQ(f.rejected_closures.size(), 1u);
+  ASSERT_EQ(f.bad_relations.size(), 1u);
+  EXPECT_NEAR((f.accepted_closures[0].start - Vec2(0, 0)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((f.accepted_closures[0].end - Vec2(0, 2)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((f.bad_relations[0].start - Vec2(2, 0)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((f.bad_relations[0].end - Vec2(0, 2)).norm(), 0.0, 1e-12);
+  f.scan_points.clear();  // the pixels below are of the lines alone
+  FigureStyle style = testStyle();
+  style.line_width = 5.0;  // closures 3 px, relations 5 px wide
+  const std::string dir = tempDir();
+  const auto files = drawMap(f, dir + "/slam.png", line_map_eval::kFigurePng, style);
+  ASSERT_EQ(files.size(), 1u);
+  cairo_surface_t* img = cairo_image_surface_create_from_png(files[0].c_str());
+  ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
+  const FigureLayout l = layoutFigure({&f}, style);
+  const auto at = [&](double x, double y)
+  {
+    const Vec2 c = l.toCanvas(Vec2(x, y));
+    return pixel(img, static_cast<int>(c.x()), static_cast<int>(c.y()));
+  };
+  const Rgb accepted = at(0.0, 1.0), rejected = at(0.5, 0.5), bad = at(1.5, 0.5), trajectory = at(1.0, 0.0);
+  EXPECT_GT(accepted.g, accepted.r + 80) << accepted.r << " " << accepted.g << " " << accepted.b;
+  EXPECT_GT(accepted.g, accepted.b + 80);
+  EXPECT_GT(rejected.r, 200) << rejected.r << " " << rejected.g << " " << rejected.b;
+  EXPECT_GT(rejected.g, rejected.b + 40);
+  EXPECT_LT(rejected.g, rejected.r - 40);
+  EXPECT_TRUE(isRed(bad)) << bad.r << " " << bad.g << " " << bad.b;
+  EXPECT_LT(trajectory.r + trajectory.g + trajectory.b, 150);
+  // Relation 0 -> 1 (0.1 m) lies on the trajectory; (2, 1) is on the trajectory's second leg only.
+  const Rgb leg = at(2.0, 1.0);
+  EXPECT_LT(leg.r + leg.g + leg.b, 150);
+  cairo_surface_destroy(img);
+}
+
+// drawSlamRun writes the SVG and the PNG (the default formats) with the legend's entries in the SVG.
+TEST(Figures, SlamRunFilesAreWritten)
+{
+  const SquareRun run;
+  const std::string dir = tempDir();
+  const auto files =
+      line_map_eval::drawSlamRun(run.recording, run.slam, &run.residuals, "square", dir + "/slam");
+  ASSERT_EQ(files.size(), 2u);
+  EXPECT_EQ(files[0], dir + "/slam.svg");
+  EXPECT_EQ(files[1], dir + "/slam.png");
+  const std::string svg = readFile(files[0]);
+  EXPECT_NE(svg.find("<svg"), std::string::npos);
+  EXPECT_EQ(readFile(files[1]).rfind("\x89PNG", 0), 0u);
+  struct stat st;
+  EXPECT_NE(stat((dir + "/slam.pdf").c_str(), &st), 0);
 }

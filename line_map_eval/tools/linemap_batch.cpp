@@ -8,12 +8,14 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "line_map_eval/batch/batch.hpp"
 #include "line_map_eval/batch/progress.hpp"
 #include "line_map_eval/batch/report.hpp"
+#include "line_map_eval/batch/slam_figure.hpp"
 #include "line_map_eval/datasets/bag_reader.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_eval/datasets/carmen_recording.hpp"
@@ -49,6 +51,8 @@ void usage(std::ostream& out)
          "  --slam            (a raw CARMEN log) the trajectory of our laser SLAM (config/slam.yaml) in\n"
          "                    place of --corrected: its keyframes are the merger's keyframes\n"
          "  --relations FILE  with --slam: print the relations error of its trajectory against FILE\n"
+         "                    (--slam writes DIR/slam.svg and .png: trajectory, scans, closures and the\n"
+         "                    relations above 0.3 m)\n"
          "  --extractor NAME  extraction algorithm (default: parameter 'algorithm')\n"
          "  --merger NAME     merger to run; repeatable (default: all of ";
   for (std::size_t i = 0; i < line_map_merging::mergerNames().size(); ++i)
@@ -236,16 +240,28 @@ BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_param
             << run.cpu_seconds << " s CPU, " << c.keyframes << " keyframes, " << c.loops_accepted
             << " loop closures (" << c.loops_rejected_score + c.loops_rejected_graph << " rejected), "
             << c.poor_matches << " poor matches\n";
+  std::optional<std::vector<RelationResidual>> residuals;
   if (!a.relations.empty())
   {
     std::vector<std::pair<double, Pose2>> poses;
     for (std::size_t i = 0; i < run.scan_poses.size() && i < raw.scans.size(); ++i)
       poses.push_back({raw.scans[i].timestamp, run.scan_poses[i]});
-    const RelationsError e = relationsError(readRelations(a.relations), poses);
+    const auto relations = readRelations(a.relations);
+    const RelationsError e = relationsError(relations, poses);
+    residuals = relationResiduals(relations, poses);
     std::cout << std::setprecision(4) << "relations error (" << e.used << " of " << e.relations
               << "): translation " << e.translation_mean << " +- " << e.translation_std << " m, rotation "
               << std::setprecision(2) << e.rotation_mean * 180.0 / linemap::kPi << " +- "
               << e.rotation_std * 180.0 / linemap::kPi << " deg\n";
+  }
+  if (a.options.figure_formats != 0)
+  {
+    fs::create_directories(a.out_dir);
+    const std::string caption = linemap::fileStem(a.dataset) + " - laser SLAM" +
+                                (slam_params.getBool("use_odometry", true) ? "" : ", no odometry");
+    const auto files = drawSlamRun(recording, run, residuals ? &*residuals : nullptr, caption,
+                                   (fs::path(a.out_dir) / "slam").string());
+    std::cout << "wrote the SLAM figure " << files.back() << "\n";
   }
   return datasetFromRecording(withSlamKeyframes(std::move(recording), run), linemap::fileStem(a.dataset),
                               "carmen+slam");

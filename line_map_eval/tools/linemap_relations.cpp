@@ -16,11 +16,13 @@
 #include <vector>
 
 #include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/batch/slam_figure.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_eval/datasets/carmen_recording.hpp"
 #include "line_map_eval/datasets/localization_recording.hpp"
 #include "line_map_eval/datasets/relations.hpp"
 #include "line_map_eval/datasets/slam_recording.hpp"
+#include "linemap/small_helpers.hpp"
 #include "tool_main.hpp"
 
 namespace fs = std::filesystem;
@@ -33,7 +35,7 @@ void usage(std::ostream& out)
 {
   out << "usage: linemap_relations RAW_LOG RELATIONS [--slam] [--slam-no-odometry] [--odometry]\n"
          "                         [--corrected LOG] [--trajectory FILE]... [--param key=value]...\n"
-         "                         [--config FILE] [--write FILE]\n"
+         "                         [--config FILE] [--write FILE] [--out DIR] [--no-figures]\n"
          "                         [--localize MAP_FILE [--initial-pose X,Y,THETA] [--localize-config FILE]\n"
          "                          [--localize-param key=value]...]\n"
          "Prints the mean and standard deviation of the translational and rotational relation error of\n"
@@ -48,6 +50,10 @@ void usage(std::ostream& out)
          "                      ./config/slam.yaml when present)\n"
          "  --write FILE        write the (last) SLAM or localized trajectory of every scan as\n"
          "                      'timestamp x y theta'\n"
+         "  --out DIR           where each SLAM run's figure goes: DIR/slam.svg, .png (without odometry\n"
+         "                      slam_no_odometry): trajectory, scans, closures, relations above 0.3 m\n"
+         "                      (default: linemap_relations_out)\n"
+         "  --no-figures        no SLAM figure\n"
          "  --localize MAP_FILE the log's scans and odometry localized in a saved line map, from the\n"
          "                      first scan's base pose in the map given by --initial-pose, or by global\n"
          "                      localization without it\n"
@@ -106,9 +112,9 @@ void print(const std::string& name, const RelationsError& e, const std::string& 
 struct Arguments
 {
   std::vector<std::string> positional, overrides, trajectories, localize_overrides;
-  std::string corrected, config, write, localize, localize_config;
+  std::string corrected, config, write, localize, localize_config, out_dir = "linemap_relations_out";
   std::optional<Pose2> initial_pose;
-  bool slam = false, slam_no_odom = false, odometry = false;
+  bool slam = false, slam_no_odom = false, odometry = false, figures = true;
 };
 
 Pose2 parsePose(const std::string& v)
@@ -132,6 +138,7 @@ bool parseArguments(int argc, char** argv, Arguments& a)
                         : arg == "--write"           ? &a.write
                         : arg == "--localize"        ? &a.localize
                         : arg == "--localize-config" ? &a.localize_config
+                        : arg == "--out"             ? &a.out_dir
                                                      : nullptr;
     std::vector<std::string>* list = arg == "--trajectory"       ? &a.trajectories
                                      : arg == "--param"          ? &a.overrides
@@ -148,6 +155,8 @@ bool parseArguments(int argc, char** argv, Arguments& a)
       a.slam_no_odom = true;
     else if (arg == "--odometry")
       a.odometry = true;
+    else if (arg == "--no-figures")
+      a.figures = false;
     else if (arg == "--initial-pose")
       a.initial_pose = parsePose(cl.value());
     else if (!arg.empty() && arg[0] == '-')
@@ -221,6 +230,14 @@ void reportSlam(const Evaluation& ev)
           << c.poor_matches << " poor matches";
     ev.report(with_odom ? "laser SLAM" : "laser SLAM, no odometry", r.scan_poses, extra.str());
     if (!a.write.empty()) writeTrajectory(a.write, ev.byRawStamp(r.scan_poses));
+    if (!a.figures) continue;
+    fs::create_directories(a.out_dir);
+    const auto residuals = relationResiduals(ev.relations, ev.byRawStamp(r.scan_poses));
+    const auto files = drawSlamRun(
+        ev.recording, r, &residuals,
+        linemap::fileStem(a.positional[0]) + (with_odom ? " - laser SLAM" : " - laser SLAM, no odometry"),
+        (fs::path(a.out_dir) / (with_odom ? "slam" : "slam_no_odometry")).string());
+    std::cout << "  wrote " << files.back() << "\n";
   }
 }
 

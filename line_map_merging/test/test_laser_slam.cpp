@@ -1,14 +1,16 @@
 // LaserSlam on a ray-cast room: with drifting odometry and without odometry the trajectory stays on
 // the truth, loops close; bad input (time going back, empty scans, odometry jumps, NaN odometry) is
-// counted and leaves the graph intact.
+// counted and leaves the graph intact; closure attempts are recorded with their keyframes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "line_map_merging/slam/laser_slam.hpp"
 #include "slam_world.hpp"
 
+using line_map_merging::ClosureAttempt;
 using line_map_merging::LaserSlam;
 using line_map_merging::LaserSlamParams;
 using line_map_merging::SlamOutcome;
@@ -118,6 +120,46 @@ TEST(LaserSlam, DriftingOdometryLoopCloses)
   const auto t = run.slam.trajectory();
   ASSERT_EQ(t.size(), c.keyframes);
   for (std::size_t k = 1; k < t.size(); ++k) EXPECT_GT(t[k].first, t[k - 1].first);
+}
+
+// Every closure attempt that got as far as a match is recorded with its keyframes and outcome; the
+// records agree with the counters, and the first accepted closure joins two keyframes that the truth
+// puts at the laps' meeting point (the start, where the second lap first sees the first one again).
+TEST(LaserSlam, ClosureAttemptsAreRecorded)
+{
+  Room run;
+  for (std::size_t i = 0; i < run.truth.size(); ++i) run.slam.addScan(run.scan(i, true));
+  using line_map_merging::ClosureOutcome;
+  const auto& attempts = run.slam.closureAttempts();
+  const auto& c = run.slam.counters();
+  const auto count = [&](ClosureOutcome o)
+  {
+    return static_cast<std::size_t>(
+        std::count_if(attempts.begin(), attempts.end(), [o](const auto& a) { return a.outcome == o; }));
+  };
+  EXPECT_EQ(count(ClosureOutcome::kAccepted), c.loops_accepted);
+  EXPECT_EQ(count(ClosureOutcome::kAmbiguous), c.loops_ambiguous);
+  EXPECT_EQ(count(ClosureOutcome::kRejectedGraph), c.loops_rejected_graph);
+  EXPECT_LE(count(ClosureOutcome::kRejectedScore), c.loops_rejected_score);
+  EXPECT_LE(attempts.size(), c.loop_attempts);
+  const auto& kfs = run.slam.keyframes();
+  const auto truthOf = [&](std::size_t k) { return run.truth[kfs[k].scan].translation(); };
+  const ClosureAttempt* first = nullptr;
+  for (const auto& a : attempts)
+  {
+    ASSERT_LT(a.from, a.to);
+    ASSERT_LT(a.to, kfs.size());
+    EXPECT_GE(kfs[a.to].path - kfs[a.from].path, run.slam.params().loop_min_path);
+    if (a.outcome != ClosureOutcome::kAccepted) continue;
+    EXPECT_GE(a.score, run.slam.params().loop_min_score);
+    // A true closure: the submap's centre is the candidate nearest the estimate, within the search radius.
+    EXPECT_LT((truthOf(a.from) - truthOf(a.to)).norm(), 1.0) << a.from << " - " << a.to;
+    if (!first) first = &a;
+  }
+  ASSERT_NE(first, nullptr);
+  const linemap::Vec2 meeting = run.truth.front().translation();
+  EXPECT_LT((truthOf(first->from) - meeting).norm(), 1.5);
+  EXPECT_LT((truthOf(first->to) - meeting).norm(), 1.5);
 }
 
 TEST(LaserSlam, WithoutOdometry)

@@ -189,6 +189,57 @@ void setColour(cairo_t* cr, std::uint32_t argb)
 
 const double kMapBlue[3] = {0.05, 0.10, 0.45};
 const double kRedundantMagenta[4] = {0.85, 0.0, 0.85, 0.45};
+const double kTrajectoryBlack[4] = {0.0, 0.0, 0.0, 1.0};
+const double kAcceptedGreen[4] = {0.0, 0.65, 0.0, 0.8};
+const double kRejectedOrange[4] = {1.0, 0.55, 0.0, 0.6};
+const double kBadRelationRed[4] = {0.9, 0.0, 0.0, 0.9};
+
+/// Straight lines in panel k, one stroke.
+void drawLines(cairo_t* cr, const std::vector<Segment2>& lines, const FigureLayout& l, int panel,
+               const double* rgba, double width)
+{
+  if (lines.empty()) return;
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+  cairo_set_line_width(cr, width);
+  cairo_set_source_rgba(cr, rgba[0], rgba[1], rgba[2], rgba[3]);
+  for (const Segment2& s : lines)
+  {
+    if (!s.start.allFinite() || !s.end.allFinite()) continue;
+    const Vec2 a = l.toCanvas(s.start, panel), b = l.toCanvas(s.end, panel);
+    cairo_move_to(cr, a.x(), a.y());
+    cairo_line_to(cr, b.x(), b.y());
+  }
+  cairo_stroke(cr);
+}
+
+/// A SLAM run's layers: rejected closures, accepted ones, the trajectory, then the bad relations on top.
+void drawSlamLayers(cairo_t* cr, const MapFigure& f, const FigureLayout& l, int panel,
+                    const FigureStyle& style)
+{
+  drawLines(cr, f.rejected_closures, l, panel, kRejectedOrange, 0.6 * style.line_width);
+  drawLines(cr, f.accepted_closures, l, panel, kAcceptedGreen, 0.6 * style.line_width);
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  cairo_set_line_width(cr, 0.6 * style.line_width);
+  cairo_set_source_rgba(cr, kTrajectoryBlack[0], kTrajectoryBlack[1], kTrajectoryBlack[2],
+                        kTrajectoryBlack[3]);
+  bool pen_down = false;
+  for (const Vec2& p : f.trajectory)
+  {
+    if (!p.allFinite())
+    {
+      pen_down = false;
+      continue;
+    }
+    const Vec2 c = l.toCanvas(p, panel);
+    if (pen_down)
+      cairo_line_to(cr, c.x(), c.y());
+    else
+      cairo_move_to(cr, c.x(), c.y());
+    pen_down = true;
+  }
+  cairo_stroke(cr);
+  if (f.show_relations) drawLines(cr, f.bad_relations, l, panel, kBadRelationRed, style.line_width);
+}
 
 /// One line of legend entries (a glyph and a label each), left to right from x, centred on y.
 class LegendLine
@@ -243,13 +294,16 @@ void drawLegend(cairo_t* cr, const MapFigure& f, double x, double y, const Figur
   cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
   cairo_set_font_size(cr, 0.85 * style.font_size);
   LegendLine legend(cr, x, y, style);
-  const double blue[4] = {kMapBlue[0], kMapBlue[1], kMapBlue[2], 1.0};
-  legend.line(blue, style.line_width);
-  legend.label("map segment");
-  legend.disc(0.90, 0.0, 0.0);
-  legend.label("start");
-  legend.disc(0.0, 0.70, 0.0);
-  legend.label("end");
+  if (!f.show_slam || !f.segments.empty())
+  {
+    const double blue[4] = {kMapBlue[0], kMapBlue[1], kMapBlue[2], 1.0};
+    legend.line(blue, style.line_width);
+    legend.label("map segment");
+    legend.disc(0.90, 0.0, 0.0);
+    legend.label("start");
+    legend.disc(0.0, 0.70, 0.0);
+    legend.label("end");
+  }
   if (!f.scan_points.empty())
   {
     legend.square(kScanGrey, 4.0);
@@ -268,6 +322,23 @@ void drawLegend(cairo_t* cr, const MapFigure& f, double x, double y, const Figur
     legend.label("unmapped straight structure (" + std::to_string(f.uncovered_structure_points.size()) + ")");
     legend.line(kRedundantMagenta, 4.0 * style.line_width);
     legend.label("redundant pair (" + std::to_string(f.redundant_pairs.size()) + ")");
+  }
+  if (f.show_slam)
+  {
+    legend.line(kTrajectoryBlack, style.line_width);
+    legend.label("trajectory");
+    legend.line(kAcceptedGreen, 2.0 * style.line_width);
+    legend.label("accepted closure (" + std::to_string(f.accepted_closures.size()) + ")");
+    legend.line(kRejectedOrange, 2.0 * style.line_width);
+    legend.label("rejected closure (" + std::to_string(f.rejected_closures.size()) + ")");
+  }
+  if (f.show_relations)
+  {
+    char limit[32];
+    std::snprintf(limit, sizeof limit, "%g", f.bad_relation);
+    legend.line(kBadRelationRed, 2.0 * style.line_width);
+    legend.label(std::string("relation error > ") + limit + " m (" + std::to_string(f.bad_relations.size()) +
+                 ")");
   }
   cairo_restore(cr);
 }
@@ -291,32 +362,18 @@ void drawPanel(cairo_t* cr, const MapFigure& f, const FigureLayout& l, int panel
   // Redundant pairs under the map: a wide translucent band over both segments of each pair.
   if (f.show_coverage && !f.redundant_pairs.empty())
   {
-    cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
-    cairo_set_line_width(cr, 4.0 * style.line_width);
-    cairo_set_source_rgba(cr, kRedundantMagenta[0], kRedundantMagenta[1], kRedundantMagenta[2],
-                          kRedundantMagenta[3]);
+    std::vector<Segment2> both;
     for (const auto& pair : f.redundant_pairs)
-      for (const Segment2* s : {&pair.first, &pair.second})
-      {
-        if (!s->start.allFinite() || !s->end.allFinite()) continue;
-        const Vec2 a = l.toCanvas(s->start, panel), b = l.toCanvas(s->end, panel);
-        cairo_move_to(cr, a.x(), a.y());
-        cairo_line_to(cr, b.x(), b.y());
-      }
-    cairo_stroke(cr);
+    {
+      both.push_back(pair.first);
+      both.push_back(pair.second);
+    }
+    drawLines(cr, both, l, panel, kRedundantMagenta, 4.0 * style.line_width);
   }
+  if (f.show_slam) drawSlamLayers(cr, f, l, panel, style);
 
-  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
-  cairo_set_line_width(cr, style.line_width);
-  cairo_set_source_rgb(cr, kMapBlue[0], kMapBlue[1], kMapBlue[2]);
-  for (const Segment2& s : f.segments)
-  {
-    if (!s.start.allFinite() || !s.end.allFinite()) continue;
-    const Vec2 a = l.toCanvas(s.start, panel), b = l.toCanvas(s.end, panel);
-    cairo_move_to(cr, a.x(), a.y());
-    cairo_line_to(cr, b.x(), b.y());
-  }
-  cairo_stroke(cr);
+  const double blue[4] = {kMapBlue[0], kMapBlue[1], kMapBlue[2], 1.0};
+  drawLines(cr, f.segments, l, panel, blue, style.line_width);
   // Ends first, starts on top: on chained segments the start of the next one stays visible.
   const auto discs = [&](bool starts)
   {
@@ -480,6 +537,7 @@ FigureLayout layoutFigure(const std::vector<const MapFigure*>& panels, const Fig
       b.add(s.end);
     }
     addRobustBounds(f->scan_points, b);
+    for (const Vec2& p : f->trajectory) b.add(p);
     if (f->lookup && !f->lookup->empty())
     {
       const LookupTable& t = *f->lookup;

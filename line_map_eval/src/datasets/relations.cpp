@@ -32,11 +32,10 @@ std::vector<Relation> readRelations(const std::string& path)
   return out;
 }
 
-RelationsError relationsError(const std::vector<Relation>& relations,
-                              const std::vector<std::pair<double, linemap::Pose2>>& poses, double tolerance)
+std::vector<RelationResidual> relationResiduals(const std::vector<Relation>& relations,
+                                                const std::vector<std::pair<double, linemap::Pose2>>& poses,
+                                                double tolerance)
 {
-  RelationsError r;
-  r.relations = relations.size();
   std::vector<std::pair<double, linemap::Pose2>> sorted(poses);
   std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   auto at = [&](double t) -> std::optional<linemap::Pose2>
@@ -49,14 +48,27 @@ RelationsError relationsError(const std::vector<Relation>& relations,
     if (!best || std::fabs(best->first - t) > tolerance) return std::nullopt;
     return best->second;
   };
-  std::vector<double> te, re;
-  for (const auto& rel : relations)
+  std::vector<RelationResidual> out;
+  for (std::size_t i = 0; i < relations.size(); ++i)
   {
-    const auto a = at(rel.t1), b = at(rel.t2);
+    const auto a = at(relations[i].t1), b = at(relations[i].t2);
     if (!a || !b) continue;
-    const linemap::Pose2 error = rel.delta.inverse() * (a->inverse() * *b);
-    te.push_back(std::hypot(error.x, error.y));
-    re.push_back(std::fabs(error.theta));
+    const linemap::Pose2 error = relations[i].delta.inverse() * (a->inverse() * *b);
+    out.push_back({i, *a, *b, std::hypot(error.x, error.y), std::fabs(error.theta)});
+  }
+  return out;
+}
+
+RelationsError relationsError(const std::vector<Relation>& relations,
+                              const std::vector<std::pair<double, linemap::Pose2>>& poses, double tolerance)
+{
+  RelationsError r;
+  r.relations = relations.size();
+  std::vector<double> te, re;
+  for (const RelationResidual& e : relationResiduals(relations, poses, tolerance))
+  {
+    te.push_back(e.translation);
+    re.push_back(e.rotation);
   }
   r.used = te.size();
   auto stats = [](const std::vector<double>& v, double& mean, double& sd, double& max)

@@ -46,6 +46,7 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
     result.scan_poses[accepted[k]] = poses[k].second;
   for (std::size_t k = 0; k < slam.keyframes().size(); ++k)
     result.keyframes.push_back({accepted[slam.keyframes()[k].scan], slam.graph().node(k)});
+  result.closures = slam.closureAttempts();
   result.counters = slam.counters();
   return result;
 }

@@ -166,10 +166,16 @@ void appendWorldPoints(const linemap::Pose2& laser_pose, const std::vector<Vec2>
 
 std::vector<Vec2> registeredScanPoints(const Recording& recording)
 {
+  return registeredScanPoints(recording, recording.keyframes);
+}
+
+std::vector<Vec2> registeredScanPoints(const Recording& recording,
+                                       const std::vector<CorrectedKeyframe>& keyframes)
+{
   std::vector<Vec2> out;
-  out.reserve(recording.keyframes.size() * recording.geometry.beam_count);
+  out.reserve(keyframes.size() * recording.geometry.beam_count);
   std::vector<Vec2> local;
-  for (const CorrectedKeyframe& kf : recording.keyframes)
+  for (const CorrectedKeyframe& kf : keyframes)
   {
     if (kf.scan_index >= recording.scans.size())
       throw std::invalid_argument("recording '" + recording.source + "': keyframe scan_index " +

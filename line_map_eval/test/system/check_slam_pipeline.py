@@ -1,9 +1,10 @@
 #!/usr/bin/python3
-"""Rostest checker (test/slam_pipeline.test): the first 1500 scans of the Intel raw log, converted
-without the corrected trajectory, played through linemap.launch slam:=true. Waits until the SLAM
-has handled every scan of the bag (its diagnostics), then checks the trajectories it published
-(poses stamped with scan stamps, one per keyframe, finite), tf map -> odom at the last scan, and
-that the merger adjusted its map to them."""
+"""Rostest checker (test/slam_pipeline.test, test/slam_pipeline_clinic.test): the first scans of a raw
+CARMEN log (private parameters ~dataset, default the Intel log, ~scans, default 1500, ~rate, default 20),
+converted without the corrected trajectory, played through linemap.launch slam:=true. Waits until the
+SLAM has handled every scan of the bag (its diagnostics), then checks the trajectories it published
+(poses stamped with scan stamps, one per keyframe, finite), tf map -> odom at the last scan, and that
+the merger adjusted its map to them and holds map segments."""
 import math
 import os
 import sys
@@ -19,16 +20,17 @@ from nav_msgs.msg import Path
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import linemap_testing as lt  # noqa: E402
 
-SCANS = 1500
-RATE = 20
 
 
 class CheckSlamPipeline(unittest.TestCase):
     def test_slam_feeds_the_merger(self):
-        raw = os.path.join(lt.datasets_dir(), "intel.clf.bz2")
+        dataset = rospy.get_param("~dataset", "intel.clf.bz2")
+        SCANS = int(rospy.get_param("~scans", 1500))
+        RATE = float(rospy.get_param("~rate", 20))
+        raw = os.path.join(lt.datasets_dir(), dataset)
         if not os.path.exists(raw):
-            self.skipTest("Intel dataset missing under " + lt.datasets_dir())
-        bag = os.path.join(tempfile.mkdtemp(prefix="slam_pipeline_"), "intel.bag")
+            self.skipTest("dataset missing: " + raw)
+        bag = os.path.join(tempfile.mkdtemp(prefix="slam_pipeline_"), dataset.split(".")[0] + ".bag")
         rc, log = lt.run(["rosrun", "line_map_eval", "carmen_to_bag", raw, bag, "--max-scans", str(SCANS)], 300)
         self.assertEqual(rc, 0, log)
         import rosbag
@@ -73,6 +75,7 @@ class CheckSlamPipeline(unittest.TestCase):
         self.assertEqual(int(slam["scans out of order (ignored)"]), 0)
         self.assertEqual(int(slam["scans dropped (no tf)"]), 0)
         self.assertGreater(int(slam["matched scans"]), SCANS // 4)
+        self.assertGreater(int(merging["map segments"]), 0)
 
         last = paths[-1]
         self.assertEqual(last.header.frame_id, "map")

@@ -131,6 +131,7 @@ void LaserSlam::reset()
   path_ = path_at_closure_ = 0.0;
   chain_matched_ = true;
   pending_.reset();
+  closures_.clear();
   time_jumps_.reset();
 }
 
@@ -391,13 +392,21 @@ std::optional<std::pair<MatchResult, double>> LaserSlam::matchLoop(std::size_t c
   const Pose2 inv = graph_.node(candidate).inverse();
   const std::size_t s = params_.loop_submap_keyframes;
   const std::size_t lo = candidate >= s ? candidate - s : 0;
+  // Only submap points within reach of the scan somewhere in the search window (its points lie within
+  // max_range of its pose, a field value depends on points a few sigma away): farther ones cannot change a
+  // score and would only widen the fields — without bound where the keyframes of a submap lie far apart.
+  const double reach = params_.max_range + radius + 1.0;
   std::vector<Vec2> points;
   for (std::size_t i = lo; i <= candidate + s && i < keyframes_.size(); ++i)
   {
     if (keyframes_[current].path - keyframes_[i].path < 0.5 * params_.loop_min_path)
       continue;  // too recent: part of the chain being checked
     const Pose2 rel = inv * graph_.node(i);
-    for (const auto& p : keyframes_[i].points) points.push_back(rel.apply(p));
+    for (const auto& p : keyframes_[i].points)
+    {
+      const Vec2 q = rel.apply(p);
+      if (std::fabs(q.x() - guess.x) <= reach && std::fabs(q.y() - guess.y) <= reach) points.push_back(q);
+    }
   }
   if (points.size() < params_.min_points) return std::nullopt;
   const auto& scan = keyframes_[current].points;
@@ -474,7 +483,14 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
   ++counters_.loop_attempts;
   const Pose2 guess = graph_.node(j).inverse() * graph_.node(k);
   const auto found = matchLoop(j, k, guess, radius, angle);
-  if (!found || found->first.score < params_.loop_min_score)
+  if (!found)
+  {
+    ++counters_.loops_rejected_score;
+    return;
+  }
+  const std::size_t attempt = closures_.size();
+  closures_.push_back({j, k, ClosureOutcome::kRejectedScore, found->first.score});
+  if (found->first.score < params_.loop_min_score)
   {
     ++counters_.loops_rejected_score;
     return;
@@ -482,6 +498,7 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
   if (params_.loop_ambiguity_distance > 0.0 && found->second >= params_.loop_ambiguity_ratio)
   {
     ++counters_.loops_ambiguous;
+    closures_[attempt].outcome = ClosureOutcome::kAmbiguous;
     return;
   }
   const MatchResult& match = found->first;
@@ -498,13 +515,24 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
     // the next optimisation.
     ++counters_.loops_accepted;
     ++counters_.loops_consistent;
+    closures_[attempt].outcome = ClosureOutcome::kAccepted;
     counters_.loops_degenerate += shape.degenerate ? 1 : 0;
     path_at_closure_ = keyframes_[k].path;
     return;
   }
   std::vector<std::size_t> added{edge};
-  if (!admitDisagreeing(j, k, e, match.pose, size, disagreement.theta, added)) return;
-  if (!optimizeKeeping(added)) return;
+  // A corroborated pending closure goes in (or out) with this one.
+  const std::size_t pending_attempt = pending_ ? pending_->attempt : closures_.size();
+  if (!admitDisagreeing(j, k, e, match.pose, size, disagreement.theta, added))
+  {
+    closures_[attempt].outcome = ClosureOutcome::kPending;
+    return;
+  }
+  const bool kept = optimizeKeeping(added);
+  const ClosureOutcome outcome = kept ? ClosureOutcome::kAccepted : ClosureOutcome::kRejectedGraph;
+  closures_[attempt].outcome = outcome;
+  if (added.size() > 1 && pending_attempt < closures_.size()) closures_[pending_attempt].outcome = outcome;
+  if (!kept) return;
   counters_.loops_accepted += added.size();
   counters_.loops_degenerate += shape.degenerate ? 1 : 0;
   graph_optimized_ = true;
@@ -524,7 +552,7 @@ bool LaserSlam::admitDisagreeing(std::size_t j, std::size_t k, const PoseGraphEd
     if (!corroborates(k, implied))
     {
       graph_.removeEdge(edge);
-      pending_ = PendingClosure{e, implied, k};
+      pending_ = PendingClosure{e, implied, k, closures_.size() - 1};
       ++counters_.loops_pending;
       return false;
     }

@@ -52,6 +52,17 @@ struct MapFigure
   /// Uncovered scan points on straight structure (then not also in uncovered_points).
   std::vector<linemap::Vec2> uncovered_structure_points;
   std::vector<std::pair<linemap::Segment2, linemap::Segment2>> redundant_pairs;
+  /// A SLAM run (slam_figure.hpp), over the scan points and under the map: the trajectory as a black
+  /// polyline, loop closures as lines between their two keyframes' positions (accepted green, rejected
+  /// orange) and relations whose error exceeds bad_relation red between their two scans' positions
+  /// (shown when show_relations). With show_slam the legend lists these layers (with their counts)
+  /// instead of the map's when the figure has no segments.
+  bool show_slam = false;
+  std::vector<linemap::Vec2> trajectory;
+  std::vector<linemap::Segment2> accepted_closures, rejected_closures;
+  bool show_relations = false;
+  double bad_relation = 0.3;  ///< [m], for the legend
+  std::vector<linemap::Segment2> bad_relations;
 };
 
 /// Placement shared by the panels of a figure: the world box [min_x, max_x] x [min_y, max_y]

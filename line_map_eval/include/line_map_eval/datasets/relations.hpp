@@ -34,6 +34,19 @@ struct RelationsError
   double translation_max = 0.0, rotation_max = 0.0;
 };
 
+/// One relation measured on a trajectory.
+struct RelationResidual
+{
+  std::size_t relation = 0;                  ///< index into the relations
+  linemap::Pose2 first, second;              ///< the trajectory's poses at t1 and t2
+  double translation = 0.0, rotation = 0.0;  ///< |translation|, |rotation| of delta*^-1 * delta [m, rad]
+};
+
+/// Every relation both of whose timestamps are in `poses` (as relationsError takes them), in order.
+std::vector<RelationResidual> relationResiduals(const std::vector<Relation>& relations,
+                                                const std::vector<std::pair<double, linemap::Pose2>>& poses,
+                                                double tolerance = 1e-4);
+
 /// The metric of `poses` (timestamp, pose), any order; a relation timestamp takes the pose whose
 /// timestamp is nearest to it within `tolerance` [s], else the relation is not used.
 RelationsError relationsError(const std::vector<Relation>& relations,

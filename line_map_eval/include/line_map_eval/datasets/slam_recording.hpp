@@ -17,6 +17,8 @@ struct SlamRecordingResult
   std::vector<Pose2> scan_poses;
   /// The keyframes: index into Recording::scans and optimised base pose.
   std::vector<CorrectedKeyframe> keyframes;
+  /// Every loop-closure attempt that got as far as a match; `from` and `to` index `keyframes`.
+  std::vector<line_map_merging::ClosureAttempt> closures;
   line_map_merging::SlamCounters counters;
   double seconds = 0.0;      ///< front and back end, the whole recording (wall time)
   double cpu_seconds = 0.0;  ///< the same in CPU time of this thread

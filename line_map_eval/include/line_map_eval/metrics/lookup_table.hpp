@@ -97,5 +97,8 @@ void appendWorldPoints(const linemap::Pose2& laser_pose, const std::vector<Vec2>
 /// World points of every corrected keyframe of a recording: laser pose = keyframe pose *
 /// base_to_laser; a beam is a point when range_min < range < range_max and finite.
 std::vector<Vec2> registeredScanPoints(const Recording& recording);
+/// The same for the given keyframes of the recording's scans (e.g. a SLAM run's).
+std::vector<Vec2> registeredScanPoints(const Recording& recording,
+                                       const std::vector<CorrectedKeyframe>& keyframes);
 
 }  // namespace line_map_eval

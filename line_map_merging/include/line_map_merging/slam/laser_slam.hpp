@@ -129,6 +129,24 @@ struct SlamCounters
   double last_optimization_ms = 0.0, total_optimization_ms = 0.0, last_match_ms = 0.0, total_loop_ms = 0.0;
 };
 
+/// What became of a loop-closure attempt that got as far as a match of keyframe `to` against the
+/// submap around keyframe `from`.
+enum class ClosureOutcome
+{
+  kAccepted,       ///< in the graph (also a closure the estimate already met, and a corroborated one)
+  kRejectedScore,  ///< the match scored below loop_min_score
+  kAmbiguous,      ///< another pose away from the match scored nearly as well (loop_ambiguity_*)
+  kPending,        ///< waiting for a corroborating closure that never came
+  kRejectedGraph,  ///< the optimised graph still missed it by more than loop_max_error_*
+};
+
+struct ClosureAttempt
+{
+  std::size_t from = 0, to = 0;  ///< keyframe indices, from < to
+  ClosureOutcome outcome = ClosureOutcome::kRejectedScore;
+  double score = 0.0;  ///< the refined match's mean field value
+};
+
 struct SlamKeyframe
 {
   double stamp = 0.0;
@@ -169,6 +187,8 @@ class LaserSlam
   const linemap::Pose2& currentLocal() const { return last_local_; }
 
   const std::vector<SlamKeyframe>& keyframes() const { return keyframes_; }
+  /// Every loop-closure attempt that got as far as a match, in order (since the last reset()).
+  const std::vector<ClosureAttempt>& closureAttempts() const { return closures_; }
   const PoseGraph& graph() const { return graph_; }
   const SlamCounters& counters() const { return counters_; }
   const LaserSlamParams& params() const { return params_; }
@@ -248,8 +268,10 @@ class LaserSlam
     PoseGraphEdge edge;
     linemap::Pose2 implied;  ///< where the closure puts its keyframe
     std::size_t to;
+    std::size_t attempt;  ///< its entry in closures_
   };
   std::optional<PendingClosure> pending_;
+  std::vector<ClosureAttempt> closures_;
   SlamCounters counters_;
 };
 
