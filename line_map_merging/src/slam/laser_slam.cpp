@@ -4,6 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <cstdio>
+#include <cstdlib>
+#include <Eigen/Eigenvalues>
 
 #include "line_extraction/param_checks.hpp"
 #include "linemap/small_helpers.hpp"
@@ -277,7 +280,15 @@ std::optional<Pose2> LaserSlam::matchFrontEnd(const SlamScan& scan, const Predic
     return std::nullopt;
   }
   Pose2 pose = best->pose;
-  if (prediction.odometry_usable)
+  if (std::getenv("SLAM_TRACE"))
+  {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(best->curvature.topLeftCorner<2, 2>());
+    std::fprintf(stderr, "TRACE %zu kf %zu pred %.3f %.3f %.3f match %.3f %.3f %.3f score %.3f eig %.1f %.1f v0 %.2f %.2f\n",
+                 counters_.scans, keyframes_.size(), predicted.x, predicted.y, predicted.theta, best->pose.x,
+                 best->pose.y, best->pose.theta, best->score, es.eigenvalues()(0), es.eigenvalues()(1),
+                 es.eigenvectors()(0, 0), es.eigenvectors()(1, 0));
+  }
+  if (prediction.odometry_usable && !std::getenv("NO_MIX"))
   {
     // The match's translation where it determines one, the odometry's elsewhere.
     const TranslationShape shape = matchShape(*best);
@@ -345,6 +356,7 @@ void LaserSlam::addKeyframe(const SlamScan& scan, std::size_t scan_index, bool c
   kf.scan = scan_index;
   kf.local = last_local_;
   kf.points = scan.points;
+  kf.surfaces = scanSurfaces(scan.points, params_.surfaces);
   kf.path = path_;
   if (keyframes_.empty())
     graph_.addNode(kf.local);
@@ -376,11 +388,11 @@ void LaserSlam::addKeyframe(const SlamScan& scan, std::size_t scan_index, bool c
 
 void LaserSlam::rebuildLocalMap()
 {
-  std::vector<Vec2> points;
+  std::vector<linemap::Segment2> surfaces;
   const std::size_t n = std::min(params_.local_map_keyframes, keyframes_.size());
   for (std::size_t i = keyframes_.size() - n; i < keyframes_.size(); ++i)
-    for (const auto& p : keyframes_[i].points) points.push_back(keyframes_[i].local.apply(p));
-  local_map_ = LikelihoodGrid(points, params_.resolution, params_.sigma, 0.5);
+    for (const auto& s : keyframes_[i].surfaces) surfaces.push_back(s.transformed(keyframes_[i].local));
+  local_map_ = LikelihoodGrid(surfaces, params_.resolution, params_.sigma, 0.5);
 }
 
 std::optional<std::pair<MatchResult, double>> LaserSlam::matchLoop(std::size_t candidate, std::size_t current,

@@ -20,6 +20,7 @@
 #include "line_map_merging/slam/likelihood_grid.hpp"
 #include "line_map_merging/slam/pose_graph.hpp"
 #include "line_map_merging/slam/scan_matcher.hpp"
+#include "line_map_merging/slam/scan_surfaces.hpp"
 #include "linemap/geometry.hpp"
 #include "linemap/params.hpp"
 #include "linemap/time_jump_detector.hpp"
@@ -43,6 +44,8 @@ struct LaserSlamParams
   double keyframe_distance = 0.2;        ///< [m]
   double keyframe_angle = 0.17;          ///< [rad]
   std::size_t local_map_keyframes = 20;  ///< keyframes in the local map
+  /// The local map's field is of the keyframes' surfaces (scanSurfaces), not of their points alone.
+  SurfaceParams surfaces;
   double max_odometry_step = 0.5;        ///< [m] odometry moving more between two scans is a jump
   double max_odometry_turn = 0.5;        ///< [rad]
   double time_jump_tolerance = 1.0;      ///< [s] a stamp this much before the last one: time jumped back
@@ -135,6 +138,7 @@ struct SlamKeyframe
   std::size_t scan = 0;               ///< index among the scans accepted (not rejected)
   linemap::Pose2 local;               ///< front-end pose
   std::vector<linemap::Vec2> points;  ///< base frame
+  std::vector<linemap::Segment2> surfaces;  ///< base frame: scanSurfaces of the points
   double path = 0.0;                  ///< [m] front-end path length up to here
 };
 
