@@ -4,9 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
-#include <cstdio>
-#include <cstdlib>
-#include <Eigen/Eigenvalues>
 
 #include "line_extraction/param_checks.hpp"
 #include "linemap/small_helpers.hpp"
@@ -70,6 +67,10 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.keyframe_distance = positiveParam(p, "front_end/keyframe_distance", s.keyframe_distance);
   s.keyframe_angle = positiveParam(p, "front_end/keyframe_angle", s.keyframe_angle);
   s.local_map_keyframes = countParam(p, "front_end/local_map_keyframes", s.local_map_keyframes, 1);
+  s.surfaces.lambda = p.getDouble("front_end/surface_lambda", s.surfaces.lambda);
+  if (!(s.surfaces.lambda >= 0.0 && s.surfaces.lambda < linemap::kPi / 2))
+    throw linemap::ParameterError("parameter 'front_end/surface_lambda' must be in [0, pi/2) rad");
+  s.surfaces.range_sigma = positiveParam(p, "front_end/range_sigma", s.surfaces.range_sigma);
   s.max_odometry_step = positiveParam(p, "front_end/max_odometry_step", s.max_odometry_step);
   s.max_odometry_turn = positiveParam(p, "front_end/max_odometry_turn", s.max_odometry_turn);
   s.time_jump_tolerance = positiveParam(p, "front_end/time_jump_tolerance", s.time_jump_tolerance);
@@ -280,15 +281,7 @@ std::optional<Pose2> LaserSlam::matchFrontEnd(const SlamScan& scan, const Predic
     return std::nullopt;
   }
   Pose2 pose = best->pose;
-  if (std::getenv("SLAM_TRACE"))
-  {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(best->curvature.topLeftCorner<2, 2>());
-    std::fprintf(stderr, "TRACE %zu kf %zu pred %.3f %.3f %.3f match %.3f %.3f %.3f score %.3f eig %.1f %.1f v0 %.2f %.2f\n",
-                 counters_.scans, keyframes_.size(), predicted.x, predicted.y, predicted.theta, best->pose.x,
-                 best->pose.y, best->pose.theta, best->score, es.eigenvalues()(0), es.eigenvalues()(1),
-                 es.eigenvectors()(0, 0), es.eigenvectors()(1, 0));
-  }
-  if (prediction.odometry_usable && !std::getenv("NO_MIX"))
+  if (prediction.odometry_usable)
   {
     // The match's translation where it determines one, the odometry's elsewhere.
     const TranslationShape shape = matchShape(*best);

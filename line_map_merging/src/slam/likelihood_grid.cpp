@@ -22,8 +22,8 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points, double 
 {
 }
 
-LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Segment2>& surfaces, double resolution, double sigma,
-                               double margin)
+LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Segment2>& surfaces, double resolution,
+                               double sigma, double margin)
     : resolution_(resolution), inv_resolution_(1.0 / resolution)
 {
   if (surfaces.empty() || !(resolution > 0.0) || !(sigma > 0.0)) return;
@@ -50,8 +50,10 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Segment2>& surfaces, d
   for (const auto& s : surfaces)
   {
     // In cell units, relative to the segment's start: the distance of a cell to the segment.
-    const double ax = (s.start.x() - origin_.x()) * inv_resolution_, ay = (s.start.y() - origin_.y()) * inv_resolution_;
-    const double bx = (s.end.x() - origin_.x()) * inv_resolution_, by = (s.end.y() - origin_.y()) * inv_resolution_;
+    const double ax = (s.start.x() - origin_.x()) * inv_resolution_,
+                 ay = (s.start.y() - origin_.y()) * inv_resolution_;
+    const double bx = (s.end.x() - origin_.x()) * inv_resolution_,
+                 by = (s.end.y() - origin_.y()) * inv_resolution_;
     const double ux = bx - ax, uy = by - ay, len2 = ux * ux + uy * uy;
     const int x0 = static_cast<int>(std::lround(std::min(ax, bx))) - r;
     const int x1 = static_cast<int>(std::lround(std::max(ax, bx))) + r;

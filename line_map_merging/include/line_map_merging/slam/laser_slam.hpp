@@ -46,9 +46,9 @@ struct LaserSlamParams
   std::size_t local_map_keyframes = 20;  ///< keyframes in the local map
   /// The local map's field is of the keyframes' surfaces (scanSurfaces), not of their points alone.
   SurfaceParams surfaces;
-  double max_odometry_step = 0.5;        ///< [m] odometry moving more between two scans is a jump
-  double max_odometry_turn = 0.5;        ///< [rad]
-  double time_jump_tolerance = 1.0;      ///< [s] a stamp this much before the last one: time jumped back
+  double max_odometry_step = 0.5;    ///< [m] odometry moving more between two scans is a jump
+  double max_odometry_turn = 0.5;    ///< [rad]
+  double time_jump_tolerance = 1.0;  ///< [s] a stamp this much before the last one: time jumped back
   /// What a match determines, as a weight per direction of the translation (its score's curvature;
   /// TranslationShape): a direction fixed at least this fraction as sharply as the best one counts
   /// fully, a weaker one in proportion. The front end takes the match's translation in the
@@ -135,11 +135,11 @@ struct SlamCounters
 struct SlamKeyframe
 {
   double stamp = 0.0;
-  std::size_t scan = 0;               ///< index among the scans accepted (not rejected)
-  linemap::Pose2 local;               ///< front-end pose
-  std::vector<linemap::Vec2> points;  ///< base frame
+  std::size_t scan = 0;                     ///< index among the scans accepted (not rejected)
+  linemap::Pose2 local;                     ///< front-end pose
+  std::vector<linemap::Vec2> points;        ///< base frame
   std::vector<linemap::Segment2> surfaces;  ///< base frame: scanSurfaces of the points
-  double path = 0.0;                  ///< [m] front-end path length up to here
+  double path = 0.0;                        ///< [m] front-end path length up to here
 };
 
 class LaserSlam

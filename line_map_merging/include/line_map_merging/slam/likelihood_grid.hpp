@@ -1,8 +1,8 @@
 // A smoothed occupancy likelihood field for scan matching (ROS-free): every cell holds
 // exp(-d^2 / 2 sigma^2) of the distance d from its centre to the nearest map point or surface
-// segment, so a scan point's score falls off smoothly with its distance to the map. The correlative search reads it
-// at the nearest cell; the refinement reads it through Ceres' bicubic interpolator, which needs
-// the smooth field (a binary grid has no gradient).
+// segment, so a scan point's score falls off smoothly with its distance to the map. The correlative search
+// reads it at the nearest cell; the refinement reads it through Ceres' bicubic interpolator, which needs the
+// smooth field (a binary grid has no gradient).
 #pragma once
 
 #include <cmath>
@@ -21,7 +21,8 @@ class LikelihoodGrid
   /// bounding box plus `margin` [m] (so a scan overhanging the map still reads zero, not garbage).
   LikelihoodGrid(const std::vector<linemap::Vec2>& points, double resolution, double sigma, double margin);
   /// The same for surfaces: the distance is to the nearest segment (a point is a segment of length 0).
-  LikelihoodGrid(const std::vector<linemap::Segment2>& surfaces, double resolution, double sigma, double margin);
+  LikelihoodGrid(const std::vector<linemap::Segment2>& surfaces, double resolution, double sigma,
+                 double margin);
 
   bool empty() const { return cells_.empty(); }
   double resolution() const { return resolution_; }

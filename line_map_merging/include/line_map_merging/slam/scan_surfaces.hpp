@@ -15,7 +15,7 @@ namespace line_map_merging
 struct SurfaceParams
 {
   /// Smallest incidence angle of a surface two neighbouring points are joined on (the adaptive
-  /// breakpoint test of line_extraction, Borges & Aldon).
+  /// breakpoint test of line_extraction, Borges & Aldon); 0: no point is joined.
   double lambda = 10.0 * linemap::kPi / 180.0;  ///< [rad]
   double range_sigma = 0.01;                    ///< [m] range noise
 };
@@ -24,6 +24,7 @@ struct SurfaceParams
 /// origin) on one surface, and every point joined to neither neighbour as a segment of length 0. Two
 /// neighbours are joined when the breakpoint test passes, or when they continue a joined pair along
 /// its line (within 3 range_sigma) with no beam between them: a wall at grazing incidence.
-std::vector<linemap::Segment2> scanSurfaces(const std::vector<linemap::Vec2>& points, const SurfaceParams& params);
+std::vector<linemap::Segment2> scanSurfaces(const std::vector<linemap::Vec2>& points,
+                                            const SurfaceParams& params);
 
 }  // namespace line_map_merging
