@@ -131,13 +131,6 @@ Errors runCorridor(const LaserSlamParams& params, bool with_odometry)
   e.counters = slam.counters();
   return e;
 }
-
-LaserSlamParams frontEndOnly()
-{
-  LaserSlamParams p;
-  p.loop_candidates = 0;
-  return p;
-}
 }  // namespace
 
 // The front end alone (no loop closure): along the axis the odometry's 4 % would put the robot metres
@@ -145,7 +138,9 @@ LaserSlamParams frontEndOnly()
 // it within a fraction of that.
 TEST(LaserSlamCorridor, FrontEndFollowsTheCorridor)
 {
-  const Errors e = runCorridor(frontEndOnly(), true);
+  LaserSlamParams front_end_only;
+  front_end_only.loop_candidates = 0;
+  const Errors e = runCorridor(front_end_only, true);
   std::printf(
       "front end, odometry: worst %.3f m, mean %.3f m, first pass worst %.3f m (odometry alone: worst %.3f "
       "m); "
