@@ -47,46 +47,48 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Segment2>& surfaces, d
   cells_.assign(static_cast<std::size_t>(width_) * height_, reach2);
   const int r = static_cast<int>(std::ceil(reach * inv_resolution_));
   const double k = -0.5 / (sigma * sigma);
-  for (const auto& s : surfaces)
+  for (const auto& s : surfaces) writeSquaredDistances(s, r);
+  for (double& c : cells_) c = c >= reach2 ? 0.0 : std::exp(k * c);
+}
+
+void LikelihoodGrid::writeSquaredDistances(const linemap::Segment2& s, int r)
+{
+  // In cell units, relative to the segment's start: the distance of a cell to the segment.
+  const double ax = (s.start.x() - origin_.x()) * inv_resolution_,
+               ay = (s.start.y() - origin_.y()) * inv_resolution_;
+  const double bx = (s.end.x() - origin_.x()) * inv_resolution_,
+               by = (s.end.y() - origin_.y()) * inv_resolution_;
+  const double ux = bx - ax, uy = by - ay, len2 = ux * ux + uy * uy;
+  const int x0 = static_cast<int>(std::lround(std::min(ax, bx))) - r;
+  const int x1 = static_cast<int>(std::lround(std::max(ax, bx))) + r;
+  const int y0 = static_cast<int>(std::lround(std::min(ay, by))) - r;
+  const int y1 = static_cast<int>(std::lround(std::max(ay, by))) + r;
+  const double len = std::sqrt(len2);
+  for (int iy = std::max(0, y0); iy <= std::min(height_ - 1, y1); ++iy)
   {
-    // In cell units, relative to the segment's start: the distance of a cell to the segment.
-    const double ax = (s.start.x() - origin_.x()) * inv_resolution_,
-                 ay = (s.start.y() - origin_.y()) * inv_resolution_;
-    const double bx = (s.end.x() - origin_.x()) * inv_resolution_,
-                 by = (s.end.y() - origin_.y()) * inv_resolution_;
-    const double ux = bx - ax, uy = by - ay, len2 = ux * ux + uy * uy;
-    const int x0 = static_cast<int>(std::lround(std::min(ax, bx))) - r;
-    const int x1 = static_cast<int>(std::lround(std::max(ax, bx))) + r;
-    const int y0 = static_cast<int>(std::lround(std::min(ay, by))) - r;
-    const int y1 = static_cast<int>(std::lround(std::max(ay, by))) + r;
-    const double len = std::sqrt(len2);
-    for (int iy = std::max(0, y0); iy <= std::min(height_ - 1, y1); ++iy)
+    double* row = &cells_[static_cast<std::size_t>(iy) * width_];
+    int from = std::max(0, x0), to = std::min(width_ - 1, x1);
+    if (std::fabs(uy) > 1e-6 * len)
     {
-      double* row = &cells_[static_cast<std::size_t>(iy) * width_];
-      int from = std::max(0, x0), to = std::min(width_ - 1, x1);
-      if (std::fabs(uy) > 1e-6 * len)
+      // Only the row's cells within reach of the segment's line (a long oblique segment's
+      // bounding box is mostly far from it).
+      const double c = ax + ux * (iy - ay) / uy, half = std::fabs((r + 1) * len / uy);
+      from = std::max(from, static_cast<int>(std::floor(c - half)));
+      to = std::min(to, static_cast<int>(std::ceil(c + half)));
+    }
+    for (int ix = from; ix <= to; ++ix)
+    {
+      double px = ix - ax, py = iy - ay;
+      if (len2 > 0.0)
       {
-        // Only the row's cells within reach of the segment's line (a long oblique segment's
-        // bounding box is mostly far from it).
-        const double c = ax + ux * (iy - ay) / uy, half = std::fabs((r + 1) * len / uy);
-        from = std::max(from, static_cast<int>(std::floor(c - half)));
-        to = std::min(to, static_cast<int>(std::ceil(c + half)));
+        const double t = std::clamp((px * ux + py * uy) / len2, 0.0, 1.0);
+        px -= t * ux;
+        py -= t * uy;
       }
-      for (int ix = from; ix <= to; ++ix)
-      {
-        double px = ix - ax, py = iy - ay;
-        if (len2 > 0.0)
-        {
-          const double t = std::clamp((px * ux + py * uy) / len2, 0.0, 1.0);
-          px -= t * ux;
-          py -= t * uy;
-        }
-        const double dx = px * resolution_, dy = py * resolution_;
-        row[ix] = std::min(row[ix], dx * dx + dy * dy);
-      }
+      const double dx = px * resolution_, dy = py * resolution_;
+      row[ix] = std::min(row[ix], dx * dx + dy * dy);
     }
   }
-  for (double& c : cells_) c = c >= reach2 ? 0.0 : std::exp(k * c);
 }
 
 }  // namespace line_map_merging

@@ -43,6 +43,9 @@ class LikelihoodGrid
   }
 
  private:
+  /// Lowers the cells within r cells of `s` to their squared distance [m^2] to it.
+  void writeSquaredDistances(const linemap::Segment2& s, int r);
+
   double resolution_ = 0.05, inv_resolution_ = 20.0;
   linemap::Vec2 origin_ = linemap::Vec2::Zero();
   int width_ = 0, height_ = 0;
