@@ -42,7 +42,7 @@ TEST(LikelihoodGrid, OneSegmentIsTheGaussianOfTheDistanceToIt)
 {
   const double res = 0.02, sigma = 0.05;
   const Vec2 a(1.0, 2.0), b(2.5, 2.7);  // oblique: the cells near it lie off its bounding box's rows
-  const LikelihoodGrid grid(std::vector<linemap::Segment2>{{a, b}}, res, sigma, 0.3);
+  const LikelihoodGrid grid({a, b}, {{a, b}}, res, sigma, 0.3);
   int near = 0;
   for (double x = 0.7; x <= 2.8; x += 0.013)
     for (double y = 1.7; y <= 3.0; y += 0.011)
@@ -73,7 +73,6 @@ TEST(ScanSurfaces, JoinAGrazingWallNotADepthJump)
   for (const auto& p : points) wall_points += on(p, 0, 1, 30, 1) ? 1 : 0;
   for (const auto& s : surfaces)
   {
-    if (s.length() == 0.0) continue;
     const bool a_wall = on(s.start, 0, 1, 30, 1), b_wall = on(s.end, 0, 1, 30, 1);
     const bool a_box = on(s.start, 3, -1, 3, -0.5), b_box = on(s.end, 3, -1, 3, -0.5);
     EXPECT_EQ(a_box, b_box) << "joined across a depth jump";
@@ -87,13 +86,6 @@ TEST(ScanSurfaces, JoinAGrazingWallNotADepthJump)
   ASSERT_GT(wall_points, 40u);
   EXPECT_EQ(wall_joins, wall_points - 1);  // one chain
   EXPECT_GT(farthest, 15.0);               // points metres apart at the far end
-  // Every point is in some segment: the field keeps them all.
-  for (const auto& p : points)
-  {
-    bool kept = false;
-    for (const auto& s : surfaces) kept |= (s.start - p).norm() < 1e-12 || (s.end - p).norm() < 1e-12;
-    EXPECT_TRUE(kept);
-  }
 }
 
 TEST(ScanMatcher, RecoversAKnownPoseFromADisplacedPrior)

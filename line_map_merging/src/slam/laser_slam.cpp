@@ -349,7 +349,7 @@ void LaserSlam::addKeyframe(const SlamScan& scan, std::size_t scan_index, bool c
   kf.scan = scan_index;
   kf.local = last_local_;
   kf.points = scan.points;
-  kf.surfaces = scanSurfaces(scan.points, params_.surfaces);
+  kf.joins = scanSurfaces(scan.points, params_.surfaces);
   kf.path = path_;
   if (keyframes_.empty())
     graph_.addNode(kf.local);
@@ -381,11 +381,15 @@ void LaserSlam::addKeyframe(const SlamScan& scan, std::size_t scan_index, bool c
 
 void LaserSlam::rebuildLocalMap()
 {
-  std::vector<linemap::Segment2> surfaces;
+  std::vector<Vec2> points;
+  std::vector<linemap::Segment2> joins;
   const std::size_t n = std::min(params_.local_map_keyframes, keyframes_.size());
   for (std::size_t i = keyframes_.size() - n; i < keyframes_.size(); ++i)
-    for (const auto& s : keyframes_[i].surfaces) surfaces.push_back(s.transformed(keyframes_[i].local));
-  local_map_ = LikelihoodGrid(surfaces, params_.resolution, params_.sigma, 0.5);
+  {
+    for (const auto& p : keyframes_[i].points) points.push_back(keyframes_[i].local.apply(p));
+    for (const auto& s : keyframes_[i].joins) joins.push_back(s.transformed(keyframes_[i].local));
+  }
+  local_map_ = LikelihoodGrid(points, joins, params_.resolution, params_.sigma, 0.5);
 }
 
 std::optional<std::pair<MatchResult, double>> LaserSlam::matchLoop(std::size_t candidate, std::size_t current,

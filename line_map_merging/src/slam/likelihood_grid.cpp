@@ -5,87 +5,94 @@
 
 namespace line_map_merging
 {
-namespace
-{
-std::vector<linemap::Segment2> asSegments(const std::vector<linemap::Vec2>& points)
-{
-  std::vector<linemap::Segment2> out;
-  out.reserve(points.size());
-  for (const auto& p : points) out.emplace_back(p, p);
-  return out;
-}
-}  // namespace
-
 LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points, double resolution, double sigma,
                                double margin)
-    : LikelihoodGrid(asSegments(points), resolution, sigma, margin)
+    : LikelihoodGrid(points, {}, resolution, sigma, margin)
 {
 }
 
-LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Segment2>& surfaces, double resolution,
-                               double sigma, double margin)
+LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points,
+                               const std::vector<linemap::Segment2>& joins, double resolution, double sigma,
+                               double margin)
     : resolution_(resolution), inv_resolution_(1.0 / resolution)
 {
-  if (surfaces.empty() || !(resolution > 0.0) || !(sigma > 0.0)) return;
+  if (points.empty() || !(resolution > 0.0) || !(sigma > 0.0)) return;
   double min_x = std::numeric_limits<double>::infinity(), min_y = min_x, max_x = -min_x, max_y = -min_x;
-  for (const auto& s : surfaces)
-    for (const auto& p : {s.start, s.end})
-    {
-      min_x = std::min(min_x, p.x());
-      min_y = std::min(min_y, p.y());
-      max_x = std::max(max_x, p.x());
-      max_y = std::max(max_y, p.y());
-    }
+  for (const auto& p : points)
+  {
+    min_x = std::min(min_x, p.x());
+    min_y = std::min(min_y, p.y());
+    max_x = std::max(max_x, p.x());
+    max_y = std::max(max_y, p.y());
+  }
   // Beyond 3 sigma the value is below 1.2 %: not worth writing.
   const double reach = 3.0 * sigma;
   margin = std::max(margin, reach + 2.0 * resolution);
   origin_ = {min_x - margin, min_y - margin};
   width_ = static_cast<int>(std::ceil((max_x - min_x + 2.0 * margin) * inv_resolution_)) + 1;
   height_ = static_cast<int>(std::ceil((max_y - min_y + 2.0 * margin) * inv_resolution_)) + 1;
-  // Nearest squared distance per cell first, one exp per cell after (far fewer than per segment).
+  // Nearest squared distance per cell first, one exp per cell after (far fewer than per point).
   const double reach2 = reach * reach;
   cells_.assign(static_cast<std::size_t>(width_) * height_, reach2);
   const int r = static_cast<int>(std::ceil(reach * inv_resolution_));
   const double k = -0.5 / (sigma * sigma);
-  for (const auto& s : surfaces) writeSquaredDistances(s, r);
+  for (const auto& p : points)
+  {
+    const double fx = (p.x() - origin_.x()) * inv_resolution_, fy = (p.y() - origin_.y()) * inv_resolution_;
+    const int cx = static_cast<int>(std::lround(fx)), cy = static_cast<int>(std::lround(fy));
+    for (int iy = std::max(0, cy - r); iy <= std::min(height_ - 1, cy + r); ++iy)
+    {
+      const double dy = (iy - fy) * resolution_;
+      double* row = &cells_[static_cast<std::size_t>(iy) * width_];
+      for (int ix = std::max(0, cx - r); ix <= std::min(width_ - 1, cx + r); ++ix)
+      {
+        const double dx = (ix - fx) * resolution_;
+        row[ix] = std::min(row[ix], dx * dx + dy * dy);
+      }
+    }
+  }
+  for (const auto& s : joins) writeJoin(s, r);
   for (double& c : cells_) c = c >= reach2 ? 0.0 : std::exp(k * c);
 }
 
-void LikelihoodGrid::writeSquaredDistances(const linemap::Segment2& s, int r)
+void LikelihoodGrid::writeJoin(const linemap::Segment2& s, int r)
 {
-  // In cell units, relative to the segment's start: the distance of a cell to the segment.
+  // In cell units from the join's start a: a cell's offset p projects to t = p.u / |u|^2 along it.
   const double ax = (s.start.x() - origin_.x()) * inv_resolution_,
                ay = (s.start.y() - origin_.y()) * inv_resolution_;
-  const double bx = (s.end.x() - origin_.x()) * inv_resolution_,
-               by = (s.end.y() - origin_.y()) * inv_resolution_;
-  const double ux = bx - ax, uy = by - ay, len2 = ux * ux + uy * uy;
-  const int x0 = static_cast<int>(std::lround(std::min(ax, bx))) - r;
-  const int x1 = static_cast<int>(std::lround(std::max(ax, bx))) + r;
-  const int y0 = static_cast<int>(std::lround(std::min(ay, by))) - r;
-  const int y1 = static_cast<int>(std::lround(std::max(ay, by))) + r;
-  const double len = std::sqrt(len2);
-  for (int iy = std::max(0, y0); iy <= std::min(height_ - 1, y1); ++iy)
+  const double ux = (s.end.x() - s.start.x()) * inv_resolution_,
+               uy = (s.end.y() - s.start.y()) * inv_resolution_;
+  const double len2 = ux * ux + uy * uy;
+  if (!(len2 > 0.0) || !std::isfinite(len2)) return;
+  const double inv_len2 = 1.0 / len2, band = (r + 1) * std::sqrt(len2);
+  const int y0 = std::max(0, static_cast<int>(std::floor(ay + std::min(0.0, uy))) - r);
+  const int y1 = std::min(height_ - 1, static_cast<int>(std::ceil(ay + std::max(0.0, uy))) + r);
+  for (int iy = y0; iy <= y1; ++iy)
   {
-    double* row = &cells_[static_cast<std::size_t>(iy) * width_];
-    int from = std::max(0, x0), to = std::min(width_ - 1, x1);
-    if (std::fabs(uy) > 1e-6 * len)
+    const double py = iy - ay;
+    // The row's cells with 0 <= t <= 1 and within reach of the line; the rest are nearer an
+    // endpoint, whose disc the points wrote.
+    double lo = std::floor(ax + std::min(0.0, ux)) - r, hi = std::ceil(ax + std::max(0.0, ux)) + r;
+    if (std::fabs(ux) > 1e-9)
     {
-      // Only the row's cells within reach of the segment's line (a long oblique segment's
-      // bounding box is mostly far from it).
-      const double c = ax + ux * (iy - ay) / uy, half = std::fabs((r + 1) * len / uy);
-      from = std::max(from, static_cast<int>(std::floor(c - half)));
-      to = std::min(to, static_cast<int>(std::ceil(c + half)));
+      const double t0 = -py * uy / ux, t1 = (len2 - py * uy) / ux;  // px at t = 0 and t = 1
+      lo = std::max(lo, ax + std::min(t0, t1) - 1.0);
+      hi = std::min(hi, ax + std::max(t0, t1) + 1.0);
     }
-    for (int ix = from; ix <= to; ++ix)
+    if (std::fabs(uy) > 1e-9)
     {
-      double px = ix - ax, py = iy - ay;
-      if (len2 > 0.0)
-      {
-        const double t = std::clamp((px * ux + py * uy) / len2, 0.0, 1.0);
-        px -= t * ux;
-        py -= t * uy;
-      }
-      const double dx = px * resolution_, dy = py * resolution_;
+      const double c = ax + ux * py / uy, half = std::fabs(band / uy);
+      lo = std::max(lo, c - half);
+      hi = std::min(hi, c + half);
+    }
+    double* row = &cells_[static_cast<std::size_t>(iy) * width_];
+    for (int ix = std::max(0, static_cast<int>(std::floor(lo)));
+         ix <= std::min(width_ - 1, static_cast<int>(hi)); ++ix)
+    {
+      const double px = ix - ax;
+      const double t = (px * ux + py * uy) * inv_len2;
+      if (t < 0.0 || t > 1.0) continue;
+      const double dx = (px - t * ux) * resolution_, dy = (py - t * uy) * resolution_;
       row[ix] = std::min(row[ix], dx * dx + dy * dy);
     }
   }

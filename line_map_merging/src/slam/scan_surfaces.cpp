@@ -12,11 +12,7 @@ std::vector<linemap::Segment2> scanSurfaces(const std::vector<linemap::Vec2>& po
 {
   std::vector<linemap::Segment2> out;
   const int n = static_cast<int>(points.size());
-  if (!(params.lambda > 0.0))
-  {
-    for (const auto& p : points) out.emplace_back(p, p);
-    return out;
-  }
+  if (!(params.lambda > 0.0)) return out;
   line_extraction::PreparedScan scan;
   scan.points = points;
   std::vector<double> steps;
@@ -49,13 +45,8 @@ std::vector<linemap::Segment2> scanSurfaces(const std::vector<linemap::Vec2>& po
     if (!joined[i] && joined[i - 1] && continues(i - 2, i - 1, i)) joined[i] = true;
   for (int i = n - 2; i >= 1; --i)
     if (!joined[i] && joined[i + 1] && continues(i + 1, i, i - 1)) joined[i] = true;
-  for (int i = 0; i < n; ++i)
-  {
-    if (i > 0 && joined[i])
-      out.emplace_back(points[i - 1], points[i]);
-    else if (i + 1 >= n || !joined[i + 1])
-      out.emplace_back(points[i], points[i]);  // joined to neither neighbour
-  }
+  for (int i = 1; i < n; ++i)
+    if (joined[i]) out.emplace_back(points[i - 1], points[i]);
   return out;
 }
 

@@ -135,11 +135,11 @@ struct SlamCounters
 struct SlamKeyframe
 {
   double stamp = 0.0;
-  std::size_t scan = 0;                     ///< index among the scans accepted (not rejected)
-  linemap::Pose2 local;                     ///< front-end pose
-  std::vector<linemap::Vec2> points;        ///< base frame
-  std::vector<linemap::Segment2> surfaces;  ///< base frame: scanSurfaces of the points
-  double path = 0.0;                        ///< [m] front-end path length up to here
+  std::size_t scan = 0;                  ///< index among the scans accepted (not rejected)
+  linemap::Pose2 local;                  ///< front-end pose
+  std::vector<linemap::Vec2> points;     ///< base frame
+  std::vector<linemap::Segment2> joins;  ///< base frame: scanSurfaces of the points
+  double path = 0.0;                     ///< [m] front-end path length up to here
 };
 
 class LaserSlam

@@ -20,9 +20,10 @@ class LikelihoodGrid
   /// Field of `points` at `resolution` [m] with spread `sigma` [m]; the grid covers the points'
   /// bounding box plus `margin` [m] (so a scan overhanging the map still reads zero, not garbage).
   LikelihoodGrid(const std::vector<linemap::Vec2>& points, double resolution, double sigma, double margin);
-  /// The same for surfaces: the distance is to the nearest segment (a point is a segment of length 0).
-  LikelihoodGrid(const std::vector<linemap::Segment2>& surfaces, double resolution, double sigma,
-                 double margin);
+  /// The same with `joins`, segments between points (of `points`) on one surface: the distance is to
+  /// the nearest point or join.
+  LikelihoodGrid(const std::vector<linemap::Vec2>& points, const std::vector<linemap::Segment2>& joins,
+                 double resolution, double sigma, double margin);
 
   bool empty() const { return cells_.empty(); }
   double resolution() const { return resolution_; }
@@ -43,8 +44,9 @@ class LikelihoodGrid
   }
 
  private:
-  /// Lowers the cells within r cells of `s` to their squared distance [m^2] to it.
-  void writeSquaredDistances(const linemap::Segment2& s, int r);
+  /// Lowers the cells within r cells of the join `s`, and nearer its inside than its ends, to their
+  /// squared distance [m^2] to it.
+  void writeJoin(const linemap::Segment2& s, int r);
 
   double resolution_ = 0.05, inv_resolution_ = 20.0;
   linemap::Vec2 origin_ = linemap::Vec2::Zero();
