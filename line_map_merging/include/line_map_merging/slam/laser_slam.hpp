@@ -1,5 +1,5 @@
 // 2D laser SLAM (ROS-free): the trajectory source for users without one. Front end: every scan is
-// matched against a local map (a likelihood field of the last keyframes' surfaces) by correlative
+// matched against a local map (a likelihood field of the last keyframes' points) by correlative
 // search + Ceres refinement, from the odometry prediction when there is odometry, else from a
 // constant-velocity prediction with a wider window. Keyframes (every keyframe_distance /
 // keyframe_angle of matched motion) are the nodes of a pose graph whose chain edges are the matched
