@@ -1,6 +1,7 @@
 // A ray-cast 2D world for the SLAM tests: walls as segments, scans as the nearest hit of each beam.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -49,6 +50,32 @@ inline std::vector<Vec2> scan(const std::vector<Segment2>& walls, const Pose2& p
     points.push_back({r * std::cos(a), r * std::sin(a)});
   }
   return points;
+}
+
+/// The poses of a robot driving from `start` through `goals` (start not included): 5 cm per scan,
+/// turning on the spot at 0.1 rad per scan towards each goal first.
+inline std::vector<Pose2> drive(Pose2 p, const std::vector<Vec2>& goals)
+{
+  std::vector<Pose2> path;
+  for (const Vec2& goal : goals)
+  {
+    const double heading = std::atan2(goal.y() - p.y, goal.x() - p.x);
+    while (std::fabs(linemap::normalizeAngle(heading - p.theta)) > 1e-9)
+    {
+      const double d = linemap::normalizeAngle(heading - p.theta);
+      p.theta = linemap::normalizeAngle(p.theta + std::clamp(d, -0.1, 0.1));
+      path.push_back(p);
+    }
+    while ((goal - p.translation()).norm() > 1e-9)
+    {
+      const Vec2 step = goal - p.translation();
+      const double len = std::min(0.05, step.norm());
+      p.x += step.x() / step.norm() * len;
+      p.y += step.y() / step.norm() * len;
+      path.push_back(p);
+    }
+  }
+  return path;
 }
 
 /// A 12 x 8 m room with a few boxes and a niche: no symmetry a matcher could confuse.

@@ -23,29 +23,10 @@ namespace
 std::vector<Pose2> laps(int count)
 {
   const std::vector<linemap::Vec2> corners = {{1.5, 4.0}, {7.0, 4.0}, {7.0, 1.0}, {1.5, 1.0}};
-  std::vector<Pose2> path;
-  Pose2 p(1.5, 4.0, 0.0);
+  std::vector<linemap::Vec2> goals;
   for (int lap = 0; lap < count; ++lap)
-    for (std::size_t c = 1; c <= corners.size(); ++c)
-    {
-      const linemap::Vec2 goal = corners[c % corners.size()];
-      const double heading = std::atan2(goal.y() - p.y, goal.x() - p.x);
-      while (std::fabs(linemap::normalizeAngle(heading - p.theta)) > 1e-9)
-      {
-        const double d = linemap::normalizeAngle(heading - p.theta);
-        p.theta = linemap::normalizeAngle(p.theta + std::clamp(d, -0.1, 0.1));
-        path.push_back(p);
-      }
-      while ((goal - p.translation()).norm() > 1e-9)
-      {
-        const linemap::Vec2 step = goal - p.translation();
-        const double len = std::min(0.05, step.norm());
-        p.x += step.x() / step.norm() * len;
-        p.y += step.y() / step.norm() * len;
-        path.push_back(p);
-      }
-    }
-  return path;
+    for (std::size_t c = 1; c <= corners.size(); ++c) goals.push_back(corners[c % corners.size()]);
+  return slam_world::drive(Pose2(1.5, 4.0, 0.0), goals);
 }
 
 /// Odometry with a heading bias per metre and per radian: the loop visibly fails to close.

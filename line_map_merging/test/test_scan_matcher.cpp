@@ -6,6 +6,7 @@
 
 #include "line_map_merging/slam/likelihood_grid.hpp"
 #include "line_map_merging/slam/scan_matcher.hpp"
+#include "line_map_merging/slam/scan_surfaces.hpp"
 #include "slam_world.hpp"
 
 using line_map_merging::correlativeSearch;
@@ -35,6 +36,56 @@ TEST(LikelihoodGrid, OnePointIsTheGaussianOfTheDistance)
   // Beyond 3 sigma: nothing; outside the grid: 0.
   EXPECT_EQ(grid.nearest(1.2, 2.0), 0.0);
   EXPECT_EQ(grid.nearest(50.0, 50.0), 0.0);
+}
+
+TEST(LikelihoodGrid, OneSegmentIsTheGaussianOfTheDistanceToIt)
+{
+  const double res = 0.02, sigma = 0.05;
+  const Vec2 a(1.0, 2.0), b(2.5, 2.7);  // oblique: the cells near it lie off its bounding box's rows
+  const LikelihoodGrid grid({a, b}, {{a, b}}, res, sigma, 0.3);
+  int near = 0;
+  for (double x = 0.7; x <= 2.8; x += 0.013)
+    for (double y = 1.7; y <= 3.0; y += 0.011)
+    {
+      const double cx = grid.origin().x() + std::lround((x - grid.origin().x()) / res) * res;
+      const double cy = grid.origin().y() + std::lround((y - grid.origin().y()) / res) * res;
+      const double d = linemap::distanceToSegment({cx, cy}, a, b);
+      const double expected = d >= 3.0 * sigma ? 0.0 : std::exp(-d * d / (2 * sigma * sigma));
+      ASSERT_NEAR(grid.nearest(x, y), expected, 1e-9) << x << " " << y;
+      near += expected > 0.5 ? 1 : 0;
+    }
+  EXPECT_GT(near, 1000);
+}
+
+// A wall seen at grazing incidence from 1 m is one chain of segments however far apart its points lie;
+// a box in front of another wall is not joined to it.
+TEST(ScanSurfaces, JoinAGrazingWallNotADepthJump)
+{
+  const std::vector<linemap::Segment2> walls = {
+      {{0, 1}, {30, 1}}, {{6, -3}, {6, -1}}, {{3, -1.0}, {3, -0.5}}};
+  const auto points = slam_world::scan(walls, Pose2(), 180, 20.0, 0.005, 3);
+  const auto surfaces = line_map_merging::scanSurfaces(points, {});
+  auto on = [](const Vec2& p, double x0, double y0, double x1, double y1) {
+    return linemap::distanceToSegment(p, {x0, y0}, {x1, y1}) < 0.03;
+  };
+  std::size_t wall_points = 0, wall_joins = 0;
+  double farthest = 0.0;
+  for (const auto& p : points) wall_points += on(p, 0, 1, 30, 1) ? 1 : 0;
+  for (const auto& s : surfaces)
+  {
+    const bool a_wall = on(s.start, 0, 1, 30, 1), b_wall = on(s.end, 0, 1, 30, 1);
+    const bool a_box = on(s.start, 3, -1, 3, -0.5), b_box = on(s.end, 3, -1, 3, -0.5);
+    EXPECT_EQ(a_box, b_box) << "joined across a depth jump";
+    EXPECT_EQ(a_wall, b_wall);
+    if (a_wall && b_wall)
+    {
+      ++wall_joins;
+      farthest = std::max(farthest, std::max(s.start.x(), s.end.x()));
+    }
+  }
+  ASSERT_GT(wall_points, 40u);
+  EXPECT_EQ(wall_joins, wall_points - 1);  // one chain
+  EXPECT_GT(farthest, 15.0);               // points metres apart at the far end
 }
 
 TEST(ScanMatcher, RecoversAKnownPoseFromADisplacedPrior)

@@ -67,6 +67,10 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.keyframe_distance = positiveParam(p, "front_end/keyframe_distance", s.keyframe_distance);
   s.keyframe_angle = positiveParam(p, "front_end/keyframe_angle", s.keyframe_angle);
   s.local_map_keyframes = countParam(p, "front_end/local_map_keyframes", s.local_map_keyframes, 1);
+  s.surfaces.lambda = p.getDouble("front_end/surface_lambda", s.surfaces.lambda);
+  if (!(s.surfaces.lambda >= 0.0 && s.surfaces.lambda < linemap::kPi / 2))
+    throw linemap::ParameterError("parameter 'front_end/surface_lambda' must be in [0, pi/2) rad");
+  s.surfaces.range_sigma = positiveParam(p, "front_end/range_sigma", s.surfaces.range_sigma);
   s.max_odometry_step = positiveParam(p, "front_end/max_odometry_step", s.max_odometry_step);
   s.max_odometry_turn = positiveParam(p, "front_end/max_odometry_turn", s.max_odometry_turn);
   s.time_jump_tolerance = positiveParam(p, "front_end/time_jump_tolerance", s.time_jump_tolerance);
@@ -346,6 +350,7 @@ void LaserSlam::addKeyframe(const SlamScan& scan, std::size_t scan_index, bool c
   kf.scan = scan_index;
   kf.local = last_local_;
   kf.points = scan.points;
+  kf.joins = scanSurfaces(scan.points, params_.surfaces);
   kf.path = path_;
   if (keyframes_.empty())
     graph_.addNode(kf.local);
@@ -378,10 +383,14 @@ void LaserSlam::addKeyframe(const SlamScan& scan, std::size_t scan_index, bool c
 void LaserSlam::rebuildLocalMap()
 {
   std::vector<Vec2> points;
+  std::vector<linemap::Segment2> joins;
   const std::size_t n = std::min(params_.local_map_keyframes, keyframes_.size());
   for (std::size_t i = keyframes_.size() - n; i < keyframes_.size(); ++i)
+  {
     for (const auto& p : keyframes_[i].points) points.push_back(keyframes_[i].local.apply(p));
-  local_map_ = LikelihoodGrid(points, params_.resolution, params_.sigma, 0.5);
+    for (const auto& s : keyframes_[i].joins) joins.push_back(s.transformed(keyframes_[i].local));
+  }
+  local_map_ = LikelihoodGrid(points, joins, params_.resolution, params_.sigma, 0.5);
 }
 
 std::optional<std::pair<MatchResult, double>> LaserSlam::matchLoop(std::size_t candidate, std::size_t current,

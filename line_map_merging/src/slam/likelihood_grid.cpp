@@ -7,6 +7,13 @@ namespace line_map_merging
 {
 LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points, double resolution, double sigma,
                                double margin)
+    : LikelihoodGrid(points, {}, resolution, sigma, margin)
+{
+}
+
+LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points,
+                               const std::vector<linemap::Segment2>& joins, double resolution, double sigma,
+                               double margin)
     : resolution_(resolution), inv_resolution_(1.0 / resolution)
 {
   if (points.empty() || !(resolution > 0.0) || !(sigma > 0.0)) return;
@@ -44,7 +51,51 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points, double 
       }
     }
   }
+  for (const auto& s : joins) writeJoin(s, r);
   for (double& c : cells_) c = c >= reach2 ? 0.0 : std::exp(k * c);
+}
+
+void LikelihoodGrid::writeJoin(const linemap::Segment2& s, int r)
+{
+  // In cell units from the join's start a: a cell's offset p projects to t = p.u / |u|^2 along it.
+  const double ax = (s.start.x() - origin_.x()) * inv_resolution_,
+               ay = (s.start.y() - origin_.y()) * inv_resolution_;
+  const double ux = (s.end.x() - s.start.x()) * inv_resolution_,
+               uy = (s.end.y() - s.start.y()) * inv_resolution_;
+  const double len2 = ux * ux + uy * uy;
+  if (!(len2 > 0.0) || !std::isfinite(len2)) return;
+  const double inv_len2 = 1.0 / len2, band = (r + 1) * std::sqrt(len2);
+  const int y0 = std::max(0, static_cast<int>(std::floor(ay + std::min(0.0, uy))) - r);
+  const int y1 = std::min(height_ - 1, static_cast<int>(std::ceil(ay + std::max(0.0, uy))) + r);
+  for (int iy = y0; iy <= y1; ++iy)
+  {
+    const double py = iy - ay;
+    // The row's cells with 0 <= t <= 1 and within reach of the line; the rest are nearer an
+    // endpoint, whose disc the points wrote.
+    double lo = std::floor(ax + std::min(0.0, ux)) - r, hi = std::ceil(ax + std::max(0.0, ux)) + r;
+    if (std::fabs(ux) > 1e-9)
+    {
+      const double t0 = -py * uy / ux, t1 = (len2 - py * uy) / ux;  // px at t = 0 and t = 1
+      lo = std::max(lo, ax + std::min(t0, t1) - 1.0);
+      hi = std::min(hi, ax + std::max(t0, t1) + 1.0);
+    }
+    if (std::fabs(uy) > 1e-9)
+    {
+      const double c = ax + ux * py / uy, half = std::fabs(band / uy);
+      lo = std::max(lo, c - half);
+      hi = std::min(hi, c + half);
+    }
+    double* row = &cells_[static_cast<std::size_t>(iy) * width_];
+    for (int ix = std::max(0, static_cast<int>(std::floor(lo)));
+         ix <= std::min(width_ - 1, static_cast<int>(hi)); ++ix)
+    {
+      const double px = ix - ax;
+      const double t = (px * ux + py * uy) * inv_len2;
+      if (t < 0.0 || t > 1.0) continue;
+      const double dx = (px - t * ux) * resolution_, dy = (py - t * uy) * resolution_;
+      row[ix] = std::min(row[ix], dx * dx + dy * dy);
+    }
+  }
 }
 
 }  // namespace line_map_merging

@@ -1,8 +1,8 @@
 // A smoothed occupancy likelihood field for scan matching (ROS-free): every cell holds
-// exp(-d^2 / 2 sigma^2) of the distance d from its centre to the nearest map point, so a scan
-// point's score falls off smoothly with its distance to the map. The correlative search reads it
-// at the nearest cell; the refinement reads it through Ceres' bicubic interpolator, which needs
-// the smooth field (a binary grid has no gradient).
+// exp(-d^2 / 2 sigma^2) of the distance d from its centre to the nearest map point or surface
+// segment, so a scan point's score falls off smoothly with its distance to the map. The correlative search
+// reads it at the nearest cell; the refinement reads it through Ceres' bicubic interpolator, which needs the
+// smooth field (a binary grid has no gradient).
 #pragma once
 
 #include <cmath>
@@ -20,6 +20,10 @@ class LikelihoodGrid
   /// Field of `points` at `resolution` [m] with spread `sigma` [m]; the grid covers the points'
   /// bounding box plus `margin` [m] (so a scan overhanging the map still reads zero, not garbage).
   LikelihoodGrid(const std::vector<linemap::Vec2>& points, double resolution, double sigma, double margin);
+  /// The same with `joins`, segments between points (of `points`) on one surface: the distance is to
+  /// the nearest point or join.
+  LikelihoodGrid(const std::vector<linemap::Vec2>& points, const std::vector<linemap::Segment2>& joins,
+                 double resolution, double sigma, double margin);
 
   bool empty() const { return cells_.empty(); }
   double resolution() const { return resolution_; }
@@ -40,6 +44,10 @@ class LikelihoodGrid
   }
 
  private:
+  /// Lowers the cells within r cells of the join `s`, and nearer its inside than its ends, to their
+  /// squared distance [m^2] to it.
+  void writeJoin(const linemap::Segment2& s, int r);
+
   double resolution_ = 0.05, inv_resolution_ = 20.0;
   linemap::Vec2 origin_ = linemap::Vec2::Zero();
   int width_ = 0, height_ = 0;
