@@ -385,10 +385,19 @@ void LaserSlam::rebuildLocalMap()
   std::vector<Vec2> points;
   std::vector<linemap::Segment2> joins;
   const std::size_t n = std::min(params_.local_map_keyframes, keyframes_.size());
+  // Only what the next scans can reach: they are matched near the newest keyframe (a keyframe every few
+  // decimetres, an odometry step at most max_odometry_step) and see max_range. Where the front end lost
+  // track, the last keyframes lie far apart and their union would make the field unbounded.
+  const Vec2 centre = keyframes_.back().local.translation();
+  const double reach = params_.max_range + params_.max_odometry_step + 1.0;
+  const auto near = [&](const Vec2& q) { return (q - centre).cwiseAbs().maxCoeff() <= reach; };
   for (std::size_t i = keyframes_.size() - n; i < keyframes_.size(); ++i)
   {
-    for (const auto& p : keyframes_[i].points) points.push_back(keyframes_[i].local.apply(p));
-    for (const auto& s : keyframes_[i].joins) joins.push_back(s.transformed(keyframes_[i].local));
+    for (const auto& p : keyframes_[i].points)
+      if (const Vec2 q = keyframes_[i].local.apply(p); near(q)) points.push_back(q);
+    for (const auto& s : keyframes_[i].joins)
+      if (const linemap::Segment2 t = s.transformed(keyframes_[i].local); near(t.start) || near(t.end))
+        joins.push_back(t);
   }
   local_map_ = LikelihoodGrid(points, joins, params_.resolution, params_.sigma, 0.5);
 }
