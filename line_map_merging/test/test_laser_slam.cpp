@@ -151,6 +151,23 @@ TEST(LaserSlam, WithoutOdometry)
   expectOnTruth(run.slam.scanPoses(), run.truth);
 }
 
+// Without odometry, twelve blind scans on the first straight (too few points: posed by the
+// constant-velocity prediction): the first match after them spans thirteen scans' motion, which is
+// per-scan velocity only once spread over them; taken whole, the prediction would run 0.65 m per scan
+// ahead, beyond the wide window, and never be caught again.
+TEST(LaserSlam, WithoutOdometryAcrossBlindScans)
+{
+  Room run;
+  for (std::size_t i = 0; i < run.truth.size(); ++i)
+  {
+    SlamScan s = run.scan(i, false);
+    if (i >= 40 && i < 52) s.points.clear();
+    run.slam.addScan(s);
+  }
+  EXPECT_EQ(run.slam.counters().few_points, 12u);
+  expectOnTruth(run.slam.scanPoses(), run.truth);
+}
+
 TEST(LaserSlam, BadInputIsCountedAndHarmless)
 {
   Room run;

@@ -130,6 +130,7 @@ void LaserSlam::reset()
   scans_.clear();
   have_scan_ = false;
   last_local_ = last_matched_local_ = velocity_ = Pose2();
+  scans_since_match_ = 0;
   last_odom_.reset();
   last_matched_odom_.reset();
   path_ = path_at_closure_ = 0.0;
@@ -320,13 +321,22 @@ void LaserSlam::advance(const SlamScan& scan, const Pose2& pose, SlamOutcome out
   {
     const Pose2 step = last_local_.inverse() * pose;
     path_ += std::hypot(step.x, step.y);
-    // Per-scan motion for the constant-velocity prediction (scans arrive at a steady rate).
-    if (outcome == SlamOutcome::kMatched) velocity_ = last_matched_local_.inverse() * pose;
+    // Per-scan motion for the constant-velocity prediction (scans arrive at a steady rate): the motion
+    // since the last match spread over the scans in between (taken whole, the motion across a run of
+    // poor matches would be extrapolated as one scan's, and the prediction would run away).
+    ++scans_since_match_;
+    if (outcome == SlamOutcome::kMatched)
+    {
+      const Pose2 motion = last_matched_local_.inverse() * pose;
+      const double n = static_cast<double>(scans_since_match_);
+      velocity_ = Pose2(motion.x / n, motion.y / n, motion.theta / n);
+    }
   }
   if (outcome == SlamOutcome::kMatched || !have_scan_)
   {
     last_matched_local_ = pose;
     last_matched_odom_ = scan.odom;
+    scans_since_match_ = 0;
   }
   last_local_ = pose;
   last_odom_ = scan.odom;

@@ -266,6 +266,7 @@ class LaserSlam
   double last_stamp_ = 0.0;  ///< of the last accepted scan
   linemap::TimeJumpDetector time_jumps_;
   linemap::Pose2 last_local_, last_matched_local_, velocity_;  ///< velocity: last matched motion per scan
+  std::size_t scans_since_match_ = 0;                          ///< scans since last_matched_local_
   std::optional<linemap::Pose2> last_odom_, last_matched_odom_;
   double path_ = 0.0, path_at_closure_ = 0.0;
   bool chain_matched_ = true;  ///< every scan since the last keyframe was matched
