@@ -120,6 +120,7 @@ TEST(LaserSlam, ClosureAttemptsAreRecorded)
   };
   EXPECT_EQ(count(ClosureOutcome::kAccepted), c.loops_accepted);
   EXPECT_EQ(count(ClosureOutcome::kAmbiguous), c.loops_ambiguous);
+  EXPECT_EQ(count(ClosureOutcome::kInconsistent), c.loops_inconsistent);
   EXPECT_EQ(count(ClosureOutcome::kRejectedGraph), c.loops_rejected_graph);
   EXPECT_LE(count(ClosureOutcome::kRejectedScore), c.loops_rejected_score);
   EXPECT_LE(attempts.size(), c.loop_attempts);

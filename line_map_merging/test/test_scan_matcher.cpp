@@ -88,6 +88,29 @@ TEST(ScanSurfaces, JoinAGrazingWallNotADepthJump)
   EXPECT_GT(farthest, 15.0);               // points metres apart at the far end
 }
 
+// Two thin posts side by side at 5 m, one beam each, with a wall far behind: the breakpoint test alone
+// would join them (0.09 m apart at 5 m passes at 10 degrees), but no third point continues the pair, so
+// they are two objects, not a surface.
+TEST(ScanSurfaces, TwoPostsAreNotASurface)
+{
+  const auto beam = [](int i) { return -linemap::kPi / 2 + linemap::kPi * (i + 0.5) / 180; };
+  std::vector<linemap::Segment2> walls = {{{15, -40}, {15, 40}}};
+  for (int i : {90, 91})
+  {
+    const Vec2 c(5.0 * std::cos(beam(i)), 5.0 * std::sin(beam(i))),
+        across(-std::sin(beam(i)), std::cos(beam(i)));
+    walls.push_back({c - 0.01 * across, c + 0.01 * across});
+  }
+  const auto points = slam_world::scan(walls, Pose2(), 180, 20.0);
+  std::size_t posts = 0;
+  for (const auto& p : points) posts += p.norm() < 6.0 ? 1 : 0;
+  ASSERT_EQ(posts, 2u);
+  const auto surfaces = line_map_merging::scanSurfaces(points, {});
+  for (const auto& s : surfaces)
+    EXPECT_FALSE(s.start.norm() < 6.0 || s.end.norm() < 6.0) << "a post joined to " << s.end.transpose();
+  EXPECT_GT(surfaces.size(), 30u);  // the far wall is still joined
+}
+
 TEST(ScanMatcher, RecoversAKnownPoseFromADisplacedPrior)
 {
   const auto walls = slam_world::room();

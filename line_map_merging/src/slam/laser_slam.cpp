@@ -1,11 +1,13 @@
 #include "line_map_merging/slam/laser_slam.hpp"
 
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <chrono>
 #include <cmath>
 #include <sstream>
 
 #include "line_extraction/param_checks.hpp"
+#include "line_map_merging/slam/relative_uncertainty.hpp"
 #include "linemap/small_helpers.hpp"
 
 namespace line_map_merging
@@ -103,6 +105,10 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.loop_pending_keyframes = countParam(p, "loop/pending_keyframes", s.loop_pending_keyframes, 1);
   s.loop_ambiguity_distance = p.getDouble("loop/ambiguity_distance", s.loop_ambiguity_distance);
   s.loop_ambiguity_ratio = p.getDouble("loop/ambiguity_ratio", s.loop_ambiguity_ratio);
+  s.loop_consistency_probability =
+      p.getDouble("loop/consistency_probability", s.loop_consistency_probability);
+  if (!(s.loop_consistency_probability >= 0.0 && s.loop_consistency_probability < 1.0))
+    throw linemap::ParameterError("parameter 'loop/consistency_probability' must be in [0, 1)");
   s.loop_scale_by_disagreement = p.getDouble("loop/scale_by_disagreement", s.loop_scale_by_disagreement);
   s.loop_consistent_xy = p.getDouble("loop/consistent_xy", s.loop_consistent_xy);
   s.loop_consistent_theta = p.getDouble("loop/consistent_theta", s.loop_consistent_theta);
@@ -117,6 +123,10 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
 
 LaserSlam::LaserSlam(const LaserSlamParams& params)
     : params_(params),
+      consistency_gate_(
+          params.loop_consistency_probability > 0.0
+              ? boost::math::quantile(boost::math::chi_squared(3.0), params.loop_consistency_probability)
+              : std::numeric_limits<double>::infinity()),
       graph_(PoseGraphParams{params.loop_loss_scale, 50}),
       time_jumps_(params.time_jump_tolerance, {"scan"})
 {
@@ -532,6 +542,12 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
   const MatchResult& match = found->first;
   const TranslationShape shape = matchShape(match);
   const PoseGraphEdge e = loopEdge(j, k, match.pose, shape, params_);
+  if (!consistentWithGraph(e))
+  {
+    ++counters_.loops_inconsistent;
+    closures_[attempt].outcome = ClosureOutcome::kInconsistent;
+    return;
+  }
   const std::size_t edge = graph_.addEdge(e);
   const Pose2 disagreement = graph_.edgeError(edge);
   // Translations in the closure's own metric: along a direction its match did not fix, the
@@ -565,6 +581,18 @@ void LaserSlam::tryLoop(std::size_t j, std::size_t k, double radius, double angl
   counters_.loops_degenerate += shape.degenerate ? 1 : 0;
   graph_optimized_ = true;
   path_at_closure_ = keyframes_[k].path;
+}
+
+bool LaserSlam::consistentWithGraph(const PoseGraphEdge& e) const
+{
+  if (!std::isfinite(consistency_gate_)) return true;
+  const auto path = relativeCovariance(graph_, e.from, e.to);
+  if (!path) return true;  // nothing relates the two: nothing to disagree with
+  const Pose2 relative = graph_.node(e.from).inverse() * graph_.node(e.to);
+  const Eigen::Vector3d r(relative.x - e.measurement.x, relative.y - e.measurement.y,
+                          linemap::normalizeAngle(relative.theta - e.measurement.theta));
+  const Eigen::Matrix3d combined = *path + edgeCovariance(e);
+  return r.dot(combined.ldlt().solve(r)) <= consistency_gate_;
 }
 
 bool LaserSlam::admitDisagreeing(std::size_t j, std::size_t k, const PoseGraphEdge& e, const Pose2& relative,
@@ -694,6 +722,7 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
           {"loop closures consistent (not optimised)", n(c.loops_consistent)},
           {"loop closures waiting for corroboration", n(c.loops_pending)},
           {"loop closures rejected (ambiguous)", n(c.loops_ambiguous)},
+          {"loop closures rejected (inconsistent with the graph)", n(c.loops_inconsistent)},
           {"loop closures accepted with a direction their match left open", n(c.loops_degenerate)},
           {"matches leaving a direction to the odometry", n(c.degenerate_matches)},
           {"loop closures rejected (score)", n(c.loops_rejected_score)},

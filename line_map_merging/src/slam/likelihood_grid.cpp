@@ -51,7 +51,10 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points,
       }
     }
   }
-  for (const auto& s : joins) writeJoin(s, r);
+  // A join shorter than sigma adds little to its end points' discs (the field sags by under an eighth
+  // between them) and most joins are that short: only the longer ones are written.
+  for (const auto& s : joins)
+    if ((s.end - s.start).squaredNorm() >= sigma * sigma) writeJoin(s, r);
   for (double& c : cells_) c = c >= reach2 ? 0.0 : std::exp(k * c);
 }
 

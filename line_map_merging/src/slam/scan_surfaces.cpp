@@ -39,6 +39,13 @@ std::vector<linemap::Segment2> scanSurfaces(const std::vector<linemap::Vec2>& po
     return steps[std::min(b, c)] <= neighbour && (pc - pb).dot(pb - pa) > 0.0 &&
            linemap::distanceToLine(pc, pa, pb) <= tolerance;
   };
+  // A pair the breakpoint test joins is kept only when a third point continues it along its line: two
+  // points alone may be two objects at similar ranges, and a phantom wall between them pulls a match.
+  std::vector<bool> straight(joined.size(), false);
+  for (int i = 1; i < n; ++i)
+    straight[i] = joined[i] && ((i >= 2 && joined[i - 1] && continues(i - 2, i - 1, i)) ||
+                                (i + 1 < n && joined[i + 1] && continues(i + 1, i, i - 1)));
+  joined = straight;
   // A grazing wall's points lie farther apart than the breakpoint test allows: extend the joined
   // pairs along their lines, both ways (the wall may run away from either end of the scan).
   for (int i = 2; i < n; ++i)

@@ -46,9 +46,8 @@ struct LaserSlamParams
   std::size_t local_map_keyframes = 20;  ///< keyframes in the local map
   /// With lambda > 0 the local map's field is of the keyframes' surfaces (scanSurfaces), not of their
   /// points alone: a wall at grazing incidence is then a line, not a row of dots that holds a scan at
-  /// the keyframe's pose along a corridor. Off by default: on ACES it improves the relations error by a
-  /// hair, but nearly identical settings lose the front end once and the run with it.
-  SurfaceParams surfaces{0.0, 0.01};
+  /// the keyframe's pose along a corridor. 0: the points alone.
+  SurfaceParams surfaces{10.0 * linemap::kPi / 180.0, 0.01};
   double max_odometry_step = 0.5;    ///< [m] odometry moving more between two scans is a jump
   double max_odometry_turn = 0.5;    ///< [rad]
   double time_jump_tolerance = 1.0;  ///< [s] a stamp this much before the last one: time jumped back
@@ -59,9 +58,11 @@ struct LaserSlamParams
   /// information takes the same shape, and its acceptance tests measure its disagreement in that
   /// metric. 0: every match determines everything (isotropic).
   double isotropic_ratio = 0.1;
-  double min_weight = 1e-3;  ///< floor of a direction's weight (keeps a closure's information invertible)
+  /// Floor of a direction's weight: only keeps the information invertible. A closure sliding along a
+  /// corridor must not hold the estimate along it, and many weakly held closures add up.
+  double min_weight = 1e-6;
   // Back end.
-  double edge_sigma_xy = 0.02, edge_sigma_theta = 0.005;        ///< matched chain edges
+  double edge_sigma_xy = 0.02, edge_sigma_theta = 0.002;        ///< matched chain edges
   double odometry_sigma_xy = 0.2, odometry_sigma_theta = 0.05;  ///< chain edges with unmatched scans
   double loop_sigma_xy = 0.05, loop_sigma_theta = 0.01;
   double loop_loss_scale = 1.0;           ///< Cauchy scale, in standard deviations
@@ -82,6 +83,11 @@ struct LaserSlamParams
   /// ambiguity_ratio of the best is refused (a corridor seen from inside); 0 / ratio > 1: no check.
   double loop_ambiguity_distance = 0.3;  ///< [m]
   double loop_ambiguity_ratio = 0.9;
+  /// A closure is refused when its disagreement with the estimate is beyond this quantile of the chi-square
+  /// distribution (3 degrees of freedom) in the metric of the combined uncertainty: the closure's own
+  /// covariance plus that of the estimate's relative pose along the graph's most certain path
+  /// (relativeCovariance). 0: no such test.
+  double loop_consistency_probability = 0.999;
   /// An unambiguous closure goes in under a Cauchy scale of this many times its disagreement with the
   /// estimate (in standard deviations), so a true closure after a long drift is applied, not damped
   /// like an outlier; 0: always the graph's loop_loss_scale.
@@ -131,7 +137,7 @@ struct SlamCounters
   std::size_t dropped = 0, zero_stamps = 0, new_trajectories = 0, paths = 0;
   std::size_t keyframes = 0, loop_attempts = 0, loops_accepted = 0, loops_rejected_score = 0,
               loops_rejected_graph = 0, loops_consistent = 0, loops_pending = 0, loops_ambiguous = 0,
-              loops_degenerate = 0, optimizations = 0;
+              loops_inconsistent = 0, loops_degenerate = 0, optimizations = 0;
   double last_optimization_ms = 0.0, total_optimization_ms = 0.0, last_match_ms = 0.0, total_loop_ms = 0.0;
 };
 
@@ -142,6 +148,7 @@ enum class ClosureOutcome
   kAccepted,       ///< in the graph (also a closure the estimate already met, and a corroborated one)
   kRejectedScore,  ///< the match scored below loop_min_score
   kAmbiguous,      ///< another pose away from the match scored nearly as well (loop_ambiguity_*)
+  kInconsistent,   ///< beyond what the graph and the match allow (loop_consistency_probability)
   kPending,        ///< waiting for a corroborating closure that never came
   kRejectedGraph,  ///< the optimised graph still missed it by more than loop_max_error_*
 };
@@ -236,6 +243,9 @@ class LaserSlam
   /// A closure (edge `added[0]`, `relative` pose of k from j) that disagrees with the estimate by
   /// `size` and `theta_error`: sets its loss, adds a corroborating pending closure to `added`, or
   /// leaves it pending (removed from the graph; false).
+  /// Whether closure edge e (not yet in the graph) disagrees with the estimate by no more than the
+  /// consistency gate allows, in the metric of its covariance plus the estimate's (relativeCovariance).
+  bool consistentWithGraph(const PoseGraphEdge& e) const;
   bool admitDisagreeing(std::size_t j, std::size_t k, const PoseGraphEdge& e, const linemap::Pose2& relative,
                         double size, double theta_error, std::vector<std::size_t>& added);
   /// Whether the pending closure implies the same correction of keyframe k as one putting it at
@@ -244,14 +254,15 @@ class LaserSlam
   /// Optimises the graph with the closure edges `added`; when the optimised graph misses one of them
   /// by more than loop_max_error_*, removes them and restores the poses. Whether they stayed.
   bool optimizeKeeping(std::vector<std::size_t> added);
-  /// The refined match and its ambiguity (best coarse score away from the peak / the peak's).
   /// The translation shape of a match (identity when isotropic_ratio is 0).
   TranslationShape matchShape(const MatchResult& match) const;
+  /// The refined match and its ambiguity (best coarse score away from the peak / the peak's).
   std::optional<std::pair<MatchResult, double>> matchLoop(std::size_t candidate, std::size_t current,
                                                           const linemap::Pose2& guess, double radius,
                                                           double angle);
 
   LaserSlamParams params_;
+  double consistency_gate_;  ///< chi-square quantile of loop_consistency_probability (infinite: off)
   PoseGraph graph_;
   std::vector<SlamKeyframe> keyframes_;
   LikelihoodGrid local_map_;

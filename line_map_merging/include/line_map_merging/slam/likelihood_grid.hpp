@@ -21,7 +21,7 @@ class LikelihoodGrid
   /// bounding box plus `margin` [m] (so a scan overhanging the map still reads zero, not garbage).
   LikelihoodGrid(const std::vector<linemap::Vec2>& points, double resolution, double sigma, double margin);
   /// The same with `joins`, segments between points (of `points`) on one surface: the distance is to
-  /// the nearest point or join.
+  /// the nearest point or join (joins shorter than sigma are left to their end points).
   LikelihoodGrid(const std::vector<linemap::Vec2>& points, const std::vector<linemap::Segment2>& joins,
                  double resolution, double sigma, double margin);
 

@@ -21,9 +21,9 @@ struct SurfaceParams
 };
 
 /// Segments between consecutive `points` (valid returns in beam order, in the frame of a sensor at the
-/// origin) on one surface. Two neighbours are joined when the breakpoint test passes, or when they
-/// continue a joined pair along its line (within 3 range_sigma) with no beam between them: a wall at
-/// grazing incidence.
+/// origin) on one surface. Two neighbours are joined when the breakpoint test passes and a neighbour on
+/// either side continues them along their line (within 3 range_sigma, no beam between them), or when they
+/// continue a joined pair that way: a wall at grazing incidence.
 std::vector<linemap::Segment2> scanSurfaces(const std::vector<linemap::Vec2>& points,
                                             const SurfaceParams& params);
 
