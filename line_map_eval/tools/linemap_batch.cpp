@@ -237,9 +237,8 @@ BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_param
               slam_params.getBool("use_odometry", true));
   const auto& c = run.counters;
   std::cout << std::fixed << std::setprecision(1) << "laser SLAM: " << recording.scans.size() << " scans in "
-            << run.cpu_seconds << " s CPU, " << c.keyframes << " keyframes, " << c.loops_accepted
-            << " loop closures (" << c.loops_rejected_score + c.loops_rejected_graph << " rejected), "
-            << c.poor_matches << " poor matches\n";
+            << run.cpu_seconds << " s CPU, " << c.keyframes << " keyframes, "
+            << line_map_merging::closureSummary(c) << ", " << c.poor_matches << " poor matches\n";
   std::optional<std::vector<RelationResidual>> residuals;
   if (!a.relations.empty())
   {

@@ -225,9 +225,8 @@ void reportSlam(const Evaluation& ev)
     const auto& c = r.counters;
     extra << std::setprecision(1) << std::fixed << r.cpu_seconds << " s CPU (" << r.seconds
           << " s wall, optimisation " << c.total_optimization_ms / 1000.0 << " s, loops "
-          << c.total_loop_ms / 1000.0 << " s), " << c.keyframes << " keyframes, " << c.loops_accepted
-          << " closures (" << c.loops_rejected_score << " + " << c.loops_rejected_graph << " rejected), "
-          << c.poor_matches << " poor matches";
+          << c.total_loop_ms / 1000.0 << " s), " << c.keyframes << " keyframes, "
+          << line_map_merging::closureSummary(c) << ", " << c.poor_matches << " poor matches";
     ev.report(with_odom ? "laser SLAM" : "laser SLAM, no odometry", r.scan_poses, extra.str());
     if (!a.write.empty()) writeTrajectory(a.write, ev.byRawStamp(r.scan_poses));
     if (!a.figures) continue;

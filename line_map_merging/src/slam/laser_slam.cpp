@@ -47,6 +47,16 @@ PoseGraphEdge loopEdge(std::size_t j, std::size_t k, const Pose2& measurement, c
 }
 }  // namespace
 
+std::string closureSummary(const SlamCounters& c)
+{
+  std::ostringstream out;
+  out << c.loops_accepted << " closures of " << c.loop_attempts
+      << " attempts (refused: " << c.loops_rejected_score << " score, " << c.loops_ambiguous << " ambiguous, "
+      << c.loops_inconsistent << " inconsistent, " << c.loops_rejected_graph << " graph, " << c.loops_pending
+      << " uncorroborated)";
+  return out.str();
+}
+
 // A line per parameter: long, but a list rather than steps.
 LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
 {
@@ -64,6 +74,9 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.refinement.max_iterations = static_cast<int>(countParam(
       p, "front_end/refinement/max_iterations", static_cast<std::size_t>(s.refinement.max_iterations), 1));
   s.min_score = p.getDouble("front_end/min_score", s.min_score);
+  s.widen_ratio = p.getDouble("front_end/widen_ratio", s.widen_ratio);
+  if (!(s.widen_ratio >= 0.0 && s.widen_ratio <= 1.0))
+    throw linemap::ParameterError("parameter 'front_end/widen_ratio' must be in [0, 1]");
   s.filter_distance = p.getDouble("front_end/filter_distance", s.filter_distance);
   s.filter_angle = p.getDouble("front_end/filter_angle", s.filter_angle);
   s.keyframe_distance = positiveParam(p, "front_end/keyframe_distance", s.keyframe_distance);
@@ -141,6 +154,7 @@ void LaserSlam::reset()
   have_scan_ = false;
   last_local_ = last_matched_local_ = velocity_ = Pose2();
   scans_since_match_ = 0;
+  typical_score_ = 0.0;
   last_odom_.reset();
   last_matched_odom_.reset();
   path_ = path_at_closure_ = 0.0;
@@ -271,17 +285,23 @@ std::optional<Pose2> LaserSlam::matchFrontEnd(const SlamScan& scan, const Predic
   auto attempt = [&](const Pose2& centre, const SearchWindow& window)
   {
     const auto found = correlativeSearch(local_map_, scan.points, centre, window, 1);
-    if (found.empty()) return;
+    if (found.empty()) return false;
     // Held towards the prediction, not the search's pick: where the scan fixes nothing (along a
     // corridor) the search's choice is arbitrary, and it favours poses that keep every point
     // on the local map, i.e. lags behind; the prediction is the information there.
     const MatchResult refined =
         refineMatch(local_map_, scan.points, found.front().pose, centre, params_.refinement);
     if (!best || refined.score > best->score) best = refined;
+    // Whether the search's best heading is on the window's border: the true one may lie beyond it.
+    return std::fabs(linemap::normalizeAngle(found.front().pose.theta - centre.theta)) >=
+           window.angular - 0.5 * window.angular_step;
   };
   const Pose2& predicted = prediction.pose;
-  if (prediction.odometry_usable) attempt(predicted, params_.window);
-  if (!best || best->score < params_.min_score)
+  const bool at_edge = prediction.odometry_usable && attempt(predicted, params_.window);
+  // Poor against this run's own recent matches (an absolute floor would pass a match far worse than
+  // the scene allows here), or at the window's edge: the odometry may be off by more than the window.
+  const double enough = std::max(params_.min_score, params_.widen_ratio * typical_score_);
+  if (!best || best->score < enough || at_edge)
   {
     if (prediction.odometry_usable) ++counters_.wide_searches;
     attempt(predicted, params_.window_no_odometry);
@@ -292,6 +312,7 @@ std::optional<Pose2> LaserSlam::matchFrontEnd(const SlamScan& scan, const Predic
     ++counters_.poor_matches;
     return std::nullopt;
   }
+  typical_score_ = typical_score_ > 0.0 ? 0.9 * typical_score_ + 0.1 * best->score : best->score;
   Pose2 pose = best->pose;
   if (prediction.odometry_usable)
   {

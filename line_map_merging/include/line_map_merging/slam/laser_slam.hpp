@@ -38,7 +38,10 @@ struct LaserSlamParams
   SearchWindow window{0.1, 0.12, 0.05, 0.006, 2.0, 20.0};            ///< with odometry
   SearchWindow window_no_odometry{0.3, 0.3, 0.05, 0.008, 2.0, 5.0};  ///< without or off the odometry
   RefinementParams refinement{2.0, 2.0, 20};
-  double min_score = 0.25;               ///< refined field score below: the prediction is kept
+  double min_score = 0.25;  ///< refined field score below: the prediction is kept
+  /// The wide window is also searched when the normal one's match scores below this fraction of the
+  /// run's recent matches (a running mean), or finds its best heading on the window's border.
+  double widen_ratio = 0.75;
   double filter_distance = 0.02;         ///< [m] with odometry, scans that moved less are not matched
   double filter_angle = 0.01;            ///< [rad]
   double keyframe_distance = 0.2;        ///< [m]
@@ -140,6 +143,9 @@ struct SlamCounters
               loops_inconsistent = 0, loops_degenerate = 0, optimizations = 0;
   double last_optimization_ms = 0.0, total_optimization_ms = 0.0, last_match_ms = 0.0, total_loop_ms = 0.0;
 };
+
+/// One line on the loop closures for a run's summary: accepted of attempted, and the refusals by reason.
+std::string closureSummary(const SlamCounters& counters);
 
 /// What became of a loop-closure attempt that got as far as a match of keyframe `to` against the
 /// submap around keyframe `from`.
@@ -262,7 +268,8 @@ class LaserSlam
                                                           double angle);
 
   LaserSlamParams params_;
-  double consistency_gate_;  ///< chi-square quantile of loop_consistency_probability (infinite: off)
+  double typical_score_ = 0.0;  ///< running mean of the front end's accepted match scores
+  double consistency_gate_;     ///< chi-square quantile of loop_consistency_probability (infinite: off)
   PoseGraph graph_;
   std::vector<SlamKeyframe> keyframes_;
   LikelihoodGrid local_map_;
