@@ -144,6 +144,38 @@ TEST(LaserSlam, ClosureAttemptsAreRecorded)
   EXPECT_LT((truthOf(first->to) - meeting).norm(), 1.5);
 }
 
+// Turning on the spot faster than the odometry says (it reports 40 % of each 0.25 rad step, like a
+// slipping wheel): every scan's heading is off the prediction by more than the normal search window. A
+// match inside that window is poor or lies on its border, so the wide window must be searched too, and
+// its refinement not held to the predicted heading; otherwise the heading error accumulates scan by scan.
+TEST(LaserSlam, FastTurnBeyondTheOdometryWindow)
+{
+  std::vector<Pose2> truth{Pose2(6.0, 4.0, 0.0)}, odom{Pose2(6.0, 4.0, 0.0)};
+  for (int i = 0; i < 50; ++i)
+  {
+    truth.push_back(truth.back() * Pose2(0.0, 0.0, 0.25));
+    odom.push_back(odom.back() * Pose2(0.0, 0.0, 0.1));
+  }
+  LaserSlam slam;
+  for (std::size_t i = 0; i < truth.size(); ++i)
+  {
+    SlamScan s;
+    s.stamp = 1.0 + 0.2 * static_cast<double>(i);
+    s.points = slam_world::scan(slam_world::room(), truth[i], 180, 20.0, 0.005, static_cast<unsigned>(i));
+    s.odom = odom[i];
+    slam.addScan(s);
+  }
+  const auto poses = slam.scanPoses();
+  ASSERT_EQ(poses.size(), truth.size());
+  double worst_heading = 0.0;
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    worst_heading =
+        std::max(worst_heading,
+                 std::fabs(linemap::normalizeAngle((truth[0] * poses[i].second).theta - truth[i].theta)));
+  EXPECT_LT(worst_heading, 0.02);
+  EXPECT_GT(slam.counters().wide_searches, 10u);
+}
+
 TEST(LaserSlam, WithoutOdometry)
 {
   Room run;

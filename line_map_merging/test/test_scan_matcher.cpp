@@ -164,6 +164,23 @@ TEST(ScanMatcher, CorridorKeepsThePriorAlongItsAxis)
   EXPECT_NEAR(refined.pose.theta, truth.theta, 0.003);
   // Along the axis nothing is measured: the penalty keeps the prior's x (not the window's edge).
   EXPECT_NEAR(refined.pose.x, prior.x, 0.03);
+  // The spread of the score over the window says the same: poses 0.15 m along the axis score as well as
+  // the best (every point still on a wall), none 0.15 m across it does.
+  line_map_merging::TranslationScores spread;
+  const auto best =
+      correlativeSearch(grid, points, prior, SearchWindow{0.2, 0.08, 0.025, 0.005, 0.0, 0.0}, 1, &spread);
+  ASSERT_EQ(spread.best.size(), 17u * 17u);
+  const Vec2 at = best[0].pose.translation();
+  EXPECT_NEAR(spread.bestAwayFrom(at, 0.0), best[0].score, 1e-12);
+  EXPECT_GT(spread.bestAwayFrom(at, 0.15), 0.95 * best[0].score);
+  double across = 0.0;
+  for (int oy = -spread.reach; oy <= spread.reach; ++oy)
+    for (int ox = -spread.reach; ox <= spread.reach; ++ox)
+      if (std::fabs(spread.centre.y() + oy * spread.step - at.y()) >= 0.15)
+        across = std::max(
+            across, spread.best[static_cast<std::size_t>((oy + spread.reach) * 17 + ox + spread.reach)]);
+  EXPECT_LT(across, 0.5 * best[0].score);
+  EXPECT_EQ(spread.bestAwayFrom(at, 10.0), 0.0);
 }
 
 namespace

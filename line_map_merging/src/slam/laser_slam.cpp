@@ -288,9 +288,12 @@ std::optional<Pose2> LaserSlam::matchFrontEnd(const SlamScan& scan, const Predic
     if (found.empty()) return false;
     // Held towards the prediction, not the search's pick: where the scan fixes nothing (along a
     // corridor) the search's choice is arbitrary, and it favours poses that keep every point
-    // on the local map, i.e. lags behind; the prediction is the information there.
+    // on the local map, i.e. lags behind; the prediction is the information there. Not in heading
+    // after a wide search: the prediction's heading was what failed, and a scan fixes its heading.
+    Pose2 prior = centre;
+    if (&window != &params_.window) prior.theta = found.front().pose.theta;
     const MatchResult refined =
-        refineMatch(local_map_, scan.points, found.front().pose, centre, params_.refinement);
+        refineMatch(local_map_, scan.points, found.front().pose, prior, params_.refinement);
     if (!best || refined.score > best->score) best = refined;
     // Whether the search's best heading is on the window's border: the true one may lie beyond it.
     return std::fabs(linemap::normalizeAngle(found.front().pose.theta - centre.theta)) >=
@@ -470,8 +473,9 @@ std::optional<std::pair<MatchResult, double>> LaserSlam::matchLoop(std::size_t c
   if (points.size() < params_.min_points) return std::nullopt;
   const auto& scan = keyframes_[current].points;
   const LikelihoodGrid coarse(points, params_.loop_resolution, params_.loop_resolution, 0.5);
-  SearchWindow wide{radius, angle, params_.loop_resolution, params_.loop_angular_step, 0.0, 0.0};
-  const auto candidates = correlativeSearch(coarse, scan, guess, wide, 3);
+  const SearchWindow wide{radius, angle, params_.loop_resolution, params_.loop_angular_step, 0.0, 0.0};
+  TranslationScores spread;
+  const auto candidates = correlativeSearch(coarse, scan, guess, wide, 3, &spread);
   if (candidates.empty()) return std::nullopt;
   const LikelihoodGrid fine(points, params_.resolution, params_.sigma, 0.5);
   SearchWindow narrow{params_.loop_resolution,
@@ -491,14 +495,9 @@ std::optional<std::pair<MatchResult, double>> LaserSlam::matchLoop(std::size_t c
   }
   if (!best) return std::nullopt;
   double ambiguity = 0.0;
-  if (params_.loop_ambiguity_distance > 0.0)
-  {
-    wide.exclude_radius = params_.loop_ambiguity_distance;
-    wide.exclude_centre = candidates.front().pose.translation();
-    const auto other = correlativeSearch(coarse, scan, guess, wide, 1);
-    if (!other.empty() && candidates.front().score > 0.0)
-      ambiguity = other.front().score / candidates.front().score;
-  }
+  if (params_.loop_ambiguity_distance > 0.0 && candidates.front().score > 0.0)
+    ambiguity = spread.bestAwayFrom(candidates.front().pose.translation(), params_.loop_ambiguity_distance) /
+                candidates.front().score;
   return std::make_pair(*best, ambiguity);
 }
 

@@ -124,10 +124,21 @@ double matchScore(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& 
   return sum / static_cast<double>(points.size());
 }
 
+double TranslationScores::bestAwayFrom(const linemap::Vec2& at, double distance) const
+{
+  double best_score = 0.0;
+  const int side = 2 * reach + 1;
+  for (int oy = -reach; oy <= reach; ++oy)
+    for (int ox = -reach; ox <= reach; ++ox)
+      if (std::hypot(centre.x() + ox * step - at.x(), centre.y() + oy * step - at.y()) >= distance)
+        best_score = std::max(best_score, best[static_cast<std::size_t>((oy + reach) * side + ox + reach)]);
+  return best_score;
+}
+
 std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
                                            const std::vector<linemap::Vec2>& points,
                                            const linemap::Pose2& center, const SearchWindow& window,
-                                           std::size_t keep)
+                                           std::size_t keep, TranslationScores* spread)
 {
   std::vector<MatchResult> best;
   if (grid.empty() || points.empty() || keep == 0) return best;
@@ -139,6 +150,14 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
   const double inv_n = 1.0 / static_cast<double>(points.size());
   const int w = grid.width(), h = grid.height();
   const double* cells = grid.cells().data();
+  const int side = 2 * reach + 1;
+  if (spread)
+  {
+    spread->centre = center.translation();
+    spread->step = step * res;
+    spread->reach = reach;
+    spread->best.assign(static_cast<std::size_t>(side) * side, 0.0);
+  }
   // Cell of every rotated point at the window's centre; translations then shift whole cells.
   std::vector<int> ix(points.size()), iy(points.size());
   // Ranked by penalised score; `keep` is small, so a sorted vector is enough.
@@ -157,10 +176,6 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
       for (int ox = -reach; ox <= reach; ++ox)
       {
         const int dx = ox * step, dy = oy * step;
-        if (window.exclude_radius > 0.0 &&
-            std::hypot(center.x + dx * res - window.exclude_centre.x(),
-                       center.y + dy * res - window.exclude_centre.y()) < window.exclude_radius)
-          continue;
         double sum = 0.0;
         for (std::size_t i = 0; i < points.size(); ++i)
         {
@@ -168,6 +183,11 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
           if (x >= 0 && y >= 0 && x < w && y < h) sum += cells[static_cast<std::size_t>(y) * w + x];
         }
         const double score = sum * inv_n;
+        if (spread)
+        {
+          double& cell = spread->best[static_cast<std::size_t>((oy + reach) * side + ox + reach)];
+          cell = std::max(cell, score);
+        }
         const double tx = dx * res, ty = dy * res;
         const double ranked_score =
             score *

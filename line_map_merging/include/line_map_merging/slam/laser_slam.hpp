@@ -33,8 +33,9 @@ struct LaserSlamParams
   double max_range = 20.0;  ///< [m] farther points are dropped (sparse, and small angle errors grow there)
   std::size_t min_points = 20;  ///< fewer valid points: the scan is not matched (pose predicted)
   // Front end.
-  double resolution = 0.025;                                         ///< [m] local likelihood field
-  double sigma = 0.04;                                               ///< [m] its spread
+  double resolution = 0.025;  ///< [m] local likelihood field
+  double sigma =
+      0.03;  ///< [m] its spread: about that of a scan point about a map point (both ranges, a cell)
   SearchWindow window{0.1, 0.12, 0.05, 0.006, 2.0, 20.0};            ///< with odometry
   SearchWindow window_no_odometry{0.3, 0.3, 0.05, 0.008, 2.0, 5.0};  ///< without or off the odometry
   RefinementParams refinement{2.0, 2.0, 20};
@@ -60,7 +61,7 @@ struct LaserSlamParams
   /// determined directions and keeps the prediction in the others (a corridor's axis); a closure's
   /// information takes the same shape, and its acceptance tests measure its disagreement in that
   /// metric. 0: every match determines everything (isotropic).
-  double isotropic_ratio = 0.1;
+  double isotropic_ratio = 0.05;
   /// Floor of a direction's weight: only keeps the information invertible. A closure sliding along a
   /// corridor must not hold the estimate along it, and many weakly held closures add up.
   double min_weight = 1e-6;

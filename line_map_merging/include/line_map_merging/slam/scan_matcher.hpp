@@ -26,10 +26,18 @@ struct SearchWindow
   /// equally good poses (a corridor) the one nearest the prior wins.
   double translation_penalty = 0.0;  ///< [1/m^2]
   double rotation_penalty = 0.0;     ///< [1/rad^2]
-  /// Candidates whose translation lies within this of `exclude_centre` are skipped (0: none): the
-  /// best pose away from a peak already found, i.e. how ambiguous that peak is.
-  double exclude_radius = 0.0;  ///< [m]
-  linemap::Vec2 exclude_centre = linemap::Vec2::Zero();
+};
+
+/// The best score over a search's headings at each translation of its grid (without the penalty): how
+/// the score spreads over the window, e.g. whether a pose far from the best scores nearly as well.
+struct TranslationScores
+{
+  linemap::Vec2 centre = linemap::Vec2::Zero();  ///< the window's centre
+  double step = 0.0;                             ///< [m] between translations
+  int reach = -1;                                ///< translations from -reach to reach steps in x and y
+  std::vector<double> best;                      ///< row-major, y outer
+  /// The best score among translations at least `distance` from `at` (0 when there is none).
+  double bestAwayFrom(const linemap::Vec2& at, double distance) const;
 };
 
 struct RefinementParams
@@ -69,11 +77,12 @@ TranslationShape translationShape(const Eigen::Matrix3d& curvature, double isotr
 double matchScore(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
                   const linemap::Pose2& pose);
 
-/// The `keep` best poses of the window around `center`, best first (score without the penalty).
+/// The `keep` best poses of the window around `center`, best first (score without the penalty);
+/// with `spread`, also the best score at each translation.
 std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
                                            const std::vector<linemap::Vec2>& points,
                                            const linemap::Pose2& center, const SearchWindow& window,
-                                           std::size_t keep = 1);
+                                           std::size_t keep = 1, TranslationScores* spread = nullptr);
 
 /// Least-squares refinement from `initial`, held towards `prior`; the result's score is the mean
 /// interpolated field value.
