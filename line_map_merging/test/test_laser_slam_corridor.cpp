@@ -181,7 +181,8 @@ TEST(LaserSlamCorridor, FrontEndFollowsTheCorridor)
 // end's drift where the doors fix the axis and leave it alone where the walls alone are seen. Pairs of scans
 // on different passes within a metre of each other must agree with the truth; a field of points alone
 // (the front end stuck at its first keyframe) misses by tens of metres, closures without the consistency
-// test or held along the axis they slid on by metres.
+// test or held along the axis they slid on by metres, chain edges as stiff along the axis as across it
+// (where the odometry, not the match, set the motion) by over a decimetre.
 TEST(LaserSlamCorridor, RevisitsAgreeInBothDirections)
 {
   const Errors e = runCorridor(LaserSlamParams(), true);
@@ -193,7 +194,7 @@ TEST(LaserSlamCorridor, RevisitsAgreeInBothDirections)
       e.counters.loops_inconsistent, e.counters.loops_ambiguous, e.counters.loop_attempts);
   EXPECT_GT(e.revisits, 1000u);
   EXPECT_GT(e.counters.loops_accepted, 10u);
-  EXPECT_LT(e.worst_revisit, 0.3);
-  EXPECT_LT(e.mean_revisit, 0.1);
-  EXPECT_LT(e.worst, 0.6);
+  EXPECT_LT(e.worst_revisit, 0.2);
+  EXPECT_LT(e.mean_revisit, 0.05);
+  EXPECT_LT(e.worst, 0.3);
 }

@@ -1,5 +1,6 @@
 #include "line_map_merging/slam/laser_slam.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <chrono>
@@ -195,6 +196,7 @@ SlamOutcome LaserSlam::addScan(const SlamScan& in)
   const auto start = std::chrono::steady_clock::now();
   const SlamScan scan = validScan(in);
   const Prediction prediction = predict(scan);
+  last_match_weights_ = Eigen::Matrix2d::Identity();
   SlamOutcome outcome = SlamOutcome::kPredicted;
   Pose2 pose = prediction.pose;
   if (barelyMoved(scan, prediction))
@@ -321,6 +323,7 @@ std::optional<Pose2> LaserSlam::matchFrontEnd(const SlamScan& scan, const Predic
   {
     // The match's translation where it determines one, the odometry's elsewhere.
     const TranslationShape shape = matchShape(*best);
+    last_match_weights_ = shape.weights;
     if (shape.degenerate)
     {
       const Vec2 t =
@@ -409,6 +412,19 @@ void LaserSlam::addKeyframe(const SlamScan& scan, std::size_t scan_index, bool c
     e.measurement = relative;
     e.sigma_xy = chain_matched ? params_.edge_sigma_xy : params_.odometry_sigma_xy;
     e.sigma_theta = chain_matched ? params_.edge_sigma_theta : params_.odometry_sigma_theta;
+    if (chain_matched)
+    {
+      // What the keyframe's match determined: along a direction it left to the odometry, the edge is as
+      // loose as an odometry edge, so a closure may move the keyframe there.
+      const double floor = std::pow(params_.edge_sigma_xy / params_.odometry_sigma_xy, 2.0);
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(last_match_weights_);
+      const Eigen::Matrix2d local = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(floor).asDiagonal() *
+                                    eigen.eigenvectors().transpose();
+      const double c = std::cos(keyframes_.back().local.theta), sn = std::sin(keyframes_.back().local.theta);
+      Eigen::Matrix2d r;
+      r << c, -sn, sn, c;
+      e.translation_weights = r.transpose() * local * r;
+    }
     graph_.addEdge(e);
   }
   keyframes_.push_back(std::move(kf));

@@ -289,6 +289,9 @@ class LaserSlam
   std::optional<linemap::Pose2> last_odom_, last_matched_odom_;
   double path_ = 0.0, path_at_closure_ = 0.0;
   bool chain_matched_ = true;  ///< every scan since the last keyframe was matched
+  /// The translation shape of the last scan's front-end match in the local frame (identity: no match or
+  /// no odometry to leave a direction to).
+  Eigen::Matrix2d last_match_weights_ = Eigen::Matrix2d::Identity();
   bool keyframe_added_ = false, graph_optimized_ = false;
   struct PendingClosure
   {
