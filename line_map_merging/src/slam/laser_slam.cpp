@@ -284,8 +284,9 @@ std::optional<Pose2> LaserSlam::matchFrontEnd(const SlamScan& scan, const Predic
   // The normal window first; a poor match (odometry off by more than the window) or a prediction
   // without usable odometry gets the wide window, around each prediction there is.
   std::optional<MatchResult> best;
-  auto attempt = [&](const Pose2& centre, const SearchWindow& window)
+  auto attempt = [&](const Pose2& centre, bool wide)
   {
+    const SearchWindow& window = wide ? params_.window_no_odometry : params_.window;
     const auto found = correlativeSearch(local_map_, scan.points, centre, window, 1);
     if (found.empty()) return false;
     // Held towards the prediction, not the search's pick: where the scan fixes nothing (along a
@@ -293,7 +294,7 @@ std::optional<Pose2> LaserSlam::matchFrontEnd(const SlamScan& scan, const Predic
     // on the local map, i.e. lags behind; the prediction is the information there. Not in heading
     // after a wide search: the prediction's heading was what failed, and a scan fixes its heading.
     Pose2 prior = centre;
-    if (&window != &params_.window) prior.theta = found.front().pose.theta;
+    if (wide) prior.theta = found.front().pose.theta;
     const MatchResult refined =
         refineMatch(local_map_, scan.points, found.front().pose, prior, params_.refinement);
     if (!best || refined.score > best->score) best = refined;
@@ -302,15 +303,15 @@ std::optional<Pose2> LaserSlam::matchFrontEnd(const SlamScan& scan, const Predic
            window.angular - 0.5 * window.angular_step;
   };
   const Pose2& predicted = prediction.pose;
-  const bool at_edge = prediction.odometry_usable && attempt(predicted, params_.window);
+  const bool at_edge = prediction.odometry_usable && attempt(predicted, false);
   // Poor against this run's own recent matches (an absolute floor would pass a match far worse than
   // the scene allows here), or at the window's edge: the odometry may be off by more than the window.
   const double enough = std::max(params_.min_score, params_.widen_ratio * typical_score_);
   if (!best || best->score < enough || at_edge)
   {
     if (prediction.odometry_usable) ++counters_.wide_searches;
-    attempt(predicted, params_.window_no_odometry);
-    if (prediction.jumped) attempt(*prediction.jumped, params_.window_no_odometry);
+    attempt(predicted, true);
+    if (prediction.jumped) attempt(*prediction.jumped, true);
   }
   if (!best || best->score < params_.min_score)
   {

@@ -34,8 +34,8 @@ struct LaserSlamParams
   std::size_t min_points = 20;  ///< fewer valid points: the scan is not matched (pose predicted)
   // Front end.
   double resolution = 0.025;  ///< [m] local likelihood field
-  double sigma =
-      0.03;  ///< [m] its spread: about that of a scan point about a map point (both ranges, a cell)
+  /// [m] its spread: about that of a scan point about a map point (both ranges noisy, plus a cell)
+  double sigma = 0.03;
   SearchWindow window{0.1, 0.12, 0.05, 0.006, 2.0, 20.0};            ///< with odometry
   SearchWindow window_no_odometry{0.3, 0.3, 0.05, 0.008, 2.0, 5.0};  ///< without or off the odometry
   RefinementParams refinement{2.0, 2.0, 20};
