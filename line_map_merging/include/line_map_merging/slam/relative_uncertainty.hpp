@@ -2,7 +2,7 @@
 // relative pose, propagated to first order along the graph's most certain path between the two nodes
 // (Dijkstra over the edges' variances, loop edges included). The path ignores the information the other
 // paths add, so the covariance is an upper bound: a loop closure's disagreement with the estimate is
-// judged against it plus the closure's own covariance (LaserSlam's consistency gate).
+// judged against it plus the closure's own covariance (ClosureGate's consistency gate).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,0 +1,69 @@
+// The laser SLAM's acceptance of loop closures (ROS-free): a matched closure (ConstraintBuilder) goes
+// into the pose graph only when it scores well, is unambiguous and is consistent with the graph
+// (chi-square gate on relativeCovariance); one the estimate already meets is added without optimising,
+// one far off waits for a corroborating second closure when asked to (loop_corroborate_*), and one the
+// optimised graph still misses is removed again. Records every attempt's outcome and counts them.
+// Not thread-safe: the caller serialises the calls.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+#include "line_map_merging/slam/constraint_builder.hpp"
+#include "line_map_merging/slam/laser_slam_params.hpp"
+#include "line_map_merging/slam/pose_graph.hpp"
+#include "line_map_merging/slam/slam_types.hpp"
+#include "linemap/geometry.hpp"
+
+namespace line_map_merging
+{
+/// What became of a closure in the graph.
+struct ClosureVerdict
+{
+  bool accepted = false;   ///< in the graph
+  bool optimized = false;  ///< and the graph was optimised with it (its poses changed)
+};
+
+class ClosureGate
+{
+ public:
+  explicit ClosureGate(const LaserSlamParams& params = {});
+
+  /// Decides on `match` (of keyframes already in `graph`): adds its edge (and a corroborated pending
+  /// closure's) and optimises, or leaves the graph as it was. Records the attempt, counts into `counters`.
+  ClosureVerdict consider(const LoopMatch& match, PoseGraph& graph, SlamCounters& counters);
+  /// Every closure attempt that got as far as a match, in order.
+  const std::vector<ClosureAttempt>& attempts() const { return attempts_; }
+
+ private:
+  /// Whether closure edge e (not yet in the graph) disagrees with the estimate by no more than the
+  /// consistency gate allows, in the metric of its covariance plus the estimate's (relativeCovariance).
+  bool consistentWithGraph(const PoseGraph& graph, const PoseGraphEdge& e) const;
+  /// A closure (edge `added[0]`, `relative` pose of k from j) that disagrees with the estimate by
+  /// `size` and `theta_error`: sets its loss, adds a corroborating pending closure to `added`, or
+  /// leaves it pending (removed from the graph; false).
+  bool admitDisagreeing(PoseGraph& graph, std::size_t j, std::size_t k, const PoseGraphEdge& e,
+                        const linemap::Pose2& relative, double size, double theta_error,
+                        std::vector<std::size_t>& added, SlamCounters& counters);
+  /// Whether the pending closure implies the same correction of keyframe k as one putting it at
+  /// `implied`.
+  bool corroborates(const PoseGraph& graph, std::size_t k, const linemap::Pose2& implied) const;
+  /// Optimises the graph with the closure edges `added`; when the optimised graph misses one of them
+  /// by more than loop_max_error_*, removes them and restores the poses. Whether they stayed.
+  bool optimizeKeeping(PoseGraph& graph, std::vector<std::size_t> added, SlamCounters& counters) const;
+
+  LaserSlamParams params_;
+  double consistency_gate_;  ///< chi-square quantile of loop_consistency_probability (infinite: off)
+  struct PendingClosure
+  {
+    PoseGraphEdge edge;
+    linemap::Pose2 implied;  ///< where the closure puts its keyframe
+    std::size_t to;
+    std::size_t attempt;  ///< its entry in attempts_
+  };
+  std::optional<PendingClosure> pending_;
+  std::vector<ClosureAttempt> attempts_;
+};
+
+}  // namespace line_map_merging

@@ -1,0 +1,98 @@
+// The laser SLAM's front end (ROS-free): every scan is matched against a local map (a likelihood
+// field of the last keyframes' surfaces) by correlative search + Ceres refinement, from the odometry
+// prediction when there is odometry, else from a constant-velocity prediction with a wider window;
+// it decides which scans become keyframes and keeps the few recent ones its local map is made of.
+// Knows nothing of the pose graph: LaserSlam hangs its keyframes into one.
+// Not thread-safe: the caller serialises the calls.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <deque>
+#include <optional>
+#include <vector>
+
+#include "line_map_merging/slam/laser_slam_params.hpp"
+#include "line_map_merging/slam/likelihood_grid.hpp"
+#include "line_map_merging/slam/slam_types.hpp"
+#include "linemap/geometry.hpp"
+
+namespace line_map_merging
+{
+/// What the front end made of one scan.
+struct LocalScanResult
+{
+  SlamOutcome outcome = SlamOutcome::kRejected;
+  SlamScan scan;        ///< the valid scan: odometry when finite, points within max_range
+  linemap::Pose2 pose;  ///< front-end pose
+  double path = 0.0;    ///< [m] front-end path length up to here
+  /// The translation shape of the scan's match in the local frame (identity: no match or no odometry to
+  /// leave a direction to); the chain edge of a keyframe takes it.
+  Eigen::Matrix2d match_weights = Eigen::Matrix2d::Identity();
+  bool keyframe = false;
+  bool chain_matched = true;             ///< every scan since the last keyframe was matched
+  std::vector<linemap::Segment2> joins;  ///< of a keyframe: scanSurfaces of its points
+};
+
+class LocalTrajectoryBuilder
+{
+ public:
+  explicit LocalTrajectoryBuilder(const LaserSlamParams& params = {});
+
+  /// A scan stamped after the last accepted one is posed (matched, filtered or predicted) and may become
+  /// a keyframe, which joins the local map; an older one is rejected. Counts into `counters`.
+  LocalScanResult addScan(const SlamScan& scan, SlamCounters& counters);
+  /// The last accepted scan's front-end pose.
+  const linemap::Pose2& currentLocal() const { return last_local_; }
+  /// The field the next scan is matched against (empty before the first keyframe).
+  const LikelihoodGrid& localMap() const { return local_map_; }
+
+ private:
+  /// The prediction of a scan's front-end pose from the last scan's.
+  struct Prediction
+  {
+    linemap::Pose2 pose;
+    bool odometry_usable = false;          ///< pose is the odometry's prediction
+    std::optional<linemap::Pose2> jumped;  ///< the odometry's prediction across a jump
+  };
+  /// A keyframe as far as the local map needs it: front-end pose, points and surfaces (base frame).
+  struct RecentKeyframe
+  {
+    linemap::Pose2 local;
+    std::vector<linemap::Vec2> points;
+    std::vector<linemap::Segment2> joins;
+  };
+  /// The scan with its odometry (when finite) and its valid points within max_range.
+  SlamScan validScan(const SlamScan& in, SlamCounters& counters) const;
+  Prediction predict(const SlamScan& scan, SlamCounters& counters) const;
+  /// With usable odometry: whether the scan barely moved since the last match (not matched then).
+  bool barelyMoved(const SlamScan& scan, const Prediction& prediction) const;
+  /// The scan matched against the local map around the prediction(s), or nothing (counted); sets the
+  /// match's translation shape in `weights`.
+  std::optional<linemap::Pose2> matchFrontEnd(const SlamScan& scan, const Prediction& prediction,
+                                              Eigen::Matrix2d& weights, SlamCounters& counters);
+  void countOutcome(SlamOutcome outcome, SlamCounters& counters);
+  /// The front end's state after a scan posed at `pose`: path, velocity, last poses and stamp.
+  void advance(const SlamScan& scan, const linemap::Pose2& pose, SlamOutcome outcome);
+  /// A keyframe when the scan has enough points and moved far enough from the last keyframe.
+  bool isKeyframe(const SlamScan& scan, const linemap::Pose2& pose) const;
+  /// Adds the keyframe to the recent ones and rebuilds the local map from them.
+  void addKeyframe(const linemap::Pose2& pose, const std::vector<linemap::Vec2>& points,
+                   const std::vector<linemap::Segment2>& joins);
+  void rebuildLocalMap();
+
+  LaserSlamParams params_;
+  double typical_score_ = 0.0;  ///< running mean of the accepted match scores
+  /// The last local_map_keyframes keyframes (at least the last one: the keyframe decision's reference).
+  std::deque<RecentKeyframe> recent_;
+  LikelihoodGrid local_map_;
+  bool have_scan_ = false;
+  double last_stamp_ = 0.0;                                    ///< of the last accepted scan
+  linemap::Pose2 last_local_, last_matched_local_, velocity_;  ///< velocity: last matched motion per scan
+  std::size_t scans_since_match_ = 0;                          ///< scans since last_matched_local_
+  std::optional<linemap::Pose2> last_odom_, last_matched_odom_;
+  double path_ = 0.0;
+  bool chain_matched_ = true;  ///< every scan since the last keyframe was matched
+};
+
+}  // namespace line_map_merging

@@ -1,0 +1,141 @@
+#include "line_map_merging/slam/constraint_builder.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "line_map_merging/slam/likelihood_grid.hpp"
+
+namespace line_map_merging
+{
+namespace
+{
+using linemap::Pose2;
+using linemap::Vec2;
+
+/// The closure edge j -> k measured by a loop match, its information shaped by the match's.
+PoseGraphEdge loopEdge(std::size_t j, std::size_t k, const Pose2& measurement, const TranslationShape& shape,
+                       const LaserSlamParams& params)
+{
+  PoseGraphEdge e;
+  e.from = j;
+  e.to = k;
+  e.measurement = measurement;
+  e.sigma_xy = params.loop_sigma_xy;
+  e.sigma_theta = params.loop_sigma_theta;
+  e.translation_weights = shape.weights;
+  e.loop = true;
+  return e;
+}
+}  // namespace
+
+LoopSearch ConstraintBuilder::search(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
+                                     std::size_t k) const
+{
+  LoopSearch s;
+  const double since = keyframes[k].path - path_at_closure_;
+  s.radius = std::min(params_.loop_max_radius, params_.loop_radius + params_.loop_radius_growth * since);
+  s.angle = std::min(params_.loop_max_angle, params_.loop_angle + params_.loop_angle_growth * since);
+  s.candidates = loopCandidates(keyframes, graph, k, s.radius);
+  return s;
+}
+
+LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
+                                   std::size_t j, std::size_t k, const LoopSearch& search,
+                                   SlamCounters& counters) const
+{
+  ++counters.loop_attempts;
+  LoopMatch m;
+  m.from = j;
+  m.to = k;
+  const Pose2 guess = graph.node(j).inverse() * graph.node(k);
+  const auto found = matchLoop(keyframes, graph, j, k, guess, search.radius, search.angle);
+  if (!found) return m;
+  m.match = found->first;
+  m.ambiguity = found->second;
+  m.shape = matchShape(found->first, params_);
+  m.edge = loopEdge(j, k, found->first.pose, m.shape, params_);
+  return m;
+}
+
+std::optional<std::pair<MatchResult, double>> ConstraintBuilder::matchLoop(
+    const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph, std::size_t candidate,
+    std::size_t current, const Pose2& guess, double radius, double angle) const
+{
+  // Submap: the candidate and its neighbours in the candidate's frame, by their optimised poses.
+  const Pose2 inv = graph.node(candidate).inverse();
+  const std::size_t s = params_.loop_submap_keyframes;
+  const std::size_t lo = candidate >= s ? candidate - s : 0;
+  // Only submap points within reach of the scan somewhere in the search window (its points lie within
+  // max_range of its pose, a field value depends on points a few sigma away): farther ones cannot change a
+  // score and would only widen the fields — without bound where the keyframes of a submap lie far apart.
+  const double reach = params_.max_range + radius + 1.0;
+  std::vector<Vec2> points;
+  for (std::size_t i = lo; i <= candidate + s && i < keyframes.size(); ++i)
+  {
+    if (keyframes[current].path - keyframes[i].path < 0.5 * params_.loop_min_path)
+      continue;  // too recent: part of the chain being checked
+    const Pose2 rel = inv * graph.node(i);
+    for (const auto& p : keyframes[i].points)
+    {
+      const Vec2 q = rel.apply(p);
+      if (std::fabs(q.x() - guess.x) <= reach && std::fabs(q.y() - guess.y) <= reach) points.push_back(q);
+    }
+  }
+  if (points.size() < params_.min_points) return std::nullopt;
+  const auto& scan = keyframes[current].points;
+  const LikelihoodGrid coarse(points, params_.loop_resolution, params_.loop_resolution, 0.5);
+  const SearchWindow wide{radius, angle, params_.loop_resolution, params_.loop_angular_step, 0.0, 0.0};
+  TranslationScores spread;
+  const auto candidates = correlativeSearch(coarse, scan, guess, wide, 3, &spread);
+  if (candidates.empty()) return std::nullopt;
+  const LikelihoodGrid fine(points, params_.resolution, params_.sigma, 0.5);
+  SearchWindow narrow{params_.loop_resolution,
+                      params_.loop_angular_step,
+                      params_.resolution,
+                      params_.loop_angular_step / 3.0,
+                      0.0,
+                      0.0};
+  std::optional<MatchResult> best;
+  for (const auto& c : candidates)
+  {
+    const auto local = correlativeSearch(fine, scan, c.pose, narrow, 1);
+    if (local.empty()) continue;
+    const MatchResult refined =
+        refineMatch(fine, scan, local.front().pose, local.front().pose, params_.refinement);
+    if (!best || refined.score > best->score) best = refined;
+  }
+  if (!best) return std::nullopt;
+  double ambiguity = 0.0;
+  if (params_.loop_ambiguity_distance > 0.0 && candidates.front().score > 0.0)
+    ambiguity = spread.bestAwayFrom(candidates.front().pose.translation(), params_.loop_ambiguity_distance) /
+                candidates.front().score;
+  return std::make_pair(*best, ambiguity);
+}
+
+std::vector<std::size_t> ConstraintBuilder::loopCandidates(const std::vector<SlamKeyframe>& keyframes,
+                                                           const PoseGraph& graph, std::size_t k,
+                                                           double radius) const
+{
+  const Pose2 here = graph.node(k);
+  std::vector<std::pair<double, std::size_t>> near;
+  for (std::size_t j = 0; j < k; ++j)
+  {
+    if (keyframes[k].path - keyframes[j].path < params_.loop_min_path)
+      break;  // paths only grow: the rest are recent too
+    const Pose2 there = graph.node(j);
+    const double d = std::hypot(there.x - here.x, there.y - here.y);
+    if (d <= radius) near.push_back({d, j});
+  }
+  std::sort(near.begin(), near.end());
+  std::vector<std::size_t> chosen;
+  for (const auto& [d, j] : near)
+  {
+    if (chosen.size() >= params_.loop_candidates) break;
+    bool overlaps = false;
+    for (std::size_t c : chosen) overlaps |= (j > c ? j - c : c - j) <= params_.loop_submap_keyframes;
+    if (!overlaps) chosen.push_back(j);
+  }
+  return chosen;
+}
+
+}  // namespace line_map_merging

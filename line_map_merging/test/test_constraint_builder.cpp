@@ -1,0 +1,106 @@
+// The loop-closure search alone: a keyframe whose graph estimate is off by a known offset is matched
+// against the submap of older keyframes it revisits, and the match finds its true pose relative to
+// the candidate; the search window grows with the path since the last closure.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "line_map_merging/slam/constraint_builder.hpp"
+#include "slam_world.hpp"
+
+using line_map_merging::ConstraintBuilder;
+using line_map_merging::LaserSlamParams;
+using line_map_merging::LoopMatch;
+using line_map_merging::LoopSearch;
+using line_map_merging::PoseGraph;
+using line_map_merging::SlamCounters;
+using line_map_merging::SlamKeyframe;
+using linemap::Pose2;
+
+namespace
+{
+struct Revisit
+{
+  std::vector<Pose2> truth;  ///< keyframes 0..6 along the room, then keyframe 7 back among them
+  std::vector<SlamKeyframe> keyframes;
+  PoseGraph graph;
+  Pose2 offset{0.3, -0.2, 0.05};  ///< of keyframe 7's estimate from its truth (in its own frame)
+
+  Revisit()
+  {
+    for (int i = 0; i < 7; ++i) truth.emplace_back(2.0 + 0.2 * i, 4.0, 0.0);
+    truth.emplace_back(2.65, 4.1, 0.2);
+    for (std::size_t i = 0; i < truth.size(); ++i)
+    {
+      SlamKeyframe kf;
+      kf.stamp = static_cast<double>(i);
+      kf.scan = i;
+      kf.local = truth[i];
+      kf.points = slam_world::scan(slam_world::room(), truth[i], 180, 20.0, 0.005, static_cast<unsigned>(i));
+      // The revisit comes after a long way round.
+      kf.path = i < 7 ? 0.2 * static_cast<double>(i) : 20.0;
+      keyframes.push_back(kf);
+      graph.addNode(i < 7 ? truth[i] : truth[i] * offset);
+    }
+  }
+};
+}  // namespace
+
+TEST(ConstraintBuilder, FindsTheTrueOffsetOfARevisit)
+{
+  const LaserSlamParams p;
+  const ConstraintBuilder builder(p);
+  const Revisit r;
+  const std::size_t k = 7;
+  const LoopSearch search = builder.search(r.keyframes, r.graph, k);
+  // 20 m since the start (no closure yet): the window has grown to its path-dependent size.
+  EXPECT_DOUBLE_EQ(search.radius, std::min(p.loop_max_radius, p.loop_radius + p.loop_radius_growth * 20.0));
+  EXPECT_DOUBLE_EQ(search.angle, std::min(p.loop_max_angle, p.loop_angle + p.loop_angle_growth * 20.0));
+  // One submap spans them all: the candidate nearest the estimate (2.98, 3.96) alone, keyframe 5 at 3.0.
+  ASSERT_EQ(search.candidates.size(), 1u);
+  const std::size_t j = search.candidates.front();
+  EXPECT_EQ(j, 5u);
+
+  SlamCounters counters;
+  const LoopMatch m = builder.match(r.keyframes, r.graph, j, k, search, counters);
+  EXPECT_EQ(counters.loop_attempts, 1u);
+  ASSERT_TRUE(m.match);
+  EXPECT_EQ(m.from, j);
+  EXPECT_EQ(m.to, k);
+  const Pose2 expected = r.truth[j].inverse() * r.truth[k];
+  EXPECT_NEAR(m.match->pose.x, expected.x, 0.02);
+  EXPECT_NEAR(m.match->pose.y, expected.y, 0.02);
+  EXPECT_NEAR(linemap::normalizeAngle(m.match->pose.theta - expected.theta), 0.0, 0.01);
+  EXPECT_GE(m.match->score, p.loop_min_score);
+  EXPECT_LT(m.ambiguity, p.loop_ambiguity_ratio);
+  // The edge is the match's, a loop edge j -> k.
+  EXPECT_EQ(m.edge.from, j);
+  EXPECT_EQ(m.edge.to, k);
+  EXPECT_TRUE(m.edge.loop);
+  EXPECT_EQ(m.edge.measurement.x, m.match->pose.x);
+  EXPECT_EQ(m.edge.sigma_xy, p.loop_sigma_xy);
+}
+
+TEST(ConstraintBuilder, WindowShrinksAfterAClosure)
+{
+  const LaserSlamParams p;
+  ConstraintBuilder builder(p);
+  const Revisit r;
+  builder.closureAccepted(r.keyframes[7].path);
+  const LoopSearch search = builder.search(r.keyframes, r.graph, 7);
+  EXPECT_DOUBLE_EQ(search.radius, p.loop_radius);
+  EXPECT_DOUBLE_EQ(search.angle, p.loop_angle);
+  // Keyframe 5 lies 0.04 m from the estimate, within loop_radius: still found.
+  ASSERT_EQ(search.candidates.size(), 1u);
+  EXPECT_EQ(search.candidates.front(), 5u);
+}
+
+TEST(ConstraintBuilder, RecentKeyframesAreNoCandidates)
+{
+  const LaserSlamParams p;
+  const ConstraintBuilder builder(p);
+  Revisit r;
+  r.keyframes[7].path = r.keyframes[6].path + 0.5 * p.loop_min_path;  // too close along the path
+  EXPECT_TRUE(builder.search(r.keyframes, r.graph, 7).candidates.empty());
+}
