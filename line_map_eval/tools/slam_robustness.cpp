@@ -41,7 +41,9 @@ void usage(std::ostream& out)
          "N\n"
          "seeded runs of each input fault (odometry 3 % long or short, heading drifting 3 mrad/m, 10 % of "
          "the\n"
-         "scans dropped, the log started later, stamps jittered; the odometry faults only with odometry).\n"
+         "scans dropped, the log started later, stamps jittered, the front end slipping by 0.3 m and 5 "
+         "degrees\n"
+         "at a random scan of the first half; the odometry faults only with odometry).\n"
          "Prints each run's relations error, then the median, 90th percentile and worst, and every failure\n"
          "(worse than 2x the defaults or above 0.1 m) with the change behind it. Exit 0 whatever the "
          "figures.\n"
@@ -59,7 +61,8 @@ void usage(std::ostream& out)
          "  --param key=value  a changed default for every run\n"
          "  --sensor FILE    (a world) its laser replaced by this sensor profile\n"
          "  --csv FILE       every run as a CSV row\n"
-         "  --figures DIR    each run's SLAM figure (trajectory, closures, relations above 0.3 m) in DIR\n";
+         "  --figures DIR    each run's SLAM figure (trajectory, closures, relations above 0.3 m) and\n"
+         "                   trajectory ('stamp x y theta') in DIR, and a world's true one (truth.txt)\n";
 }
 
 struct Arguments
@@ -158,6 +161,15 @@ Input loadInput(const Arguments& a)
     in.recording = simulate(world).recording;
     for (const auto& s : in.recording.scans) in.stamps.push_back(s.stamp);
     in.relations = truthRelations(in.recording);
+    if (!a.figures.empty())
+    {
+      fs::create_directories(a.figures);
+      std::ofstream truth(fs::path(a.figures) / "truth.txt");
+      truth << std::setprecision(17);
+      for (const auto& kf : in.recording.keyframes)
+        truth << in.recording.scans[kf.scan_index].stamp << " " << kf.pose.x << " " << kf.pose.y << " "
+              << kf.pose.theta << "\n";
+    }
     in.recording.keyframes.clear();
     return in;
   }
@@ -183,7 +195,7 @@ std::vector<RobustnessVariant> variants(const Arguments& a, const linemap::Param
   if (wanted("faults"))
   {
     std::vector<InputFault> faults{InputFault::kDroppedScans, InputFault::kLateStart,
-                                   InputFault::kStampJitter};
+                                   InputFault::kStampJitter, InputFault::kFrontEndSlip};
     if (a.odometry) faults.insert(faults.begin(), {InputFault::kOdometryScale, InputFault::kHeadingDrift});
     for (auto& v : faultVariants(faults, a.runs, a.seed)) out.push_back(std::move(v));
   }
@@ -228,7 +240,8 @@ int run(const Arguments& a)
               << r.error.translation_std << std::setprecision(2) << std::setw(9)
               << r.error.rotation_mean * deg << std::setw(10)
               << (s.defaults > 0.0 ? r.error.translation_mean / s.defaults : 0.0) << "  "
-              << line_map_merging::closureSummary(r.counters) << ", " << std::setprecision(1) << r.cpu_seconds << " s CPU\n";
+              << line_map_merging::closureSummary(r.counters) << ", " << std::setprecision(1) << r.cpu_seconds
+              << " s CPU\n";
   std::cout << std::setprecision(4) << "defaults " << s.defaults << " m; median " << s.median
             << " m, 90th percentile " << s.p90 << " m, worst " << s.worst << " m (" << s.worst_label << ", "
             << std::setprecision(2) << (s.defaults > 0.0 ? s.worst / s.defaults : 0.0) << "x the defaults)\n"

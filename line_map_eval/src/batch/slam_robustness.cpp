@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <numeric>
 #include <sstream>
@@ -78,6 +79,8 @@ std::string faultName(InputFault fault)
       return "late start";
     case InputFault::kStampJitter:
       return "stamp jitter";
+    case InputFault::kFrontEndSlip:
+      return "front-end slip";
   }
   return "?";
 }
@@ -165,6 +168,16 @@ FaultyRecording withFault(const Recording& recording, InputFault fault, std::uin
       const double jitter = 0.2 * linemap::median(periods);
       for (auto& s : scans) s.stamp += jitter * (2.0 * rng.uniform() - 1.0);
       keepIncreasing(scans);
+      return out;
+    }
+    case InputFault::kFrontEndSlip:
+    {
+      FrontEndSlip slip;
+      slip.scan = static_cast<std::size_t>(0.5 * rng.uniform() * static_cast<double>(scans.size()));
+      const double direction = 2.0 * linemap::kPi * rng.uniform();
+      slip.slip =
+          Pose2(0.3 * std::cos(direction), 0.3 * std::sin(direction), sign * 5.0 * linemap::kPi / 180.0);
+      out.slip = slip;
       return out;
     }
     case InputFault::kDroppedScans:
@@ -264,7 +277,7 @@ RobustnessRun runVariant(const Recording& recording, const std::vector<double>& 
     input.original.resize(recording.scans.size());
     std::iota(input.original.begin(), input.original.end(), std::size_t{0});
   }
-  const SlamRecordingResult slam = runSlam(input.recording, slam_params, use_odometry);
+  const SlamRecordingResult slam = runSlam(input.recording, slam_params, use_odometry, input.slip);
   std::vector<std::pair<double, Pose2>> trajectory;
   for (std::size_t i = 0; i < slam.scan_poses.size(); ++i)
     trajectory.push_back({stamps.at(input.original[i]), slam.scan_poses[i]});
@@ -275,6 +288,10 @@ RobustnessRun runVariant(const Recording& recording, const std::vector<double>& 
   {
     const auto residuals = relationResiduals(relations, trajectory);
     drawSlamRun(input.recording, slam, &residuals, variant.label, figure);
+    std::ofstream out(figure + ".txt");
+    out << std::setprecision(17);
+    for (const auto& [stamp, p] : trajectory)
+      out << stamp << " " << p.x << " " << p.y << " " << p.theta << "\n";
   }
   run.counters = slam.counters;
   run.cpu_seconds = slam.cpu_seconds;

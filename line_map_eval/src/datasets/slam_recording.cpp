@@ -8,7 +8,7 @@
 namespace line_map_eval
 {
 SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::LaserSlamParams& params,
-                            bool use_odometry)
+                            bool use_odometry, const std::optional<FrontEndSlip>& slip)
 {
   SlamRecordingResult result;
   const auto start = std::chrono::steady_clock::now();
@@ -24,6 +24,7 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
   for (std::size_t i = 0; i < recording.scans.size(); ++i)
   {
     const RecordedScan& s = recording.scans[i];
+    if (slip && slip->scan == i) slam.injectFrontEndSlip(slip->slip);
     const ScanGeometry& g = recording.geometryOf(s);  // a scan's own where the sensor changes it
     line_map_merging::SlamScan scan;
     scan.stamp = s.stamp;

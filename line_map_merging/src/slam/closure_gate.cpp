@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "line_map_merging/slam/closure_consensus.hpp"
 #include "line_map_merging/slam/relative_uncertainty.hpp"
 
 namespace line_map_merging
@@ -46,8 +47,11 @@ ClosureVerdict ClosureGate::consider(const LoopMatch& match, PoseGraph& graph, S
   if (!consistentWithGraph(graph, e))
   {
     ++counters.loops_inconsistent;
+    ++counters.inconsistent_in_a_row;
+    counters.most_inconsistent_in_a_row =
+        std::max(counters.most_inconsistent_in_a_row, counters.inconsistent_in_a_row);
     attempts_[attempt].outcome = ClosureOutcome::kInconsistent;
-    return {};
+    return outvoteChain(match, attempt, graph, counters);
   }
   const std::size_t edge = graph.addEdge(e);
   const Pose2 disagreement = graph.edgeError(edge);
@@ -60,6 +64,7 @@ ClosureVerdict ClosureGate::consider(const LoopMatch& match, PoseGraph& graph, S
     // the next optimisation.
     ++counters.loops_accepted;
     ++counters.loops_consistent;
+    counters.inconsistent_in_a_row = 0;
     attempts_[attempt].outcome = ClosureOutcome::kAccepted;
     counters.loops_degenerate += match.shape.degenerate ? 1 : 0;
     return {true, false};
@@ -77,8 +82,62 @@ ClosureVerdict ClosureGate::consider(const LoopMatch& match, PoseGraph& graph, S
   attempts_[attempt].outcome = outcome;
   if (added.size() > 1 && pending_attempt < attempts_.size()) attempts_[pending_attempt].outcome = outcome;
   if (!kept) return {};
+  counters.inconsistent_in_a_row = 0;
   counters.loops_accepted += added.size();
   counters.loops_degenerate += match.shape.degenerate ? 1 : 0;
+  return {true, true};
+}
+
+ClosureVerdict ClosureGate::outvoteChain(const LoopMatch& match, std::size_t attempt, PoseGraph& graph,
+                                         SlamCounters& counters)
+{
+  if (params_.loop_consensus == 0) return {};
+  const std::size_t k = match.to;
+  refused_.erase(std::remove_if(refused_.begin(), refused_.end(),
+                                [&](const RefusedClosure& r)
+                                { return r.edge.to + params_.loop_consensus_keyframes < k; }),
+                 refused_.end());
+  refused_.push_back({match.edge, attempt, match.shape.degenerate});
+  std::vector<PoseGraphEdge> edges;
+  for (const auto& r : refused_) edges.push_back(r.edge);
+  const std::vector<std::size_t> group = consistentGroup(graph, edges, edges.size() - 1, consistency_gate_);
+  if (distinctKeyframes(edges, group) < params_.loop_consensus) return {};
+  // Each under a loss as wide as its own disagreement with the estimate, as an unambiguous closure goes in:
+  // the correction they agree on is the drift they are for.
+  std::vector<std::size_t> added;
+  for (std::size_t g : group)
+  {
+    const std::size_t edge = graph.addEdge(edges[g]);
+    const double scale = params_.loop_scale_by_disagreement > 0.0
+                             ? params_.loop_scale_by_disagreement * graph.weightedTranslationError(edge) /
+                                   params_.loop_sigma_xy
+                             : 0.0;
+    graph.setLossScale(edge, std::max(params_.loop_loss_scale, scale));
+    added.push_back(edge);
+  }
+  const bool kept = optimizeKeeping(graph, added, counters);
+  for (std::size_t g : group)
+  {
+    attempts_[refused_[g].attempt].outcome =
+        kept ? ClosureOutcome::kAccepted : ClosureOutcome::kRejectedGraph;
+    if (kept) counters.loops_degenerate += refused_[g].degenerate ? 1 : 0;
+  }
+  // They leave the waiting list either way: in the graph, or refused by it.
+  std::vector<bool> in_group(refused_.size(), false);
+  for (std::size_t g : group) in_group[g] = true;
+  std::vector<RefusedClosure> waiting;
+  for (std::size_t i = 0; i < refused_.size(); ++i)
+    if (!in_group[i]) waiting.push_back(refused_[i]);
+  refused_ = std::move(waiting);
+  counters.loops_inconsistent -= group.size();
+  if (!kept)
+  {
+    // optimizeKeeping counted them as refused by the graph.
+    return {};
+  }
+  counters.loops_accepted += group.size();
+  counters.loops_by_consensus += group.size();
+  counters.inconsistent_in_a_row = 0;
   return {true, true};
 }
 

@@ -106,6 +106,15 @@ void LaserSlam::addKeyframe(LocalScanResult& scan, std::size_t scan_index)
     e.measurement = relative;
     e.sigma_xy = chain_matched ? params_.edge_sigma_xy : params_.odometry_sigma_xy;
     e.sigma_theta = chain_matched ? params_.edge_sigma_theta : params_.odometry_sigma_theta;
+    if (chain_matched && scan.odometry_motion)
+    {
+      // As certain as the match, and no more certain than its disagreement with the odometry, an independent
+      // measurement of the same motion: where the front end slipped, the chain is no longer stiff, so the
+      // closures across the slip put their correction there instead of bending the whole chain.
+      const Pose2 disagreement = scan.odometry_motion->inverse() * relative;
+      e.sigma_xy = std::hypot(e.sigma_xy, std::hypot(disagreement.x, disagreement.y));
+      e.sigma_theta = std::hypot(e.sigma_theta, linemap::normalizeAngle(disagreement.theta));
+    }
     if (chain_matched)
     {
       // What the keyframe's match determined: along a direction it left to the odometry, the edge is as

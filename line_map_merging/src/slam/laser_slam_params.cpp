@@ -82,6 +82,8 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.loop_corroborate_theta = p.getDouble("loop/corroborate_theta", s.loop_corroborate_theta);
   s.loop_agreement_xy = p.getDouble("loop/agreement_xy", s.loop_agreement_xy);
   s.loop_agreement_theta = p.getDouble("loop/agreement_theta", s.loop_agreement_theta);
+  s.loop_consensus = countParam(p, "loop/consensus", s.loop_consensus, 0);
+  s.loop_consensus_keyframes = countParam(p, "loop/consensus_keyframes", s.loop_consensus_keyframes, 1);
   s.loop_pending_keyframes = countParam(p, "loop/pending_keyframes", s.loop_pending_keyframes, 1);
   s.loop_ambiguity_distance = p.getDouble("loop/ambiguity_distance", s.loop_ambiguity_distance);
   s.loop_ambiguity_ratio = p.getDouble("loop/ambiguity_ratio", s.loop_ambiguity_ratio);

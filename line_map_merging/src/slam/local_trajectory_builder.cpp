@@ -24,6 +24,7 @@ LocalScanResult LocalTrajectoryBuilder::addScan(const SlamScan& in, SlamCounters
   result.scan = validScan(in, counters);
   const SlamScan& scan = result.scan;
   const Prediction prediction = predict(scan, counters);
+  odometry_continuous_ &= scan.odom && prediction.odometry_usable;
   result.outcome = SlamOutcome::kPredicted;
   result.pose = prediction.pose;
   if (barelyMoved(scan, prediction))
@@ -40,6 +41,10 @@ LocalScanResult LocalTrajectoryBuilder::addScan(const SlamScan& in, SlamCounters
   if (isKeyframe(scan, result.pose))
   {
     result.keyframe = true;
+    if (odometry_continuous_ && keyframe_odom_ && scan.odom)
+      result.odometry_motion = keyframe_odom_->inverse() * *scan.odom;
+    keyframe_odom_ = scan.odom;
+    odometry_continuous_ = scan.odom.has_value();
     result.joins = scanSurfaces(scan.points, params_.surfaces);
     addKeyframe(result.pose, scan.points, result.joins);
   }
@@ -133,6 +138,7 @@ std::optional<Pose2> LocalTrajectoryBuilder::matchFrontEnd(const SlamScan& scan,
   // Poor against this run's own recent matches (an absolute floor would pass a match far worse than
   // the scene allows here), or at the window's edge: the odometry may be off by more than the window.
   const double enough = std::max(params_.min_score, params_.widen_ratio * typical_score_);
+  counters.border_matches += at_edge ? 1 : 0;
   if (!best || best->score < enough || at_edge)
   {
     if (prediction.odometry_usable) ++counters.wide_searches;
@@ -225,6 +231,16 @@ void LocalTrajectoryBuilder::addKeyframe(const Pose2& pose, const std::vector<Ve
   while (recent_.size() > std::max<std::size_t>(params_.local_map_keyframes, 1)) recent_.pop_front();
   chain_matched_ = true;
   rebuildLocalMap();
+}
+
+void LocalTrajectoryBuilder::injectSlip(const Pose2& slip)
+{
+  const Pose2 moved = last_local_ * slip;
+  const Pose2 shift = moved * last_local_.inverse();  // the old front-end frame into the slipped one
+  last_local_ = moved;
+  last_matched_local_ = shift * last_matched_local_;
+  for (auto& kf : recent_) kf.local = shift * kf.local;
+  if (!recent_.empty()) rebuildLocalMap();
 }
 
 void LocalTrajectoryBuilder::rebuildLocalMap()

@@ -13,6 +13,7 @@
 
 #include "line_map_eval/datasets/recording.hpp"
 #include "line_map_eval/datasets/relations.hpp"
+#include "line_map_eval/datasets/slam_recording.hpp"
 #include "line_map_merging/slam/laser_slam.hpp"
 #include "linemap/params.hpp"
 
@@ -26,6 +27,9 @@ enum class InputFault
   kDroppedScans,   ///< 10 % of the scans removed at random
   kLateStart,      ///< the log started 2–10 % of its scans later
   kStampJitter,    ///< every stamp moved by up to a fifth of the scan period (order kept)
+  /// The front end slips by 0.3 m (in a random direction) and 5 degrees (either way) at a random scan of
+  /// the recording's first half (LaserSlam::injectFrontEndSlip): later closures must repair it.
+  kFrontEndSlip,
 };
 
 std::string faultName(InputFault fault);
@@ -62,6 +66,7 @@ struct FaultyRecording
 {
   Recording recording;
   std::vector<std::size_t> original;  ///< index into the input's scans, per scan
+  std::optional<FrontEndSlip> slip;   ///< kFrontEndSlip: where and how much
 };
 
 /// `recording` with `fault` drawn from `seed`; keyframes follow their scans (those of removed scans are
@@ -86,7 +91,8 @@ struct RobustnessRun
 
 /// One SLAM run of the variant on `recording` (`stamps`: the stamp each of its scans is known by in
 /// the relations), scored against `relations`. With `figure` (a path without extension), the run's
-/// SLAM figure (slam_figure.hpp) is written there.
+/// SLAM figure (slam_figure.hpp) is written there, and its trajectory as "stamp x y theta" lines to
+/// `figure`.txt.
 RobustnessRun runVariant(const Recording& recording, const std::vector<double>& stamps,
                          const std::vector<Relation>& relations, const linemap::ParamSet& defaults,
                          const RobustnessVariant& variant, bool use_odometry, const std::string& figure = "");

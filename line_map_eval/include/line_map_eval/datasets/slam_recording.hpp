@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -24,11 +25,18 @@ struct SlamRecordingResult
   double cpu_seconds = 0.0;  ///< the same in CPU time of this thread
 };
 
+/// A front-end slip injected before one scan (LaserSlam::injectFrontEndSlip).
+struct FrontEndSlip
+{
+  std::size_t scan = 0;  ///< index into Recording::scans
+  Pose2 slip;
+};
+
 /// Feeds every scan (valid beams under its own geometry, in the base frame by the recording's mounting) with
 /// its odometry
 /// (`use_odometry` false: none, the laser-only case) to a LaserSlam.
 SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::LaserSlamParams& params,
-                            bool use_odometry = true);
+                            bool use_odometry = true, const std::optional<FrontEndSlip>& slip = std::nullopt);
 
 /// The recording with the SLAM keyframes as its corrected keyframes (a loop-closure dataset).
 Recording withSlamKeyframes(Recording recording, const SlamRecordingResult& slam);

@@ -2,8 +2,9 @@
 // into the pose graph only when it scores well, is unambiguous and is consistent with the graph
 // (chi-square gate on relativeCovariance); one the estimate already meets is added without optimising,
 // one far off waits for a corroborating second closure when asked to (loop_corroborate_*), and one the
-// optimised graph still misses is removed again. Records every attempt's outcome and counts them.
-// Not thread-safe: the caller serialises the calls.
+// optimised graph still misses is removed again. A closure refused as inconsistent is not forgotten: when
+// enough of the recent ones agree with each other (closure_consensus.hpp) they outvote the chain. Records
+// every attempt's outcome and counts them. Not thread-safe: the caller serialises the calls.
 #pragma once
 
 #include <cstddef>
@@ -49,6 +50,10 @@ class ClosureGate
   /// Whether the pending closure implies the same correction of keyframe k as one putting it at
   /// `implied`.
   bool corroborates(const PoseGraph& graph, std::size_t k, const linemap::Pose2& implied) const;
+  /// Keeps the closure just refused as inconsistent among the recent ones; when loop_consensus of them
+  /// agree with each other, adds them all and optimises (kept or removed as optimizeKeeping decides).
+  ClosureVerdict outvoteChain(const LoopMatch& match, std::size_t attempt, PoseGraph& graph,
+                              SlamCounters& counters);
   /// Optimises the graph with the closure edges `added`; when the optimised graph misses one of them
   /// by more than loop_max_error_*, removes them and restores the poses. Whether they stayed.
   bool optimizeKeeping(PoseGraph& graph, std::vector<std::size_t> added, SlamCounters& counters) const;
@@ -63,6 +68,14 @@ class ClosureGate
     std::size_t attempt;  ///< its entry in attempts_
   };
   std::optional<PendingClosure> pending_;
+  /// Closures refused as inconsistent within the last loop_consensus_keyframes keyframes.
+  struct RefusedClosure
+  {
+    PoseGraphEdge edge;
+    std::size_t attempt;  ///< its entry in attempts_
+    bool degenerate;      ///< its match left a direction open
+  };
+  std::vector<RefusedClosure> refused_;
   std::vector<ClosureAttempt> attempts_;
 };
 

@@ -65,6 +65,9 @@ class LaserSlam
   const SlamCounters& counters() const { return counters_; }
   const LaserSlamParams& params() const { return params_; }
   std::vector<std::pair<std::string, std::string>> diagnostics() const;
+  /// Fault injection (tests, the robustness benchmark): the front end slips by `slip` before the next
+  /// scan (LocalTrajectoryBuilder::injectSlip); the graph's closures must repair it.
+  void injectFrontEndSlip(const linemap::Pose2& slip) { front_end_.injectSlip(slip); }
   /// Forgets everything but the counters (a new trajectory starts at the origin).
   void reset();
 

@@ -30,7 +30,10 @@ struct LocalScanResult
   /// leave a direction to); the chain edge of a keyframe takes it.
   Eigen::Matrix2d match_weights = Eigen::Matrix2d::Identity();
   bool keyframe = false;
-  bool chain_matched = true;             ///< every scan since the last keyframe was matched
+  bool chain_matched = true;  ///< every scan since the last keyframe was matched
+  /// Of a keyframe: the odometry's motion since the previous keyframe, when every scan in between had
+  /// usable odometry (an independent measurement of what the chain edge measures).
+  std::optional<linemap::Pose2> odometry_motion;
   std::vector<linemap::Segment2> joins;  ///< of a keyframe: scanSurfaces of its points
 };
 
@@ -44,6 +47,11 @@ class LocalTrajectoryBuilder
   LocalScanResult addScan(const SlamScan& scan, SlamCounters& counters);
   /// The last accepted scan's front-end pose.
   const linemap::Pose2& currentLocal() const { return last_local_; }
+  /// Fault injection (tests, the robustness benchmark): the front end's estimate jumps by `slip`,
+  /// composed onto the last scan's pose, as after a false match it cannot see; its local map moves with
+  /// it, so the following scans are matched consistently in the slipped frame and only the graph's
+  /// closures can tell.
+  void injectSlip(const linemap::Pose2& slip);
   /// The field the next scan is matched against (empty before the first keyframe).
   const LikelihoodGrid& localMap() const { return local_map_; }
 
@@ -92,7 +100,9 @@ class LocalTrajectoryBuilder
   std::size_t scans_since_match_ = 0;                          ///< scans since last_matched_local_
   std::optional<linemap::Pose2> last_odom_, last_matched_odom_;
   double path_ = 0.0;
-  bool chain_matched_ = true;  ///< every scan since the last keyframe was matched
+  bool chain_matched_ = true;                    ///< every scan since the last keyframe was matched
+  std::optional<linemap::Pose2> keyframe_odom_;  ///< odometry at the last keyframe's scan
+  bool odometry_continuous_ = false;             ///< usable odometry at every scan since it
 };
 
 }  // namespace line_map_merging

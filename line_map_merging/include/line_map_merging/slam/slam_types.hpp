@@ -36,6 +36,12 @@ struct SlamCounters
   std::size_t keyframes = 0, loop_attempts = 0, loops_accepted = 0, loops_rejected_score = 0,
               loops_rejected_graph = 0, loops_consistent = 0, loops_pending = 0, loops_ambiguous = 0,
               loops_inconsistent = 0, loops_degenerate = 0, optimizations = 0;
+  /// Closures refused as inconsistent with the chain that a group of mutually consistent ones later
+  /// brought in (counted among the accepted, no longer among the inconsistent).
+  std::size_t loops_by_consensus = 0;
+  /// Trouble signs: closures refused as inconsistent since the last accepted one (and the longest such
+  /// run), front-end matches whose best heading lay on the search window's border.
+  std::size_t inconsistent_in_a_row = 0, most_inconsistent_in_a_row = 0, border_matches = 0;
   double last_optimization_ms = 0.0, total_optimization_ms = 0.0, last_match_ms = 0.0, total_loop_ms = 0.0;
 };
 
