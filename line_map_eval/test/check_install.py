@@ -184,11 +184,19 @@ def check_tools(checks, env, prefix, home):
         rc, out = run(["rosrun", "line_map_eval", tool, "--help"], env)
         checks.add("tool_%s" % tool, None if rc == 0 and "usage" in out.lower() else
                    "rosrun line_map_eval %s --help exits %d" % (tool, rc), out)
-    # linemap_batch finds the shipped defaults from its own place (no --config-dir, no repository).
+    # linemap_batch finds the shipped defaults from its own place (no --config-dir, no repository), then
+    # fails on the missing dataset alone: exit code 1 (an error of the run, toolMain's code), the message
+    # naming the dataset. A parse error (2), a crash (negative: a signal) or a run that somehow succeeds
+    # (0) fails this check, as do the warnings of a missing config.
     rc, out = run(["rosrun", "line_map_eval", "linemap_batch", "/nonexistent.bag", "--out",
                    os.path.join(home, "batch")], env)
-    checks.add("tool_linemap_batch_finds_config", "linemap_batch runs without the shipped config files"
-               if "no config directory found" in out or "not found; its defaults" in out else None, out)
+    if "no config directory found" in out or "not found; its defaults" in out:
+        error = "linemap_batch runs without the shipped config files"
+    elif rc != 1 or "/nonexistent.bag" not in out:
+        error = "linemap_batch on a missing dataset exits %d (expected 1, naming the dataset)" % rc
+    else:
+        error = None
+    checks.add("tool_linemap_batch_finds_config", error, out)
 
 
 def check_nodelets(checks, env, prefix, classes, home):

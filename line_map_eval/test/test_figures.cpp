@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <regex>
 #include <string>
 
 #include "line_map_eval/batch/figures.hpp"
@@ -109,6 +111,17 @@ bool isRed(const Rgb& c)
 bool isGreen(const Rgb& c)
 {
   return c.g > 140 && c.r < 60 && c.b < 60;
+}
+
+/// The layer colours of a figure on white: 'k' black, 'g' green, 'o' orange, 'r' red, 'b' blue, else 0.
+char colourName(const Rgb& c)
+{
+  if (c.r < 40 && c.g < 40 && c.b < 40) return 'k';
+  if (c.g > c.r + 80 && c.g > c.b + 80) return 'g';
+  if (c.r > 200 && c.g > c.b + 40 && c.g < c.r - 40) return 'o';
+  if (isRed(c)) return 'r';
+  if (c.b > c.r + 40 && c.b > c.g + 40) return 'b';
+  return 0;
 }
 }  // namespace
 
@@ -316,6 +329,11 @@ TEST(Figures, SlamRunLayers)
   EXPECT_NEAR((f.accepted_closures[0].end - Vec2(0, 2)).norm(), 0.0, 1e-12);
   EXPECT_NEAR((f.bad_relations[0].start - Vec2(2, 0)).norm(), 0.0, 1e-12);
   EXPECT_NEAR((f.bad_relations[0].end - Vec2(0, 2)).norm(), 0.0, 1e-12);
+  // The legend: the run's layers with their counts (one closure of each outcome, one relation above
+  // 0.3 m: 0.5 m; 0.1 m is below), no map segment or end point (the figure has no segments).
+  const std::vector<std::string> expected = {"scan point", "trajectory", "accepted closure (1)",
+                                             "rejected closure (1)", "relation error > 0.3 m (1)"};
+  EXPECT_EQ(line_map_eval::legendLabels(f), expected);
   f.scan_points.clear();  // the pixels below are of the lines alone
   FigureStyle style = testStyle();
   style.line_width = 5.0;  // closures 3 px, relations 5 px wide
@@ -344,7 +362,9 @@ TEST(Figures, SlamRunLayers)
   cairo_surface_destroy(img);
 }
 
-// drawSlamRun writes the SVG and the PNG (the default formats) with the legend's entries in the SVG.
+// drawSlamRun writes the SVG and the PNG (the default formats) with the legend's entries: in the legend
+// band of the PNG (its glyphs' colours, in order) and in the SVG (its strokes in those colours, below the
+// map area). A legend listing the map's layers instead draws a dark blue glyph first and no orange one.
 TEST(Figures, SlamRunFilesAreWritten)
 {
   const SquareRun run;
@@ -359,4 +379,33 @@ TEST(Figures, SlamRunFilesAreWritten)
   EXPECT_EQ(readFile(files[1]).rfind("\x89PNG", 0), 0u);
   struct stat st;
   EXPECT_NE(stat((dir + "/slam.pdf").c_str(), &st), 0);
+
+  // The legend's glyphs along the middle of its band, left to right: scan point (grey), trajectory
+  // (black), accepted (green), rejected (orange), relation (red); the text between them is black too.
+  const MapFigure f = line_map_eval::slamFigure(run.recording, run.slam, &run.residuals, "square");
+  const FigureLayout l = layoutFigure({&f}, FigureStyle());
+  const double middle = l.margin + l.map_height + l.margin + l.caption_height + 0.5 * l.legend_height;
+  cairo_surface_t* img = cairo_image_surface_create_from_png(files[1].c_str());
+  ASSERT_EQ(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
+  std::string order;  // a letter per run of legend pixels of one glyph colour
+  for (int x = static_cast<int>(l.margin); x < static_cast<int>(l.margin + l.map_width); ++x)
+  {
+    const char k = colourName(pixel(img, x, static_cast<int>(middle)));
+    if (k != 'k' && k != 0 && (order.empty() || order.back() != k)) order.push_back(k);
+  }
+  cairo_surface_destroy(img);
+  EXPECT_EQ(order, "gor");
+  // The SVG: the legend's line glyphs are horizontal strokes through the band's middle, left to right
+  // (cairo writes a stroke's colour as rgb(r%,g%,b%), its alpha apart).
+  const std::regex stroke(
+      R"re(stroke:rgb\(([0-9.]+)%,([0-9.]+)%,([0-9.]+)%\);[^"]*" d="M ([0-9.]+) ([0-9.]+) L ([0-9.]+) ([0-9.]+) ")re");
+  std::string glyphs;
+  for (std::sregex_iterator it(svg.begin(), svg.end(), stroke), end; it != end; ++it)
+  {
+    const auto& m = *it;
+    if (std::fabs(std::stod(m[5]) - middle) > 0.5 || std::fabs(std::stod(m[7]) - middle) > 0.5) continue;
+    const auto level = [&](int i) { return static_cast<int>(std::lround(2.55 * std::stod(m[i]))); };
+    glyphs.push_back(colourName({level(1), level(2), level(3)}));
+  }
+  EXPECT_EQ(glyphs, "kgor");  // trajectory, accepted, rejected, relation; no map segment (blue)
 }

@@ -182,7 +182,10 @@ TEST(LaserSlamCorridor, FrontEndFollowsTheCorridor)
 // on different passes within a metre of each other must agree with the truth; a field of points alone
 // (the front end stuck at its first keyframe) misses by tens of metres, closures without the consistency
 // test or held along the axis they slid on by metres, chain edges as stiff along the axis as across it
-// (where the odometry, not the match, set the motion) by over a decimetre.
+// (where the odometry, not the match, set the motion) by over a decimetre. The floors lie between the
+// SLAM and the SLAM with chain edges of identity translation weights (chainEdgeTranslationWeights patched
+// out), measured 2026-11-27 on 4f9fdb2: revisits worst 0.080 / 0.118 m, mean 0.020 / 0.042 m; every scan
+// worst 0.084 / 0.147 m.
 TEST(LaserSlamCorridor, RevisitsAgreeInBothDirections)
 {
   const Errors e = runCorridor(LaserSlamParams(), true);
@@ -194,7 +197,7 @@ TEST(LaserSlamCorridor, RevisitsAgreeInBothDirections)
       e.counters.loops_inconsistent, e.counters.loops_ambiguous, e.counters.loop_attempts);
   EXPECT_GT(e.revisits, 1000u);
   EXPECT_GT(e.counters.loops_accepted, 10u);
-  EXPECT_LT(e.worst_revisit, 0.2);
-  EXPECT_LT(e.mean_revisit, 0.05);
-  EXPECT_LT(e.worst, 0.3);
+  EXPECT_LT(e.worst_revisit, 0.1);
+  EXPECT_LT(e.mean_revisit, 0.03);
+  EXPECT_LT(e.worst, 0.12);
 }

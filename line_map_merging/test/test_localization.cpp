@@ -149,7 +149,9 @@ TEST(LocalizationSegmentMatcher, CorridorIsDegenerateAlongItsAxisAndThePriorHold
   PosePrior prior;
   prior.mean = {0.3, 0.0, 0.0};  // odometry: 0.3 m further along than the truth
   prior.information.diagonal() << 1.0 / (0.1 * 0.1), 1.0 / (0.1 * 0.1), 1.0 / (0.05 * 0.05);
-  const SegmentMatch m = matchToSegments(index, points, {0.3, 0.12, 0.03}, prior, SegmentMatchParams());
+  // The search starts at x = 0.8, neither the truth nor the prior: a solve that ignores the prior has
+  // nothing to move x and ends where it started, 0.5 m from where the prior holds it.
+  const SegmentMatch m = matchToSegments(index, points, {0.8, 0.12, 0.03}, prior, SegmentMatchParams());
   // Across the corridor and in heading the walls decide; along it nothing but the prior.
   EXPECT_NEAR(m.pose.y, 0.0, 1e-3);
   EXPECT_NEAR(m.pose.theta, 0.0, 0.05 * kDeg);

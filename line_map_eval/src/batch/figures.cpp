@@ -245,12 +245,14 @@ void drawSlamLayers(cairo_t* cr, const MapFigure& f, const FigureLayout& l, int 
 class LegendLine
 {
  public:
-  LegendLine(cairo_t* cr, double x, double y, const FigureStyle& style) : cr_(cr), x_(x), y_(y), style_(style)
+  LegendLine(cairo_t* cr, double x, double y, const FigureStyle& style, std::vector<std::string>* labels)
+      : cr_(cr), x_(x), y_(y), style_(style), labels_(labels)
   {
   }
 
   void label(const std::string& text)
   {
+    if (labels_) labels_->push_back(text);
     cairo_set_source_rgb(cr_, 0.0, 0.0, 0.0);
     cairo_move_to(cr_, x_ + kGlyph + 4.0, y_ + 0.3 * style_.font_size);
     cairo_show_text(cr_, text.c_str());
@@ -286,14 +288,16 @@ class LegendLine
   cairo_t* cr_;
   double x_, y_;
   const FigureStyle& style_;
+  std::vector<std::string>* labels_;  ///< when not null, every label drawn is appended
 };
 
-void drawLegend(cairo_t* cr, const MapFigure& f, double x, double y, const FigureStyle& style)
+void drawLegend(cairo_t* cr, const MapFigure& f, double x, double y, const FigureStyle& style,
+                std::vector<std::string>* labels = nullptr)
 {
   cairo_save(cr);
   cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
   cairo_set_font_size(cr, 0.85 * style.font_size);
-  LegendLine legend(cr, x, y, style);
+  LegendLine legend(cr, x, y, style, labels);
   if (!f.show_slam || !f.segments.empty())
   {
     const double blue[4] = {kMapBlue[0], kMapBlue[1], kMapBlue[2], 1.0};
@@ -507,6 +511,18 @@ int FigureLayout::pixelWidth() const
 int FigureLayout::pixelHeight() const
 {
   return static_cast<int>(std::ceil(height - 1e-9));
+}
+
+std::vector<std::string> legendLabels(const MapFigure& figure, const FigureStyle& style)
+{
+  // The legend's own drawing code on a scratch surface: the labels are those a figure shows.
+  cairo_surface_t* surface = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, 1, 1);
+  cairo_t* cr = cairo_create(surface);
+  std::vector<std::string> labels;
+  drawLegend(cr, figure, 0.0, 0.0, style, &labels);
+  cairo_destroy(cr);
+  cairo_surface_destroy(surface);
+  return labels;
 }
 
 double scaleBarLength(double width)

@@ -47,6 +47,43 @@ def run(cmd, timeout):
     return p.returncode, p.stdout.decode(errors="replace")
 
 
+def stamp_key(stamp):
+    """A log stamp as a key: a tenth of a millisecond tells the scans apart and survives float rounding."""
+    return round(stamp, 4)
+
+
+def read_relations(path):
+    """The relations file of a log (Kuemmerle et al.): (t1 key, t2 key, x, y, yaw) per line."""
+    with open(path) as f:
+        return [(stamp_key(float(v[0])), stamp_key(float(v[1])), float(v[2]), float(v[3]), float(v[7]))
+                for v in (line.split() for line in f) if v]
+
+
+def read_trajectory(path):
+    """A trajectory as linemap_relations --write writes it ("stamp x y theta" per scan): {stamp key: pose}."""
+    with open(path) as f:
+        return {stamp_key(float(v[0])): (float(v[1]), float(v[2]), float(v[3]))
+                for v in (line.split() for line in f) if v}
+
+
+def relative_pose(a, b):
+    """b in a's frame: (x, y, theta)."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (c * dx + s * dy, -s * dx + c * dy, math.atan2(math.sin(b[2] - a[2]), math.cos(b[2] - a[2])))
+
+
+def relations_error(poses, relations):
+    """Mean translation error of the relations whose two stamps both have a pose in `poses` ({stamp key:
+    (x, y, theta)}), computed here independently of the C++ metric; and how many were used."""
+    errors = []
+    for t1, t2, x, y, _ in relations:
+        if t1 in poses and t2 in poses:
+            r = relative_pose(poses[t1], poses[t2])
+            errors.append(math.hypot(r[0] - x, r[1] - y))
+    return (sum(errors) / len(errors) if errors else float("nan")), len(errors)
+
+
 def simulate(world, seed, scans, prefix="system_", extra=()):
     """Simulates config/worlds/<world>.yaml into a temporary bag; returns (bag, truth yaml path, log)."""
     bag = os.path.join(tempfile.mkdtemp(prefix=prefix), world + ".bag")

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "line_map_merging/slam/chain_edge.hpp"
 #include "linemap/small_helpers.hpp"
 
 namespace line_map_merging
@@ -119,14 +120,8 @@ void LaserSlam::addKeyframe(LocalScanResult& scan, std::size_t scan_index)
     {
       // What the keyframe's match determined: along a direction it left to the odometry, the edge is as
       // loose as an odometry edge, so a closure may move the keyframe there.
-      const double floor = std::pow(params_.edge_sigma_xy / params_.odometry_sigma_xy, 2.0);
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(last_match_weights_);
-      const Eigen::Matrix2d local = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(floor).asDiagonal() *
-                                    eigen.eigenvectors().transpose();
-      const double c = std::cos(keyframes_.back().local.theta), sn = std::sin(keyframes_.back().local.theta);
-      Eigen::Matrix2d r;
-      r << c, -sn, sn, c;
-      e.translation_weights = r.transpose() * local * r;
+      e.translation_weights = chainEdgeTranslationWeights(last_match_weights_, keyframes_.back().local.theta,
+                                                          params_.edge_sigma_xy, params_.odometry_sigma_xy);
     }
     graph_.addEdge(e);
   }

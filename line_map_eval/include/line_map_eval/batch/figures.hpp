@@ -92,6 +92,10 @@ struct FigureLayout
 
 FigureLayout layoutFigure(const std::vector<const MapFigure*>& panels, const FigureStyle& style);
 
+/// The labels of the panel's legend, left to right, as drawn (with their counts; a narrow panel clips
+/// the last ones).
+std::vector<std::string> legendLabels(const MapFigure& figure, const FigureStyle& style = {});
+
 /// Length of the scale bar for a map `width` metres wide: the largest 1, 2 or 5 times a power
 /// of ten that is at most a quarter of it.
 double scaleBarLength(double width);
