@@ -170,7 +170,6 @@ Input loadInput(const Arguments& a)
         truth << in.recording.scans[kf.scan_index].stamp << " " << kf.pose.x << " " << kf.pose.y << " "
               << kf.pose.theta << "\n";
     }
-    in.recording.keyframes.clear();
     return in;
   }
   const CarmenLog raw = readCarmenLog(a.positional[0]);
@@ -229,6 +228,7 @@ int run(const Arguments& a)
   for (std::size_t j = 0; j < std::min(a.jobs, todo.size()); ++j) threads.emplace_back(worker);
   for (auto& t : threads) t.join();
   const RobustnessSummary s = summarize(runs);
+  const bool world = isWorldFile(a.positional[0]);
   const double deg = 180.0 / linemap::kPi;
   std::cout << fs::path(a.positional[0]).filename().string() << (a.odometry ? "" : ", no odometry") << ": "
             << runs.size() << " runs\n"
@@ -240,8 +240,9 @@ int run(const Arguments& a)
               << r.error.translation_std << std::setprecision(2) << std::setw(9)
               << r.error.rotation_mean * deg << std::setw(10)
               << (s.defaults > 0.0 ? r.error.translation_mean / s.defaults : 0.0) << "  "
-              << line_map_merging::closureSummary(r.counters) << ", " << std::setprecision(1) << r.cpu_seconds
-              << " s CPU\n";
+              << line_map_merging::closureSummary(r.counters)
+              << (world ? ", " + std::to_string(r.false_closures) + " false" : std::string()) << ", "
+              << std::setprecision(1) << r.cpu_seconds << " s CPU\n";
   std::cout << std::setprecision(4) << "defaults " << s.defaults << " m; median " << s.median
             << " m, 90th percentile " << s.p90 << " m, worst " << s.worst << " m (" << s.worst_label << ", "
             << std::setprecision(2) << (s.defaults > 0.0 ? s.worst / s.defaults : 0.0) << "x the defaults)\n"

@@ -137,3 +137,101 @@ TEST(ClosureGate, RefusesPoorAndAmbiguousMatchesBeforeTheGraph)
   EXPECT_EQ(gate.attempts()[0].outcome, ClosureOutcome::kRejectedScore);
   EXPECT_EQ(gate.attempts()[1].outcome, ClosureOutcome::kAmbiguous);
 }
+
+namespace
+{
+/// Out 40 nodes 0.5 m apart along x, back 40 along y = 1 (node 79 - i beside node i); the chain's edge into
+/// node 35 slipped by 0.3 m and 5 degrees, the rest exact.
+std::vector<Pose2> outAndBack()
+{
+  std::vector<Pose2> t;
+  for (int i = 0; i < 40; ++i) t.push_back({0.5 * i, 0.0, 0.0});
+  for (int i = 0; i < 40; ++i) t.push_back({19.5 - 0.5 * i, 1.0, linemap::kPi});
+  return t;
+}
+
+PoseGraph slippedChain(const LaserSlamParams& p)
+{
+  const auto truth = outAndBack();
+  PoseGraph g(line_map_merging::PoseGraphParams{p.loop_loss_scale, 50});
+  g.addNode(truth[0]);
+  for (std::size_t i = 1; i < truth.size(); ++i)
+  {
+    PoseGraphEdge e;
+    e.from = i - 1;
+    e.to = i;
+    e.measurement = truth[i - 1].inverse() * truth[i];
+    if (i == 35) e.measurement = e.measurement * Pose2(0.1, 0.28, 5.0 * linemap::kPi / 180.0);
+    e.sigma_xy = p.edge_sigma_xy;
+    e.sigma_theta = p.edge_sigma_theta;
+    g.addNode(g.node(i - 1) * e.measurement);
+    g.addEdge(e);
+  }
+  return g;
+}
+
+/// A closure j -> k measuring the true relative pose composed with `error`.
+LoopMatch trueClosure(std::size_t j, std::size_t k, const LaserSlamParams& p, const Pose2& error = {})
+{
+  const auto truth = outAndBack();
+  LoopMatch m = closure(truth[j].inverse() * truth[k] * error, p);
+  m.from = m.edge.from = j;
+  m.to = m.edge.to = k;
+  return m;
+}
+}  // namespace
+
+// Three closures across the slip, from older keyframes two submap spans apart: each alone is refused (the
+// chain claims the slipped estimate), the third makes a group that agrees with itself, and all three go in
+// and pull the return leg back. Without the consensus (loop_consensus 0) the slip stays.
+TEST(ClosureGate, IndependentClosuresAgreeingWithEachOtherOutvoteTheChain)
+{
+  LaserSlamParams p;
+  p.loop_consensus_keyframes = 30;
+  const auto truth = outAndBack();
+  for (const std::size_t consensus : {std::size_t{0}, std::size_t{3}})
+  {
+    p.loop_consensus = consensus;
+    PoseGraph g = slippedChain(p);
+    ClosureGate gate(p);
+    SlamCounters counters;
+    ClosureVerdict last;
+    for (const std::size_t j : {34u, 21u, 8u}) last = gate.consider(trueClosure(j, 79 - j, p), g, counters);
+    // Node 71 beside node 8: where the closures say it is, relative to the start.
+    const Pose2 there = g.node(0).inverse() * g.node(71);
+    const double miss = std::hypot(there.x - truth[71].x, there.y - truth[71].y);
+    if (consensus == 0)
+    {
+      EXPECT_FALSE(last.accepted);
+      EXPECT_EQ(counters.loops_inconsistent, 3u);
+      EXPECT_EQ(counters.inconsistent_in_a_row, 3u);
+      EXPECT_GT(miss, 0.5);  // the slip swung the return leg by most of a metre
+    }
+    else
+    {
+      EXPECT_TRUE(last.accepted);
+      EXPECT_TRUE(last.optimized);
+      EXPECT_EQ(counters.loops_by_consensus, 3u);
+      EXPECT_EQ(counters.loops_inconsistent, 0u);
+      EXPECT_EQ(counters.inconsistent_in_a_row, 0u);
+      EXPECT_EQ(counters.most_inconsistent_in_a_row, 3u);  // the third completed the group
+      for (const auto& a : gate.attempts()) EXPECT_EQ(a.outcome, ClosureOutcome::kAccepted);
+      EXPECT_LT(miss, 0.3);
+    }
+  }
+}
+
+// Closures against one submap share its errors: three that agree but come from neighbouring older keyframes
+// are one vote, not three, and the chain stands.
+TEST(ClosureGate, NeighbouringClosuresAreOneVote)
+{
+  LaserSlamParams p;
+  PoseGraph g = slippedChain(p);
+  ClosureGate gate(p);
+  SlamCounters counters;
+  ClosureVerdict last;
+  for (const std::size_t j : {30u, 28u, 26u}) last = gate.consider(trueClosure(j, 79 - j, p), g, counters);
+  EXPECT_FALSE(last.accepted);
+  EXPECT_EQ(counters.loops_by_consensus, 0u);
+  EXPECT_EQ(counters.loops_inconsistent, 3u);
+}

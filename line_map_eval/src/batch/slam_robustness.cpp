@@ -284,6 +284,20 @@ RobustnessRun runVariant(const Recording& recording, const std::vector<double>& 
   RobustnessRun run;
   run.variant = variant;
   run.error = relationsError(relations, trajectory);
+  // True poses of the scans (a simulated world's keyframes): each closure measured against them.
+  std::vector<const Pose2*> truth(input.recording.scans.size(), nullptr);
+  for (const auto& kf : input.recording.keyframes) truth[kf.scan_index] = &kf.pose;
+  for (const auto& e : slam.loop_edges)
+  {
+    const Pose2* a = truth[slam.keyframes[e.from].scan_index];
+    const Pose2* b = truth[slam.keyframes[e.to].scan_index];
+    if (!a || !b) continue;
+    const Pose2 t = a->inverse() * *b;
+    const Eigen::Vector2d d(e.measurement.x - t.x, e.measurement.y - t.y);
+    if (std::sqrt(d.dot(e.translation_weights * d)) > 0.1 ||
+        std::fabs(linemap::normalizeAngle(e.measurement.theta - t.theta)) > 0.02)
+      ++run.false_closures;
+  }
   if (!figure.empty())
   {
     const auto residuals = relationResiduals(relations, trajectory);

@@ -48,6 +48,8 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
   for (std::size_t k = 0; k < slam.keyframes().size(); ++k)
     result.keyframes.push_back({accepted[slam.keyframes()[k].scan], slam.graph().node(k)});
   result.closures = slam.closureAttempts();
+  for (const auto& e : slam.graph().edges())
+    if (e.loop) result.loop_edges.push_back(e);
   result.counters = slam.counters();
   return result;
 }

@@ -180,8 +180,12 @@ class SlamNodelet : public nodelet::Nodelet
   {
     std::lock_guard<std::mutex> lock(mutex_);
     const bool dropped = slam_->counters().dropped > 0;
-    stat.summary(dropped ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
-                 dropped ? "scans dropped (no base -> laser tf)" : "ok");
+    const std::string trouble = slam_->trouble();
+    if (!trouble.empty())
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, trouble);
+    else
+      stat.summary(dropped ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
+                   dropped ? "scans dropped (no base -> laser tf)" : "ok");
     for (const auto& [key, value] : slam_->diagnostics()) stat.add(key, value);
   }
 

@@ -100,7 +100,18 @@ ClosureVerdict ClosureGate::outvoteChain(const LoopMatch& match, std::size_t att
   refused_.push_back({match.edge, attempt, match.shape.degenerate});
   std::vector<PoseGraphEdge> edges;
   for (const auto& r : refused_) edges.push_back(r.edge);
-  const std::vector<std::size_t> group = consistentGroup(graph, edges, edges.size() - 1, consistency_gate_);
+  const std::vector<std::size_t> agreeing = consistentGroup(graph, edges, edges.size() - 1, consistency_gate_);
+  // Votes count when independent: closures against overlapping submaps share their errors (a match slid
+  // along one corridor agrees with its neighbours' slide), so only one per submap span of older keyframes.
+  std::vector<std::size_t> group;
+  for (std::size_t g : agreeing)
+    if (std::all_of(group.begin(), group.end(),
+                    [&](std::size_t h)
+                    {
+                      const std::size_t a = edges[g].from, b = edges[h].from;
+                      return (a > b ? a - b : b - a) > 2 * params_.loop_submap_keyframes;
+                    }))
+      group.push_back(g);
   if (distinctKeyframes(edges, group) < params_.loop_consensus) return {};
   // Each under a loss as wide as its own disagreement with the estimate, as an unambiguous closure goes in:
   // the correction they agree on is the drift they are for.

@@ -1,6 +1,7 @@
 #include "line_map_merging/slam/laser_slam.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -18,7 +19,8 @@ std::string closureSummary(const SlamCounters& c)
   out << c.loops_accepted << " closures of " << c.loop_attempts
       << " attempts (refused: " << c.loops_rejected_score << " score, " << c.loops_ambiguous << " ambiguous, "
       << c.loops_inconsistent << " inconsistent, " << c.loops_rejected_graph << " graph, " << c.loops_pending
-      << " uncorroborated)";
+      << " uncorroborated; " << c.loops_by_consensus << " by consensus; most inconsistent in a row "
+      << c.most_inconsistent_in_a_row << ")";
   return out.str();
 }
 
@@ -40,6 +42,7 @@ void LaserSlam::reset()
   graph_.clear();
   keyframes_.clear();
   scans_.clear();
+  recent_disagreements_.clear();
   time_jumps_.reset();
 }
 
@@ -107,15 +110,8 @@ void LaserSlam::addKeyframe(LocalScanResult& scan, std::size_t scan_index)
     e.measurement = relative;
     e.sigma_xy = chain_matched ? params_.edge_sigma_xy : params_.odometry_sigma_xy;
     e.sigma_theta = chain_matched ? params_.edge_sigma_theta : params_.odometry_sigma_theta;
-    if (chain_matched && scan.odometry_motion)
-    {
-      // As certain as the match, and no more certain than its disagreement with the odometry, an independent
-      // measurement of the same motion: where the front end slipped, the chain is no longer stiff, so the
-      // closures across the slip put their correction there instead of bending the whole chain.
-      const Pose2 disagreement = scan.odometry_motion->inverse() * relative;
-      e.sigma_xy = std::hypot(e.sigma_xy, std::hypot(disagreement.x, disagreement.y));
-      e.sigma_theta = std::hypot(e.sigma_theta, linemap::normalizeAngle(disagreement.theta));
-    }
+    if (chain_matched && scan.odometry_motion && params_.edge_odometry_disagreement)
+      widenBySlip(scan.odometry_motion->inverse() * relative, e);
     if (chain_matched)
     {
       // What the keyframe's match determined: along a direction it left to the odometry, the edge is as
@@ -134,6 +130,40 @@ void LaserSlam::addKeyframe(LocalScanResult& scan, std::size_t scan_index)
     closeLoops();
     counters_.total_loop_ms += linemap::millisecondsSince(start);
   }
+}
+
+void LaserSlam::widenBySlip(const Pose2& disagreement, PoseGraphEdge& e)
+{
+  // The match against the odometry over the same step: two independent measurements of one motion. Their
+  // usual disagreement is the odometry's noise (robust scale of the recent ones: the odometry's quality
+  // is the run's, not a constant); one far beyond it is a slip of one of the two. The edge is then no
+  // more certain than they agree, so closures across a slip of the front end put their correction there
+  // instead of bending the whole chain (and a slip of the odometry costs little: closures hold the rest).
+  const double shift = std::hypot(disagreement.x, disagreement.y);
+  const double turn = std::fabs(linemap::normalizeAngle(disagreement.theta));
+  constexpr std::size_t kHistory = 200, kEnough = 20;
+  constexpr double kOutlier = 6.0;  // robust standard deviations: no noise of a working odometry reaches it
+  if (recent_disagreements_.size() >= kEnough)
+  {
+    std::vector<double> shifts, turns;
+    for (const auto& [s, t] : recent_disagreements_)
+    {
+      shifts.push_back(s);
+      turns.push_back(t);
+    }
+    // 1.4826 x the median absolute value: the standard deviation of a normal distribution.
+    const double shift_scale = 1.4826 * linemap::median(shifts) + e.sigma_xy;
+    const double turn_scale = 1.4826 * linemap::median(turns) + e.sigma_theta;
+    if (shift > kOutlier * shift_scale || turn > kOutlier * turn_scale)
+    {
+      e.sigma_xy = std::hypot(e.sigma_xy, shift);
+      e.sigma_theta = std::hypot(e.sigma_theta, turn);
+      ++counters_.suspect_edges;
+      return;  // an outlier does not widen the noise it is judged by
+    }
+  }
+  recent_disagreements_.push_back({shift, turn});
+  if (recent_disagreements_.size() > kHistory) recent_disagreements_.pop_front();
 }
 
 void LaserSlam::closeLoops()
@@ -180,6 +210,45 @@ Pose2 LaserSlam::currentPose() const
   return graph_.node(k) * (keyframes_[k].local.inverse() * last_local);
 }
 
+double LaserSlam::unclosedShare() const
+{
+  if (keyframes_.size() < 2 || keyframes_.back().path <= 0.0) return 0.0;
+  // Keyframe intervals spanned by a closure, merged.
+  std::vector<std::pair<std::size_t, std::size_t>> spans;
+  for (const auto& e : graph_.edges())
+    if (e.loop) spans.push_back({std::min(e.from, e.to), std::max(e.from, e.to)});
+  std::sort(spans.begin(), spans.end());
+  double closed = 0.0;
+  std::size_t start = 0, end = 0;
+  bool open = false;
+  auto flush = [&] { closed += keyframes_[end].path - keyframes_[start].path; };
+  for (const auto& [a, b] : spans)
+  {
+    if (open && a <= end)
+      end = std::max(end, b);
+    else
+    {
+      if (open) flush();
+      start = a;
+      end = b;
+      open = true;
+    }
+  }
+  if (open) flush();
+  return std::clamp(1.0 - closed / keyframes_.back().path, 0.0, 1.0);
+}
+
+std::string LaserSlam::trouble() const
+{
+  // More refusals in a row than a consensus needs several times over: the closures keep telling the
+  // estimate it is wrong and nothing has outvoted it.
+  const std::size_t many = std::max<std::size_t>(10, 3 * params_.loop_consensus);
+  if (counters_.inconsistent_in_a_row < many) return {};
+  return std::to_string(counters_.inconsistent_in_a_row) +
+         " loop closures in a row refused as inconsistent with the trajectory: the front end may have "
+         "slipped";
+}
+
 std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
 {
   const auto& c = counters_;
@@ -212,6 +281,13 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
           {"matches leaving a direction to the odometry", n(c.degenerate_matches)},
           {"loop closures rejected (score)", n(c.loops_rejected_score)},
           {"loop closures rejected (graph)", n(c.loops_rejected_graph)},
+          {"loop closures accepted by consensus (outvoting the chain)", n(c.loops_by_consensus)},
+          {"loop closures refused as inconsistent in a row (now)", n(c.inconsistent_in_a_row)},
+          {"loop closures refused as inconsistent in a row (most)", n(c.most_inconsistent_in_a_row)},
+          {"front-end matches at the search window's border", n(c.border_matches)},
+          {"chain edges widened (disagreeing with the odometry)", n(c.suspect_edges)},
+          {"share of the path no closure spans [%]",
+           std::to_string(static_cast<int>(std::lround(100.0 * unclosedShare())))},
           {"optimizations", n(c.optimizations)},
           {"last optimization [ms]", opt.str()},
           {"total optimization [ms]", total.str()},

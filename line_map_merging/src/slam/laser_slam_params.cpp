@@ -60,6 +60,7 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.edge_sigma_theta = positiveParam(p, "graph/edge_sigma_theta", s.edge_sigma_theta);
   s.odometry_sigma_xy = positiveParam(p, "graph/odometry_sigma_xy", s.odometry_sigma_xy);
   s.odometry_sigma_theta = positiveParam(p, "graph/odometry_sigma_theta", s.odometry_sigma_theta);
+  s.edge_odometry_disagreement = p.getBool("graph/edge_odometry_disagreement", s.edge_odometry_disagreement);
   s.loop_sigma_xy = positiveParam(p, "graph/loop_sigma_xy", s.loop_sigma_xy);
   s.loop_sigma_theta = positiveParam(p, "graph/loop_sigma_theta", s.loop_sigma_theta);
   s.loop_loss_scale = positiveParam(p, "graph/loop_loss_scale", s.loop_loss_scale);

@@ -20,6 +20,8 @@ struct SlamRecordingResult
   std::vector<CorrectedKeyframe> keyframes;
   /// Every loop-closure attempt that got as far as a match; `from` and `to` index `keyframes`.
   std::vector<line_map_merging::ClosureAttempt> closures;
+  /// The loop-closure edges in the final graph; `from` and `to` index `keyframes`.
+  std::vector<line_map_merging::PoseGraphEdge> loop_edges;
   line_map_merging::SlamCounters counters;
   double seconds = 0.0;      ///< front and back end, the whole recording (wall time)
   double cpu_seconds = 0.0;  ///< the same in CPU time of this thread

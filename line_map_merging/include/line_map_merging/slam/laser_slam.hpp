@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <deque>
 #include <string>
 #include <utility>
 #include <vector>
@@ -65,6 +66,12 @@ class LaserSlam
   const SlamCounters& counters() const { return counters_; }
   const LaserSlamParams& params() const { return params_; }
   std::vector<std::pair<std::string, std::string>> diagnostics() const;
+  /// The share of the keyframes' path that no accepted closure spans (a stretch between a closure's two
+  /// keyframes is held by it): where a slip would go unseen. 0 before any path.
+  double unclosedShare() const;
+  /// A sentence on why the run may be going wrong (many closures in a row refused as inconsistent: the
+  /// estimate and the scans disagree), or empty: for a WARN on /diagnostics without ground truth.
+  std::string trouble() const;
   /// Fault injection (tests, the robustness benchmark): the front end slips by `slip` before the next
   /// scan (LocalTrajectoryBuilder::injectSlip); the graph's closures must repair it.
   void injectFrontEndSlip(const linemap::Pose2& slip) { front_end_.injectSlip(slip); }
@@ -98,6 +105,12 @@ class LaserSlam
   /// The translation shape of the last scan's front-end match in the local frame (identity: no match or
   /// no odometry to leave a direction to).
   Eigen::Matrix2d last_match_weights_ = Eigen::Matrix2d::Identity();
+  /// The chain edge of a keyframe, its sigmas widened when its match disagrees with the odometry far more
+  /// than the run's matches usually do (a slip).
+  void widenBySlip(const linemap::Pose2& disagreement, PoseGraphEdge& e);
+  /// The recent chain edges' disagreements with the odometry (shift, turn): the odometry's own noise as
+  /// this run sees it.
+  std::deque<std::pair<double, double>> recent_disagreements_;
   bool keyframe_added_ = false, graph_optimized_ = false;
   SlamCounters counters_;
 };

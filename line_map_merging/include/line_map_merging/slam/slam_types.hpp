@@ -42,6 +42,8 @@ struct SlamCounters
   /// Trouble signs: closures refused as inconsistent since the last accepted one (and the longest such
   /// run), front-end matches whose best heading lay on the search window's border.
   std::size_t inconsistent_in_a_row = 0, most_inconsistent_in_a_row = 0, border_matches = 0;
+  /// Chain edges whose match disagreed with the odometry beyond its uncertainty (loosened).
+  std::size_t suspect_edges = 0;
   double last_optimization_ms = 0.0, total_optimization_ms = 0.0, last_match_ms = 0.0, total_loop_ms = 0.0;
 };
 
