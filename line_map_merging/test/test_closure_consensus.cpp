@@ -10,6 +10,7 @@
 
 #include "line_map_merging/slam/closure_consensus.hpp"
 #include "line_map_merging/slam/relative_uncertainty.hpp"
+#include "slipped_chain.hpp"
 
 using line_map_merging::compose;
 using line_map_merging::consistentGroup;
@@ -73,36 +74,16 @@ PoseGraphEdge edge(std::size_t from, std::size_t to, const Pose2& z, double sxy,
   return e;
 }
 
-/// The robot's true poses: 40 steps of 0.5 m along x, then back 40 steps along y = 1 (heading pi).
-std::vector<Pose2> truePath()
-{
-  std::vector<Pose2> t;
-  for (int i = 0; i < 40; ++i) t.push_back({0.5 * i, 0.0, 0.0});
-  for (int i = 0; i < 40; ++i) t.push_back({19.5 - 0.5 * i, 1.0, linemap::kPi});
-  return t;
-}
-
-/// A chain graph of the true path's relative poses, except that the edge into node 20 slipped by
-/// `slip`; the nodes at the chain's (slipped) estimate.
+/// The chain of the out-and-back drive, its edge into node 20 slipped by `slip`.
 PoseGraph slippedChain(const Pose2& slip)
 {
-  const auto truth = truePath();
-  PoseGraph g;
-  g.addNode(truth[0]);
-  for (std::size_t i = 1; i < truth.size(); ++i)
-  {
-    Pose2 z = truth[i - 1].inverse() * truth[i];
-    if (i == 20) z = z * slip;
-    g.addNode(g.node(i - 1) * z);
-    g.addEdge(edge(i - 1, i, z, kSigmaXy, kSigmaTheta, false));
-  }
-  return g;
+  return slipped_chain::slippedChain(20, slip, kSigmaXy, kSigmaTheta);
 }
 
 /// A closure from node j to k measuring their true relative pose composed with `error`.
 PoseGraphEdge trueClosure(std::size_t j, std::size_t k, const Pose2& error = {})
 {
-  const auto truth = truePath();
+  const auto truth = slipped_chain::outAndBack();
   return edge(j, k, truth[j].inverse() * truth[k] * error, 0.05, 0.01, true);
 }
 

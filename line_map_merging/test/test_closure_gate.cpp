@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "line_map_merging/slam/closure_gate.hpp"
+#include "slipped_chain.hpp"
 
 using line_map_merging::ClosureGate;
 using line_map_merging::ClosureOutcome;
@@ -140,40 +141,18 @@ TEST(ClosureGate, RefusesPoorAndAmbiguousMatchesBeforeTheGraph)
 
 namespace
 {
-/// Out 40 nodes 0.5 m apart along x, back 40 along y = 1 (node 79 - i beside node i); the chain's edge into
-/// node 35 slipped by 0.3 m and 5 degrees, the rest exact.
-std::vector<Pose2> outAndBack()
-{
-  std::vector<Pose2> t;
-  for (int i = 0; i < 40; ++i) t.push_back({0.5 * i, 0.0, 0.0});
-  for (int i = 0; i < 40; ++i) t.push_back({19.5 - 0.5 * i, 1.0, linemap::kPi});
-  return t;
-}
-
+/// The out-and-back drive's chain, its edge into node 35 slipped by 0.3 m and 5 degrees.
 PoseGraph slippedChain(const LaserSlamParams& p)
 {
-  const auto truth = outAndBack();
-  PoseGraph g(line_map_merging::PoseGraphParams{p.loop_loss_scale, 50});
-  g.addNode(truth[0]);
-  for (std::size_t i = 1; i < truth.size(); ++i)
-  {
-    PoseGraphEdge e;
-    e.from = i - 1;
-    e.to = i;
-    e.measurement = truth[i - 1].inverse() * truth[i];
-    if (i == 35) e.measurement = e.measurement * Pose2(0.1, 0.28, 5.0 * linemap::kPi / 180.0);
-    e.sigma_xy = p.edge_sigma_xy;
-    e.sigma_theta = p.edge_sigma_theta;
-    g.addNode(g.node(i - 1) * e.measurement);
-    g.addEdge(e);
-  }
-  return g;
+  return slipped_chain::slippedChain(35, Pose2(0.1, 0.28, 5.0 * linemap::kPi / 180.0), p.edge_sigma_xy,
+                                     p.edge_sigma_theta,
+                                     line_map_merging::PoseGraphParams{p.loop_loss_scale, 50});
 }
 
 /// A closure j -> k measuring the true relative pose composed with `error`.
 LoopMatch trueClosure(std::size_t j, std::size_t k, const LaserSlamParams& p, const Pose2& error = {})
 {
-  const auto truth = outAndBack();
+  const auto truth = slipped_chain::outAndBack();
   LoopMatch m = closure(truth[j].inverse() * truth[k] * error, p);
   m.from = m.edge.from = j;
   m.to = m.edge.to = k;
@@ -188,7 +167,7 @@ TEST(ClosureGate, IndependentClosuresAgreeingWithEachOtherOutvoteTheChain)
 {
   LaserSlamParams p;
   p.loop_consensus_keyframes = 30;
-  const auto truth = outAndBack();
+  const auto truth = slipped_chain::outAndBack();
   for (const std::size_t consensus : {std::size_t{0}, std::size_t{3}})
   {
     p.loop_consensus = consensus;
