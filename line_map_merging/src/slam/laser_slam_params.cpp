@@ -73,7 +73,11 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.loop_max_angle = positiveParam(p, "loop/max_angle", s.loop_max_angle);
   s.loop_resolution = positiveParam(p, "loop/resolution", s.loop_resolution);
   s.loop_angular_step = positiveParam(p, "loop/angular_step", s.loop_angular_step);
-  s.loop_submap_keyframes = countParam(p, "loop/submap_keyframes", s.loop_submap_keyframes, 0);
+  if (p.has("loop/submap_keyframes"))
+    throw linemap::ParameterError(
+        "parameter 'loop/submap_keyframes' is now 'loop/submap_path' (metres of path on "
+        "each side of the candidate; 1.2 = the former 6 keyframes at 0.2 m)");
+  s.loop_submap_path = p.getNonNegative("loop/submap_path", s.loop_submap_path);
   s.loop_candidates = countParam(p, "loop/candidates", s.loop_candidates, 0);
   s.loop_every = countParam(p, "loop/every", s.loop_every, 1);
   s.loop_min_score = p.getDouble("loop/min_score", s.loop_min_score);

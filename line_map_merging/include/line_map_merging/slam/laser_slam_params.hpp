@@ -60,19 +60,19 @@ struct LaserSlamParams
   /// injected slips and makes others worse (README, known limits).
   bool edge_odometry_disagreement = false;
   double loop_sigma_xy = 0.05, loop_sigma_theta = 0.01;
-  double loop_loss_scale = 1.0;           ///< Cauchy scale, in standard deviations
-  double loop_min_path = 5.0;             ///< [m] path between a keyframe and a candidate
-  double loop_radius = 0.6;               ///< [m] search radius just after a closure
-  double loop_radius_growth = 0.05;       ///< [m per m of path since the last closure]
-  double loop_max_radius = 3.0;           ///< [m]
-  double loop_angle = 0.15;               ///< [rad]
-  double loop_angle_growth = 0.01;        ///< [rad per m]
-  double loop_max_angle = 0.5;            ///< [rad]
-  double loop_resolution = 0.1;           ///< [m] coarse field of the wide search
-  double loop_angular_step = 0.015;       ///< [rad]
-  std::size_t loop_submap_keyframes = 6;  ///< on each side of the candidate
-  std::size_t loop_candidates = 2;        ///< submaps tried per keyframe
-  std::size_t loop_every = 1;             ///< keyframes between attempts
+  double loop_loss_scale = 1.0;      ///< Cauchy scale, in standard deviations
+  double loop_min_path = 5.0;        ///< [m] path between a keyframe and a candidate
+  double loop_radius = 0.6;          ///< [m] search radius just after a closure
+  double loop_radius_growth = 0.05;  ///< [m per m of path since the last closure]
+  double loop_max_radius = 3.0;      ///< [m]
+  double loop_angle = 0.15;          ///< [rad]
+  double loop_angle_growth = 0.01;   ///< [rad per m]
+  double loop_max_angle = 0.5;       ///< [rad]
+  double loop_resolution = 0.1;      ///< [m] coarse field of the wide search
+  double loop_angular_step = 0.015;  ///< [rad]
+  double loop_submap_path = 1.2;     ///< [m] of path on each side of the candidate: its submap
+  std::size_t loop_candidates = 2;   ///< submaps tried per keyframe
+  std::size_t loop_every = 1;        ///< keyframes between attempts
   double loop_min_score = 0.55;
   /// A closure whose coarse search finds another pose at least ambiguity_distance away scoring at least
   /// ambiguity_ratio of the best is refused (a corridor seen from inside); 0 / ratio > 1: no check.
