@@ -97,7 +97,7 @@ ClosureVerdict ClosureGate::outvoteChain(const LoopMatch& match, std::size_t att
                                 [&](const RefusedClosure& r)
                                 { return r.edge.to + params_.loop_consensus_keyframes < k; }),
                  refused_.end());
-  refused_.push_back({match.edge, attempt, match.shape.degenerate, match.from_path});
+  refused_.push_back({match.edge, attempt, match.shape.degenerate});
   std::vector<PoseGraphEdge> edges;
   for (const auto& r : refused_) edges.push_back(r.edge);
   const std::vector<std::size_t> agreeing =
@@ -107,9 +107,10 @@ ClosureVerdict ClosureGate::outvoteChain(const LoopMatch& match, std::size_t att
   std::vector<std::size_t> group;
   for (std::size_t g : agreeing)
     if (std::all_of(group.begin(), group.end(),
-                    [&](std::size_t h) {
-                      return std::fabs(refused_[g].from_path - refused_[h].from_path) >
-                             2.0 * params_.loop_submap_path;
+                    [&](std::size_t h)
+                    {
+                      const std::size_t a = edges[g].from, b = edges[h].from;
+                      return (a > b ? a - b : b - a) > 2 * params_.submapKeyframes();
                     }))
       group.push_back(g);
   if (distinctKeyframes(edges, group) < params_.loop_consensus) return {};

@@ -47,7 +47,6 @@ LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, c
   LoopMatch m;
   m.from = j;
   m.to = k;
-  m.from_path = keyframes[j].path;
   const Pose2 guess = graph.node(j).inverse() * graph.node(k);
   const auto found = matchLoop(keyframes, graph, j, k, guess, search.radius, search.angle);
   if (!found) return m;
@@ -64,18 +63,14 @@ std::optional<std::pair<MatchResult, double>> ConstraintBuilder::matchLoop(
 {
   // Submap: the candidate and its neighbours in the candidate's frame, by their optimised poses.
   const Pose2 inv = graph.node(candidate).inverse();
-  // The neighbours within loop_submap_path of path either side (a span of path, not a count: the same
-  // stretch of building whatever the keyframe spacing; turning on the spot adds keyframes, not path).
-  const double centre = keyframes[candidate].path;
-  std::size_t lo = candidate, hi = candidate;
-  while (lo > 0 && centre - keyframes[lo - 1].path <= params_.loop_submap_path) --lo;
-  while (hi + 1 < keyframes.size() && keyframes[hi + 1].path - centre <= params_.loop_submap_path) ++hi;
+  const std::size_t s = params_.submapKeyframes();
+  const std::size_t lo = candidate >= s ? candidate - s : 0;
   // Only submap points within reach of the scan somewhere in the search window (its points lie within
   // max_range of its pose, a field value depends on points a few sigma away): farther ones cannot change a
   // score and would only widen the fields — without bound where the keyframes of a submap lie far apart.
   const double reach = params_.max_range + radius + 1.0;
   std::vector<Vec2> points;
-  for (std::size_t i = lo; i <= hi; ++i)
+  for (std::size_t i = lo; i <= candidate + s && i < keyframes.size(); ++i)
   {
     if (keyframes[current].path - keyframes[i].path < 0.5 * params_.loop_min_path)
       continue;  // too recent: part of the chain being checked
@@ -137,8 +132,7 @@ std::vector<std::size_t> ConstraintBuilder::loopCandidates(const std::vector<Sla
   {
     if (chosen.size() >= params_.loop_candidates) break;
     bool overlaps = false;
-    for (std::size_t c : chosen)
-      overlaps |= std::fabs(keyframes[j].path - keyframes[c].path) <= params_.loop_submap_path;
+    for (std::size_t c : chosen) overlaps |= (j > c ? j - c : c - j) <= params_.submapKeyframes();
     if (!overlaps) chosen.push_back(j);
   }
   return chosen;

@@ -74,7 +74,6 @@ class ClosureGate
     PoseGraphEdge edge;
     std::size_t attempt;  ///< its entry in attempts_
     bool degenerate;      ///< its match left a direction open
-    double from_path;     ///< [m] the front end's path at its older keyframe
   };
   std::vector<RefusedClosure> refused_;
   std::vector<ClosureAttempt> attempts_;

@@ -32,7 +32,6 @@ struct LoopSearch
 struct LoopMatch
 {
   std::size_t from = 0, to = 0;
-  double from_path = 0.0;  ///< [m] the front end's path at keyframe `from`
   /// The refined match: `to`'s pose in `from`'s frame; nothing when the submap had too few points or
   /// the search found nothing.
   std::optional<MatchResult> match;

@@ -3,6 +3,8 @@
 // (matchShape).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <limits>
 
@@ -70,9 +72,11 @@ struct LaserSlamParams
   double loop_max_angle = 0.5;       ///< [rad]
   double loop_resolution = 0.1;      ///< [m] coarse field of the wide search
   double loop_angular_step = 0.015;  ///< [rad]
-  double loop_submap_path = 1.2;     ///< [m] of path on each side of the candidate: its submap
-  std::size_t loop_candidates = 2;   ///< submaps tried per keyframe
-  std::size_t loop_every = 1;        ///< keyframes between attempts
+  /// [m] a loop candidate's submap: its neighbouring keyframes over this much path on each side, counted as
+  /// keyframes at keyframe_distance (submapKeyframes): the same stretch of building whatever the spacing.
+  double loop_submap_path = 1.2;
+  std::size_t loop_candidates = 2;  ///< submaps tried per keyframe
+  std::size_t loop_every = 1;       ///< keyframes between attempts
   double loop_min_score = 0.55;
   /// A closure whose coarse search finds another pose at least ambiguity_distance away scoring at least
   /// ambiguity_ratio of the best is refused (a corridor seen from inside); 0 / ratio > 1: no check.
@@ -107,6 +111,12 @@ struct LaserSlamParams
   /// A closure the current estimate meets within these is added without optimising at once.
   double loop_consistent_xy = 0.03;     ///< [m]
   double loop_consistent_theta = 0.01;  ///< [rad]
+
+  /// The keyframes on each side of a loop candidate in its submap (at least 1).
+  std::size_t submapKeyframes() const
+  {
+    return static_cast<std::size_t>(std::max(1.0, std::round(loop_submap_path / keyframe_distance)));
+  }
 
   /// Keys as in config/slam.yaml (e.g. "window/linear", "loop/min_score"); throws
   /// linemap::ParameterError naming the key.
