@@ -186,10 +186,16 @@ void parseLaserFields(Fields& f, CarmenScan& s, std::size_t trailer)
   const double beams = s.field_of_view / s.angular_resolution;
   if (static_cast<double>(n) < beams - 0.5 || static_cast<double>(n) > beams + 1.5)
   {
-    const long lo = static_cast<long>(std::ceil(beams - 0.5)),
-               hi = static_cast<long>(std::floor(beams + 1.5));
-    std::string expected = std::to_string(lo);
-    for (long k = lo + 1; k <= hi; ++k) expected += (k == hi ? " or " : ", ") + std::to_string(k);
+    std::string expected;
+    if (beams <= static_cast<double>(kMaxBeams))
+    {
+      const long lo = static_cast<long>(std::ceil(beams - 0.5)),
+                 hi = static_cast<long>(std::floor(beams + 1.5));
+      expected = std::to_string(lo);
+      for (long k = lo + 1; k <= hi; ++k) expected += (k == hi ? " or " : ", ") + std::to_string(k);
+    }
+    else  // no count of beams a log can hold (and none a long can)
+      expected = "about " + std::to_string(beams);
     f.fail("num_readings (field " + std::to_string(f.field()) + ") is " + std::to_string(n) +
            ", but field_of_view " + std::to_string(s.field_of_view) + " at angular_resolution " +
            std::to_string(s.angular_resolution) + " (fields " + fov_field + ", " + res_field + ") holds " +
