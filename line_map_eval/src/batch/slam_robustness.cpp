@@ -63,6 +63,27 @@ void distortOdometry(std::vector<RecordedScan>& scans, double scale, double drif
     scans[i].odom = rebuilt;
   }
 }
+
+/// `recording` with only the scans `keep` marks, its keyframes following their scans.
+FaultyRecording withScansKept(const Recording& recording, const std::vector<bool>& keep)
+{
+  FaultyRecording out;
+  out.recording = recording;
+  out.recording.scans.clear();
+  out.recording.keyframes.clear();
+  std::vector<std::size_t> new_index(keep.size(), static_cast<std::size_t>(-1));
+  for (std::size_t i = 0; i < keep.size(); ++i)
+    if (keep[i])
+    {
+      new_index[i] = out.recording.scans.size();
+      out.recording.scans.push_back(recording.scans[i]);
+      out.original.push_back(i);
+    }
+  for (const auto& kf : recording.keyframes)
+    if (kf.scan_index < keep.size() && keep[kf.scan_index])
+      out.recording.keyframes.push_back({new_index[kf.scan_index], kf.pose});
+  return out;
+}
 }  // namespace
 
 std::string faultName(InputFault fault)
@@ -194,21 +215,7 @@ FaultyRecording withFault(const Recording& recording, InputFault fault, std::uin
     const auto first = static_cast<std::size_t>(share * static_cast<double>(keep.size()));
     for (std::size_t i = 0; i < first && i < keep.size(); ++i) keep[i] = false;
   }
-  std::vector<std::size_t> new_index(keep.size(), static_cast<std::size_t>(-1));
-  scans.clear();
-  out.original.clear();
-  for (std::size_t i = 0; i < keep.size(); ++i)
-    if (keep[i])
-    {
-      new_index[i] = scans.size();
-      scans.push_back(recording.scans[i]);
-      out.original.push_back(i);
-    }
-  out.recording.keyframes.clear();
-  for (const auto& kf : recording.keyframes)
-    if (kf.scan_index < keep.size() && keep[kf.scan_index])
-      out.recording.keyframes.push_back({new_index[kf.scan_index], kf.pose});
-  return out;
+  return withScansKept(recording, keep);
 }
 
 std::vector<Relation> truthRelations(const Recording& recording, double spacing, double loop_distance,

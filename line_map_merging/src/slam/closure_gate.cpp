@@ -102,17 +102,7 @@ ClosureVerdict ClosureGate::outvoteChain(const LoopMatch& match, std::size_t att
   for (const auto& r : refused_) edges.push_back(r.edge);
   const std::vector<std::size_t> agreeing =
       consistentGroup(graph, edges, edges.size() - 1, consistency_gate_);
-  // Votes count when independent: closures against overlapping submaps share their errors (a match slid
-  // along one corridor agrees with its neighbours' slide), so only one per submap span of older keyframes.
-  std::vector<std::size_t> group;
-  for (std::size_t g : agreeing)
-    if (std::all_of(group.begin(), group.end(),
-                    [&](std::size_t h)
-                    {
-                      const std::size_t a = edges[g].from, b = edges[h].from;
-                      return (a > b ? a - b : b - a) > 2 * params_.submapKeyframes();
-                    }))
-      group.push_back(g);
+  const std::vector<std::size_t> group = independentVotes(edges, agreeing);
   if (distinctKeyframes(edges, group) < params_.loop_consensus) return {};
   // Each under a loss as wide as its own disagreement with the estimate, as an unambiguous closure goes in:
   // the correction they agree on is the drift they are for.
@@ -120,11 +110,7 @@ ClosureVerdict ClosureGate::outvoteChain(const LoopMatch& match, std::size_t att
   for (std::size_t g : group)
   {
     const std::size_t edge = graph.addEdge(edges[g]);
-    const double scale = params_.loop_scale_by_disagreement > 0.0
-                             ? params_.loop_scale_by_disagreement * graph.weightedTranslationError(edge) /
-                                   params_.loop_sigma_xy
-                             : 0.0;
-    graph.setLossScale(edge, std::max(params_.loop_loss_scale, scale));
+    graph.setLossScale(edge, disagreementScale(graph.weightedTranslationError(edge)));
     added.push_back(edge);
   }
   const bool kept = optimizeKeeping(graph, added, counters);
@@ -151,6 +137,29 @@ ClosureVerdict ClosureGate::outvoteChain(const LoopMatch& match, std::size_t att
   counters.loops_by_consensus += group.size();
   counters.inconsistent_in_a_row = 0;
   return {true, true};
+}
+
+std::vector<std::size_t> ClosureGate::independentVotes(const std::vector<PoseGraphEdge>& edges,
+                                                       const std::vector<std::size_t>& agreeing) const
+{
+  // Closures against overlapping submaps share their errors (a match slid along one corridor agrees with its
+  // neighbours' slide), so only one per two submap spans of older keyframes counts.
+  std::vector<std::size_t> votes;
+  for (std::size_t g : agreeing)
+    if (std::all_of(votes.begin(), votes.end(),
+                    [&](std::size_t h)
+                    {
+                      const std::size_t a = edges[g].from, b = edges[h].from;
+                      return (a > b ? a - b : b - a) > 2 * params_.submapKeyframes();
+                    }))
+      votes.push_back(g);
+  return votes;
+}
+
+double ClosureGate::disagreementScale(double size) const
+{
+  if (!(params_.loop_scale_by_disagreement > 0.0)) return params_.loop_loss_scale;
+  return std::max(params_.loop_loss_scale, params_.loop_scale_by_disagreement * size / params_.loop_sigma_xy);
 }
 
 bool ClosureGate::consistentWithGraph(const PoseGraph& graph, const PoseGraphEdge& e) const
@@ -192,8 +201,7 @@ bool ClosureGate::admitDisagreeing(PoseGraph& graph, std::size_t j, std::size_t 
     pending_.reset();
   }
   else if (params_.loop_scale_by_disagreement > 0.0)
-    graph.setLossScale(edge, std::max(params_.loop_loss_scale,
-                                      params_.loop_scale_by_disagreement * size / params_.loop_sigma_xy));
+    graph.setLossScale(edge, disagreementScale(size));
   return true;
 }
 

@@ -54,6 +54,13 @@ class ClosureGate
   /// agree with each other, adds them all and optimises (kept or removed as optimizeKeeping decides).
   ClosureVerdict outvoteChain(const LoopMatch& match, std::size_t attempt, PoseGraph& graph,
                               SlamCounters& counters);
+  /// Of the mutually agreeing refused closures `agreeing` (indices into `edges`), those whose older keyframes
+  /// lie more than two submap spans from every one kept before them.
+  std::vector<std::size_t> independentVotes(const std::vector<PoseGraphEdge>& edges,
+                                            const std::vector<std::size_t>& agreeing) const;
+  /// The Cauchy scale of a closure that disagrees with the estimate by `size` (in its own metric): wide
+  /// enough to apply the correction it is for (loop_scale_by_disagreement), never below loop_loss_scale.
+  double disagreementScale(double size) const;
   /// Optimises the graph with the closure edges `added`; when the optimised graph misses one of them
   /// by more than loop_max_error_*, removes them and restores the poses. Whether they stayed.
   bool optimizeKeeping(PoseGraph& graph, std::vector<std::size_t> added, SlamCounters& counters) const;
