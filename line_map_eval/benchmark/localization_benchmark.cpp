@@ -28,18 +28,13 @@
 #include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_eval/datasets/carmen_recording.hpp"
 #include "line_map_eval/datasets/localization_recording.hpp"
+#include "linemap/small_helpers.hpp"
 
 using namespace line_map_eval;
+using linemap::percentile;
 
 namespace
 {
-double percentile(std::vector<double> v, double q)
-{
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
-}
-
 bool near(const Pose2& a, const Pose2& b)
 {
   return std::hypot(a.x - b.x, a.y - b.y) <= 0.3 &&

@@ -26,18 +26,10 @@ using line_map_eval::benchmark::millis;
 using line_map_merging::CaeParams;
 using line_map_merging::CaeRlsm;
 using line_map_merging::Keyframe;
+using linemap::percentile;
 using linemap::Pose2;
 using linemap::Segment2;
 using linemap::Vec2;
-
-double percentile(std::vector<double> v, double q)
-{
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  // Nearest rank: the smallest value with at least q of the samples at or below it.
-  const double rank = std::ceil(q * static_cast<double>(v.size()));
-  return v[static_cast<std::size_t>(std::max(1.0, rank)) - 1];
-}
 
 /// Time of each addKeyframe() [ms], the merger fresh at the start.
 std::vector<double> timeFrames(CaeRlsm& merger, const std::vector<Keyframe>& keyframes)

@@ -40,7 +40,8 @@ void usage(std::ostream& out)
   out << "usage: linemap_batch DATASET [--corrected LOG | --slam [--relations FILE]] [--extractor NAME]\n"
          "                     [--merger NAME]...\n"
          "                     [--param key=value]... [--config FILE]... [--config-dir DIR] [--out DIR]\n"
-         "                     [--every N] [--sensor FILE] [--no-progress] [--no-figures] [--help]\n"
+         "                     [--every N] [--sensor FILE] [--no-progress] [--no-figures] [--time-steps]\n"
+         "                     [--help]\n"
          "\n"
          "DATASET is a raw CARMEN log (with --corrected: its corrected keyframe log), a corrected or\n"
          "pre-registered CARMEN log alone, a world file (config/worlds/*.yaml, simulated in-process) or a\n"
@@ -72,6 +73,8 @@ void usage(std::ostream& out)
          "                    its laser block replaces the world's key by key\n"
          "  --no-progress     no progress bars\n"
          "  --no-figures      write the reports and map files only\n"
+         "  --time-steps      time each step of the mergers that name theirs (CAE-RLSM: OTM-ILSM, map\n"
+         "                    merge, crossings, per keyframe and per adjustment) into the reports\n"
          "  --replay          (a .bag) feed the bag's messages in bag order to the online mapper and\n"
          "                    evaluator the nodelets run (one --merger, default cae); writes "
          "DIR/replay.json\n";
@@ -159,6 +162,8 @@ bool parseArguments(int argc, char** argv, Arguments& a)
       a.options.progress = false;
     else if (arg == "--no-figures")
       a.options.figure_formats = 0;
+    else if (arg == "--time-steps")
+      a.options.time_steps = true;
     else if (arg == "--slam")
       a.slam = true;
     else if (arg == "--replay")

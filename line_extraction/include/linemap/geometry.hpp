@@ -15,6 +15,9 @@ constexpr double kPi = 3.14159265358979323846;
 /// Wraps an angle to (-pi, pi].
 inline double normalizeAngle(double a)
 {
+  // Most angles are in range already; std::remainder is slow (it switches the rounding mode) and
+  // returns them unchanged, so skipping it changes no bit.
+  if (a > -kPi && a <= kPi) return a;
   a = std::remainder(a, 2.0 * kPi);  // [-pi, pi]
   return a <= -kPi ? a + 2.0 * kPi : a;
 }

@@ -1,5 +1,5 @@
-// Small helpers every package needs once: elapsed time, the median, a path's file name and stem, a
-// number from text.
+// Small helpers every package needs once: elapsed time, the median and percentiles, a path's file name and
+// stem, a number from text.
 #pragma once
 
 #include <algorithm>
@@ -29,6 +29,17 @@ inline double median(std::vector<double> values)
   if (values.size() % 2 == 1) return upper;
   const double lower = *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid));
   return 0.5 * (lower + upper);
+}
+
+/// The q-th quantile by nearest rank: the smallest value with at least a share q of the values at or
+/// below it (q = 0.99: the 99th percentile); NaN for no value.
+inline double percentile(std::vector<double> values, double q)
+{
+  if (values.empty()) return std::nan("");
+  const double rank = std::ceil(q * static_cast<double>(values.size()));
+  const std::size_t k = std::min(values.size(), static_cast<std::size_t>(std::max(1.0, rank))) - 1;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
 }
 
 /// The part of `path` after its last '/'.

@@ -394,6 +394,7 @@ MergerHolder runOnline(const BatchSetup& setup, const SharedEvaluation& shared, 
         computeMapQuality(shared.table, run.map_before_adjust, setup.metrics.quality).quality;
     aside_ms += linemap::millisecondsSince(start);
   };
+  holder.mapper->merger().timeSteps(setup.options.time_steps);
   const auto start = Clock::now();
   run.trajectories = driveOnline(*holder.mapper, rec, setup.schedule, setup.segmentSource(), hooks);
   run.total_ms = linemap::millisecondsSince(start) - aside_ms;
@@ -403,6 +404,9 @@ MergerHolder runOnline(const BatchSetup& setup, const SharedEvaluation& shared, 
   run.rebuilds = counters.rebuilds;
   run.adjust_ms = timed.adjustTime();
   run.per_frame_ms = linemap::median(timed.addTimes());
+  run.per_frame_p99_ms = linemap::percentile(timed.addTimes(), 0.99);
+  for (const double ms : timed.addTimes()) run.keyframe_ms += ms;
+  run.step_ms = timed.stepTimes();
   const auto& stamps = holder.mapper->keyframeStamps();
   bool same = stamps.size() == setup.frames.size();
   for (std::size_t k = 0; same && k < stamps.size(); ++k)

@@ -185,8 +185,10 @@ void emitCoverage(YAML::Emitter& out, const MergerRun& r)
 void emitRunning(YAML::Emitter& out, const MergerRun& r)
 {
   measure(out, "per_frame_ms", r.per_frame_ms, 4);
+  measure(out, "per_frame_p99_ms", r.per_frame_p99_ms, 4);
   measure(out, "total_ms", r.total_ms);
   measure(out, "adjust_ms", r.adjust_ms);
+  measure(out, "keyframe_ms", r.keyframe_ms);
   field(out, "trajectories", r.trajectories);
   field(out, "adjustments", r.adjustments);
   field(out, "rebuilds", r.rebuilds);
@@ -195,6 +197,10 @@ void emitRunning(YAML::Emitter& out, const MergerRun& r)
   field(out, "provenance", r.provenance);
   measure(out, "quality_before_adjust_pct",
           r.quality_before_adjust ? *r.quality_before_adjust : std::nan(""));
+  if (r.step_ms.empty()) return;
+  out << YAML::Key << "step_ms" << YAML::Value << YAML::BeginMap;
+  for (const auto& [step, ms] : r.step_ms) measure(out, step.c_str(), ms);
+  out << YAML::EndMap;
 }
 
 void emitGroundTruth(YAML::Emitter& out, const GroundTruthResult& g)
@@ -396,6 +402,12 @@ void mergerNote(std::ostringstream& md, const MergerRun& r)
      << fixed(r.evaluation_ms, 1) << " ms";
   if (r.adjustments) md << "; " << r.adjustments << " adjustments, " << fixed(r.adjust_ms, 1) << " ms";
   if (r.rebuilds) md << "; rebuilt from the nodes of the first trajectory";
+  if (!r.step_ms.empty())
+  {
+    md << "; steps";
+    for (const auto& [step, ms] : r.step_ms)
+      md << (&step == &r.step_ms.front().first ? " " : ", ") << step << " " << fixed(ms, 1) << " ms";
+  }
   if (r.quality_before_adjust)
     md << "; quality before the last trajectory " << fixed(*r.quality_before_adjust, 2) << " %";
   if (r.ground_truth) groundTruthNote(md, *r.ground_truth);

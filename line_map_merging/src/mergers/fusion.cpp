@@ -67,9 +67,10 @@ double horizontalOverlap(const Segment2& map, const Segment2& scan)
 
 bool meetsFusionConditions(const Segment2& map, const Segment2& scan, const FusionParams& params)
 {
-  return headingDeviation(map, scan) <= params.max_angle &&
+  // The cheapest test first (the heading costs two atan2); the outcome does not depend on the order.
+  return horizontalOverlap(map, scan) >= params.min_overlap &&
          verticalDistance(map, scan) <= params.max_distance &&
-         horizontalOverlap(map, scan) >= params.min_overlap;
+         headingDeviation(map, scan) <= params.max_angle;
 }
 
 bool meetEachOther(const Segment2& a, const Segment2& b, const FusionParams& params)

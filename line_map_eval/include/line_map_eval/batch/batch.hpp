@@ -88,6 +88,9 @@ struct BatchOptions
   /// Where figures and map files go (DIR/<merger>/...); empty: nothing is written.
   std::string out_dir;
   unsigned figure_formats = 7u;  ///< FigureFormat bits; 0: no figures (map files and reports only)
+  /// Time the mergers' own steps (Merger::stepTimes) into MergerRun::step_ms; adds a little to their
+  /// time, so the speed figures come from runs without it.
+  bool time_steps = false;
 };
 
 struct LengthStatistics
@@ -121,10 +124,13 @@ struct MergerRun
   std::size_t rebuilds = 0;      ///< maps made again from the nodes of the first trajectory
   std::optional<double> quality_before_adjust;  ///< [%] map just before the last trajectory
   std::optional<GroundTruthResult> ground_truth;
-  double per_frame_ms = std::numeric_limits<double>::quiet_NaN();  ///< median addKeyframe, online only
+  double per_frame_ms = std::numeric_limits<double>::quiet_NaN();      ///< median addKeyframe, online only
+  double per_frame_p99_ms = std::numeric_limits<double>::quiet_NaN();  ///< its 99th percentile
   double total_ms = 0.0;       ///< every addKeyframe and adjust, and the final map() call
   double adjust_ms = 0.0;      ///< of which adjust()
+  double keyframe_ms = 0.0;    ///< of which addKeyframe() (the rest: the online mapper's own work)
   double evaluation_ms = 0.0;  ///< every metric of this map (computeMapMetrics; table excluded)
+  std::vector<line_map_merging::StepTime> step_ms;  ///< with BatchOptions::time_steps: the merger's steps
   std::vector<linemap::Segment2> final_map;
   std::vector<linemap::Segment2> map_before_adjust;  ///< the same map (loop closure runs, online mergers)
   std::vector<std::string> files;                    ///< figures and map file written

@@ -3,7 +3,8 @@
 // One class, its parts in src/mergers/cae_rlsm/, a file per part:
 //   cae_rlsm.cpp             parameters, addKeyframe, read access to the tree
 //   otm_ilsm.cpp             OTM-ILSM: candidate search (R-tree) and insertion of a segment
-//   map_merge.cpp            map-level merge (map segment against map segment) and regroup
+//   map_merge.cpp            map-level merge (map segment against map segment)
+//   regroup.cpp              regroup on adjustment, resumed from a checkpoint where nothing moved
 //   crossing_resolution.cpp  no two map segments cross (bent walls into chains, T junctions)
 //   mp_gma.cpp               MP-GMA: adjust() to new keyframe poses, the consistency pass
 //   map_file.cpp             save() and load(): the map file (YAML)
@@ -53,6 +54,10 @@ struct CaeParams
   /// leaf in arrival order under the new poses, instead of re-fusing each map segment's own leaves;
   /// ids carry over by the leaves. Groups formed on drifted poses otherwise stay as formed.
   bool regroup_on_adjust = true;
+  /// With regroup_on_adjust: when the keyframes the last regroup covered kept their poses bit for bit,
+  /// resume from the state it reached instead of starting again (regroup.cpp). The map is the same
+  /// either way; off = always from scratch.
+  bool incremental_regroup = true;
   /// Crossing resolution (crossing_resolution.cpp): no two map segments may cross (both running on past
   /// their intersection by more than crossing_overhang). A pair crossing at up to crossing_chain_angle
   /// (same facing side) is one bent wall: its originals are split at the bend, each side re-fused
@@ -69,8 +74,8 @@ struct CaeParams
   double single_view_min_length = 0.6;
 
   /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge",
-  /// "absorb_contained", "regroup_on_adjust", "resolve_crossings", "crossing_overhang",
-  /// "crossing_chain_angle", "single_view_min_length".
+  /// "absorb_contained", "regroup_on_adjust", "incremental_regroup", "resolve_crossings",
+  /// "crossing_overhang", "crossing_chain_angle", "single_view_min_length".
   static CaeParams fromParams(const linemap::ParamSet& params);
   /// Throws linemap::ParameterError naming the key for an out-of-range value.
   void validate() const;
@@ -100,6 +105,25 @@ class CaeRlsm : public Merger
 
   const CaeParams& params() const { return params_; }
   std::uint64_t nextId() const { return next_id_; }
+
+  /// The steps of a keyframe (OTM-ILSM, map merge, crossing resolution) and of an adjustment.
+  enum Step : std::size_t
+  {
+    kKeyframeOtm,
+    kKeyframeMapMerge,
+    kKeyframeCrossings,
+    kAdjustPoses,
+    kAdjustOtm,  ///< regroup: the keyframe steps again, counted apart
+    kAdjustMapMerge,
+    kAdjustCrossings,
+    kAdjustIds,     ///< regroup: ids carried over, index rebuilt
+    kAdjustRefuse,  ///< without regroup: re-fusing, the consistency pass, crossings
+    kStepCount
+  };
+  /// Regroups that resumed from the last one's state (incremental_regroup) since construction.
+  std::size_t resumedRegroups() const { return checkpoint_.resumed; }
+  void timeSteps(bool on) override { steps_.enable(on); }
+  std::vector<StepTime> stepTimes() const override { return steps_.totals(); }
 
  private:
   using Point = boost::geometry::model::point<double, 2, boost::geometry::cs::cartesian>;
@@ -140,6 +164,9 @@ class CaeRlsm : public Merger
   /// id survives and takes the others' leaves. Returns how many map segments were merged away.
   /// `changed` (optional) receives the ids of the surviving segments that a merge changed.
   std::size_t mergeMapSegments(std::set<std::uint64_t> pending, std::set<std::uint64_t>* changed = nullptr);
+  /// After a keyframe's originals are in (addKeyframe, regroup): the map merge and crossing resolution
+  /// of what they touched. `offset` is the step of kKeyframeOtm to count the steps at.
+  void finishKeyframe(const std::set<std::uint64_t>& touched, std::size_t offset);
   /// Crossing resolution (crossing_resolution.cpp): resolves every crossing of the pending map segments,
   /// re-queueing what it changes, until none of them crosses another. Returns how many pairs it resolved.
   std::size_t resolveCrossings(std::set<std::uint64_t> pending);
@@ -152,9 +179,11 @@ class CaeRlsm : public Merger
   void splitAtBend(Node& na, Node& nb, const Vec2& x, bool a_before);
   /// Merges map segment `from` into `into` (leaves, re-fused); the caller re-queues `into`.
   void absorbNode(std::uint64_t into, std::uint64_t from);
-  /// Rebuilds the map from the leaves under the current poses (map_merge.cpp); each new map segment
+  /// Rebuilds the map from the leaves under the current poses (regroup.cpp); each new map segment
   /// keeps the smallest old id among its leaves' not taken by a segment before it. Returns the count.
   std::size_t regroup();
+  /// Whether the keyframes the checkpoint covers still have its transforms, bit for bit.
+  bool checkpointStillHolds() const;
   /// After regroup(): the map segments renamed by their leaves' old ids (`old_id` by leaf), fresh ids
   /// from `first_fresh`.
   void keepOldIds(const std::vector<std::uint64_t>& old_id, std::uint64_t first_fresh);
@@ -197,9 +226,23 @@ class CaeRlsm : public Merger
   bool shown(const Node& node) const;
 
   std::unordered_map<std::uint64_t, Node> nodes_;
+  /// The state the last regroup's pass reached, before its segments took their ids back.
+  struct RegroupCheckpoint
+  {
+    bool valid = false;
+    std::vector<Transform> transforms;  ///< of the keyframes it covers (slots 0..size-1)
+    std::uint32_t leaves = 0;           ///< the leaves of those keyframes: 0..leaves-1
+    std::unordered_map<std::uint64_t, Node> nodes;
+    std::uint64_t next_id = 0;
+    std::size_t resumed = 0;
+  };
+  RegroupCheckpoint checkpoint_;
   RTree index_;
   bool index_stale_ = false;  // set by adjust(): rebuilt in one go by the next search
   std::uint64_t next_id_ = 0;
+  StepTimes<kStepCount> steps_{{"keyframe: OTM-ILSM", "keyframe: map merge", "keyframe: crossings",
+                                "adjust: poses", "adjust: OTM-ILSM", "adjust: map merge", "adjust: crossings",
+                                "adjust: ids and index", "adjust: re-fuse"}};
   mutable std::vector<std::uint64_t> candidates_;  // scratch
   mutable std::vector<Entry> hits_;                // scratch
 };

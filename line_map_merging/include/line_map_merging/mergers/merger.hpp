@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "line_map_merging/mergers/step_times.hpp"
 #include "linemap/geometry.hpp"
 #include "linemap/params.hpp"
 
@@ -125,6 +126,12 @@ class Merger
   {
     throw MapFileError(std::string(name()) + ": loading is not supported");
   }
+
+  /// Turns the timing of the merger's own steps on or off; a merger without named steps ignores it.
+  virtual void timeSteps(bool /*on*/) {}
+  /// The time spent in each of its steps while timing was on [ms], in a fixed order; empty when the
+  /// merger has no named steps.
+  virtual std::vector<StepTime> stepTimes() const { return {}; }
 };
 
 /// Creates merger `name` from parameters (shared: "fusion/max_angle", "fusion/max_distance",

@@ -20,6 +20,7 @@ CaeParams CaeParams::fromParams(const linemap::ParamSet& params)
   p.map_merge = params.getBool("map_merge", p.map_merge);
   p.absorb_contained = params.getBool("absorb_contained", p.absorb_contained);
   p.regroup_on_adjust = params.getBool("regroup_on_adjust", p.regroup_on_adjust);
+  p.incremental_regroup = params.getBool("incremental_regroup", p.incremental_regroup);
   p.resolve_crossings = params.getBool("resolve_crossings", p.resolve_crossings);
   p.crossing_overhang = params.getDouble("crossing_overhang", p.crossing_overhang);
   p.crossing_chain_angle = params.getDouble("crossing_chain_angle", p.crossing_chain_angle);
@@ -74,28 +75,41 @@ AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
 
   AddResult result;
   std::set<std::uint64_t> touched;
-  for (const Segment2& local : keyframe.segments)
   {
-    // A finite segment under a huge (finite) pose can still overflow in the map frame.
-    const Segment2 global = local.transformed(p);
-    if (!isValidSegment(local) || !isValidSegment(global))
+    const StepTimes<kStepCount>::Scope timed(steps_, kKeyframeOtm);
+    for (const Segment2& local : keyframe.segments)
     {
-      ++result.rejected;
-      continue;
+      // A finite segment under a huge (finite) pose can still overflow in the map frame.
+      const Segment2 global = local.transformed(p);
+      if (!isValidSegment(local) || !isValidSegment(global))
+      {
+        ++result.rejected;
+        continue;
+      }
+      const auto leaf = static_cast<std::uint32_t>(leaves_.size());
+      leaves_.push_back({slot, local});
+      touched.insert(insertSegment(global, leaf));
+      ++result.merged;
     }
-    const auto leaf = static_cast<std::uint32_t>(leaves_.size());
-    leaves_.push_back({slot, local});
-    touched.insert(insertSegment(global, leaf));
-    ++result.merged;
   }
+  finishKeyframe(touched, kKeyframeOtm);
+  return result;
+}
+
+void CaeRlsm::finishKeyframe(const std::set<std::uint64_t>& touched, std::size_t offset)
+{
   std::set<std::uint64_t> changed;
-  if (params_.map_merge) mergeMapSegments(touched, &changed);
+  if (params_.map_merge)
+  {
+    const StepTimes<kStepCount>::Scope timed(steps_, offset + (kKeyframeMapMerge - kKeyframeOtm));
+    mergeMapSegments(touched, &changed);
+  }
   if (params_.resolve_crossings)
   {
+    const StepTimes<kStepCount>::Scope timed(steps_, offset + (kKeyframeCrossings - kKeyframeOtm));
     changed.insert(touched.begin(), touched.end());
     resolveCrossings(std::move(changed));
   }
-  return result;
 }
 
 std::vector<MapSegment> CaeRlsm::map() const
@@ -152,6 +166,8 @@ void CaeRlsm::reset()
   index_.clear();
   index_stale_ = false;
   next_id_ = 0;
+  checkpoint_ = RegroupCheckpoint();
+  steps_.clear();
 }
 
 }  // namespace line_map_merging

@@ -206,12 +206,18 @@ AdjustResult CaeRlsm::adjust(const std::vector<std::pair<std::uint64_t, linemap:
       throw std::invalid_argument("adjust: pose of keyframe " + std::to_string(index) +
                                   " is not finite or lies beyond " + std::to_string(kMaxCoordinate) + " m");
   tbb::task_arena arena(params_.threads > 0 ? params_.threads : tbb::task_arena::automatic);
-  moveKeyframes(poses, arena, result);
+  {
+    const StepTimes<kStepCount>::Scope timed(steps_, kAdjustPoses);
+    moveKeyframes(poses, arena, result);
+  }
   if (result.moved == 0) return result;
   if (params_.consistent_adjustment && params_.regroup_on_adjust)
     result.merged = regroup();
   else
+  {
+    const StepTimes<kStepCount>::Scope timed(steps_, kAdjustRefuse);
     refuseAll(arena, result);
+  }
   return result;
 }
 
