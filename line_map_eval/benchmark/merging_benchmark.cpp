@@ -1,8 +1,11 @@
-// merging_benchmark: per-frame OTM-ILSM time on the Intel corrected keyframes and on a synthetic
-// map grown to 1e5 map segments (1e6 leaves), and MP-GMA time for 1e6 leaves on 1 and 2 threads.
-// Prints the figures and writes them as JSON.
+// merging_benchmark: CAE-RLSM through the online path of linemap_batch (the OnlineMapper the nodelets
+// run) on Intel and ACES raw + corrected and on the hall world, with the time of each of its steps;
+// per-frame OTM-ILSM time on the Intel corrected keyframes and on a synthetic map grown to 1e5 map
+// segments (1e6 leaves); MP-GMA time for 1e6 leaves on 1 and 2 threads. Prints the figures and
+// writes them as JSON.
 //
-//   rosrun line_map_eval merging_benchmark [--intel PATH] [--json PATH] [--segments N] [--runs N]
+//   rosrun line_map_eval merging_benchmark [--intel PATH] [--datasets DIR] [--config-dir DIR]
+//                                          [--json PATH] [--segments N] [--runs N]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -10,11 +13,14 @@
 #include <cstdlib>
 #include <exception>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "benchmark_common.hpp"
+#include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/datasets/world.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
 #include "linemap/small_helpers.hpp"
 
@@ -30,6 +36,105 @@ using linemap::percentile;
 using linemap::Pose2;
 using linemap::Segment2;
 using linemap::Vec2;
+
+/// CAE-RLSM on one dataset through the batch's online path: medians over the runs, and the share of
+/// each step from one more run with the step timers on (they add a little time of their own).
+struct OnlineFigures
+{
+  std::string name;
+  std::size_t keyframes = 0, segments = 0, adjustments = 0;
+  double frame_median = std::nan(""), frame_p99 = std::nan(""), total = std::nan(""), adjust = std::nan("");
+  std::vector<line_map_merging::StepTime> steps;
+};
+
+OnlineFigures timeOnline(const std::string& name, const line_map_eval::BatchDataset& dataset,
+                         const linemap::ParamSet& params, int runs)
+{
+  line_map_eval::BatchOptions options;
+  options.mergers = {"cae"};
+  options.params = params;
+  options.progress = false;
+  options.figure_formats = 0;
+  OnlineFigures f;
+  f.name = name;
+  std::vector<double> medians, p99s, totals, adjusts;
+  for (int r = 0; r <= runs; ++r)
+  {
+    options.time_steps = r == runs;
+    const line_map_eval::MergerRun run = line_map_eval::runBatch(dataset, options).mergers.at(0);
+    if (options.time_steps)
+    {
+      f.steps = run.step_ms;
+      break;
+    }
+    medians.push_back(run.per_frame_ms);
+    p99s.push_back(run.per_frame_p99_ms);
+    totals.push_back(run.total_ms);
+    adjusts.push_back(run.adjust_ms);
+    f.keyframes = run.scans;
+    f.segments = run.map_segments;
+    f.adjustments = run.adjustments;
+  }
+  f.frame_median = linemap::median(medians);
+  f.frame_p99 = linemap::median(p99s);
+  f.total = linemap::median(totals);
+  f.adjust = linemap::median(adjusts);
+  double timed = 0.0;
+  for (const auto& step : f.steps) timed += step.second;
+  std::printf(
+      "%s, cae online: %zu keyframes -> %zu segments; per keyframe median %.4f ms, p99 %.4f ms; "
+      "%zu adjustments %.1f ms; total %.1f ms (medians of %d runs)\n  steps:",
+      name.c_str(), f.keyframes, f.segments, f.frame_median, f.frame_p99, f.adjustments, f.adjust, f.total,
+      runs);
+  for (const auto& [step, ms] : f.steps)
+    std::printf(" %s %.0f %%;", step.c_str(), timed > 0.0 ? 100.0 * ms / timed : 0.0);
+  std::printf(" (of the merger's %.1f ms)\n", timed);
+  return f;
+}
+
+/// Intel and ACES raw + corrected, and the hall world (1 degree laser), each skipped with a message
+/// when it cannot be read.
+std::vector<OnlineFigures> timeOnlinePath(const std::string& datasets, const std::string& config, int runs)
+{
+  std::vector<OnlineFigures> out;
+  linemap::ParamSet params;
+  try
+  {
+    params = line_map_eval::loadParameterFiles({config + "/line_extraction.yaml",
+                                                config + "/line_map_merging.yaml",
+                                                config + "/line_map_eval.yaml"});
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "merging_benchmark: online path skipped: %s\n", e.what());
+    return out;
+  }
+  const auto run = [&](const std::string& name, const std::function<line_map_eval::BatchDataset()>& load)
+  {
+    try
+    {
+      out.push_back(timeOnline(name, load(), params, runs));
+    }
+    catch (const std::exception& e)
+    {
+      std::fprintf(stderr, "merging_benchmark: %s skipped: %s\n", name.c_str(), e.what());
+    }
+  };
+  for (const char* log : {"intel", "aces"})
+    run(std::string(log) + " raw + corrected",
+        [&]
+        {
+          return line_map_eval::loadCarmenWithCorrection(datasets + "/" + log + ".clf.bz2",
+                                                         datasets + "/" + log + "-corrected.log.gz");
+        });
+  run("hall world, 1 deg laser",
+      [&]
+      {
+        return line_map_eval::simulatedDataset(line_map_eval::withSensorProfile(
+            line_map_eval::loadWorld(config + "/worlds/hall.yaml"), config + "/sensors/laser_1deg_30m.yaml"));
+      });
+  return out;
+}
 
 /// Time of each addKeyframe() [ms], the merger fresh at the start.
 std::vector<double> timeFrames(CaeRlsm& merger, const std::vector<Keyframe>& keyframes)
@@ -203,11 +308,24 @@ void timeCopy(const CaeRlsm& grown, int runs)
               percentile(copy_ms, 0.5));
 }
 
-void writeJson(const std::string& json, const IntelFigures& intel, const GrowthFigures& growth,
-               const GmaFigures& g1, const GmaFigures& g2, const GmaFigures& c1, const GmaFigures& c2)
+void writeJson(const std::string& json, const std::vector<OnlineFigures>& online, const IntelFigures& intel,
+               const GrowthFigures& growth, const GmaFigures& g1, const GmaFigures& g2, const GmaFigures& c1,
+               const GmaFigures& c2)
 {
   std::ofstream out(json);
-  out << "{\n"
+  out << "{\n  \"online\": [";
+  for (const OnlineFigures& f : online)
+  {
+    out << (&f == &online.front() ? "\n" : ",\n") << "    {\"dataset\": \"" << f.name
+        << "\", \"keyframes\": " << f.keyframes << ", \"map_segments\": " << f.segments
+        << ", \"frame_median_ms\": " << f.frame_median << ", \"frame_p99_ms\": " << f.frame_p99
+        << ", \"adjustments\": " << f.adjustments << ", \"adjust_ms\": " << f.adjust
+        << ", \"total_ms\": " << f.total << ", \"step_ms\": {";
+    for (const auto& [step, ms] : f.steps)
+      out << (&step == &f.steps.front().first ? "" : ", ") << "\"" << step << "\": " << ms;
+    out << "}}";
+  }
+  out << "\n  ],\n"
       << "  \"intel\": {\"keyframes\": " << intel.frames << ", \"leaves\": " << intel.leaves
       << ", \"map_segments\": " << intel.segments << ", \"otm_median_ms\": " << intel.median
       << ", \"otm_p99_ms\": " << intel.p99 << "},\n"
@@ -228,14 +346,19 @@ int main(int argc, char** argv)
 {
   // Default: the shared datasets next to the repository (this file is line_map_eval/benchmark/...).
   const std::string here = __FILE__;
-  std::string intel = here.substr(0, here.rfind('/')) + "/../../../shared/datasets/intel-corrected.log.gz";
+  const std::string root = here.substr(0, here.rfind('/')) + "/../..";
+  std::string datasets = root + "/../shared/datasets", config = root + "/config";
+  std::string intel;
   std::string json = "merging_benchmark.json";
   std::size_t walls = 100000;
   int runs = 5;
   if (const auto stop = line_map_eval::benchmark::parseOptions(
           argc, argv, "merging_benchmark",
-          "usage: merging_benchmark [--intel PATH] [--json PATH] [--segments N] [--runs N]",
+          "usage: merging_benchmark [--intel PATH] [--datasets DIR] [--config-dir DIR] [--json PATH]\n"
+          "                         [--segments N] [--runs N]",
           {{"--intel", [&](const std::string& v) { intel = v; }},
+           {"--datasets", [&](const std::string& v) { datasets = v; }},
+           {"--config-dir", [&](const std::string& v) { config = v; }},
            {"--json", [&](const std::string& v) { json = v; }},
            {"--segments", [&](const std::string& v) { walls = std::strtoul(v.c_str(), nullptr, 10); }},
            {"--runs", [&](const std::string& v) { runs = std::max(1, std::atoi(v.c_str())); }}}))
@@ -246,8 +369,13 @@ int main(int argc, char** argv)
     return 2;
   }
 
+  if (intel.empty()) intel = datasets + "/intel-corrected.log.gz";
+
   try
   {
+    // 0. The online path with its adjustments, step by step.
+    const std::vector<OnlineFigures> online = timeOnlinePath(datasets, config, runs);
+
     // 1. Intel corrected keyframes, extracted with the default extractor (srg).
     const IntelFigures intel_figures = timeIntel(intel, runs);
 
@@ -274,7 +402,7 @@ int main(int argc, char** argv)
         g1.leaves, g1.segments, g1.median_ms, g2.median_ms, g1.median_ms / g2.median_ms, g2.next_frame_ms);
     std::printf("MP-GMA + consistency pass: 1 thread %.1f ms, 2 threads %.1f ms, speed-up %.2fx\n",
                 c1.median_ms, c2.median_ms, c1.median_ms / c2.median_ms);
-    writeJson(json, intel_figures, growth, g1, g2, c1, c2);
+    writeJson(json, online, intel_figures, growth, g1, g2, c1, c2);
     std::printf("wrote %s\n", json.c_str());
   }
   catch (const std::exception& e)

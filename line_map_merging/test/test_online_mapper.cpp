@@ -438,3 +438,34 @@ TEST(TrajectoryAnchor, HistoryAndCorrections)
   EXPECT_NEAR(correctionAt(c, 9.0, CorrectionMode::kNearest).x, 3.0, 1e-12);
   EXPECT_THROW(correctionModeFromString("trajectory_correction", "spline"), linemap::ParameterError);
 }
+
+TEST(TrajectoryAnchor, ScansAndNodesOutOfOrder)
+{
+  // A scan that arrives late goes in its place in time; a stamp seen before keeps its first pose.
+  OdometryHistory h;
+  h.add(3.0, Pose2(3.0, 0.0, 0.0));
+  h.add(1.0, Pose2(1.0, 0.0, 0.0));
+  h.add(2.0, Pose2(2.0, 0.0, 0.0));
+  h.add(1.0, Pose2(7.0, 0.0, 0.0));
+  EXPECT_EQ(h.size(), 3u);
+  EXPECT_NEAR(h.at(1.5, 0.01, 1.0)->x, 1.5, 1e-12);
+  EXPECT_NEAR(h.at(2.75, 0.01, 1.0)->x, 2.75, 1e-12);
+  EXPECT_NEAR(h.at(1.0, 0.01, 1.0)->x, 1.0, 1e-12);
+
+  // Nodes in any order come out in stamp order; a stamp named twice takes its last pose. The
+  // correction is node * odometry^-1: here a shift of x by (node x - odometry x).
+  const std::vector<std::pair<double, Pose2>> nodes{{3.0, Pose2(3.5, 0.0, 0.0)},
+                                                    {1.0, Pose2(1.1, 0.0, 0.0)},
+                                                    {3.0, Pose2(3.2, 0.0, 0.0)},
+                                                    {2.0, Pose2(2.3, 0.0, 0.0)},
+                                                    {9.0, Pose2()}};
+  const NodeCorrections nc = nodeCorrections(h, nodes, 0.01, 1.0);
+  EXPECT_EQ(nc.unmatched, 1u);  // 9.0 lies after the last scan
+  ASSERT_EQ(nc.corrections.size(), 3u);
+  const double stamps[] = {1.0, 2.0, 3.0}, shifts[] = {0.1, 0.3, 0.2};
+  for (int i = 0; i < 3; ++i)
+  {
+    EXPECT_EQ(nc.corrections[i].first, stamps[i]);
+    EXPECT_NEAR(nc.corrections[i].second.x, shifts[i], 1e-12);
+  }
+}

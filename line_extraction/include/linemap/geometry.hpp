@@ -37,7 +37,8 @@ struct Pose2
 
   Vec2 apply(const Vec2& p) const
   {
-    const double c = std::cos(theta), s = std::sin(theta);
+    double c = 1.0, s = 0.0;
+    cosSin(c, s);
     return {c * p.x() - s * p.y() + x, s * p.x() + c * p.y() + y};
   }
 
@@ -49,8 +50,19 @@ struct Pose2
 
   Pose2 inverse() const
   {
-    const double c = std::cos(theta), s = std::sin(theta);
+    double c = 1.0, s = 0.0;
+    cosSin(c, s);
     return {-(c * x + s * y), s * x - c * y, normalizeAngle(-theta)};
+  }
+
+ private:
+  /// cos and sin of theta. A mount or a start pose is often unrotated: for +0 they are exactly 1 and
+  /// +0, which is what std::cos and std::sin return, at no cost (they save and restore the rounding mode).
+  void cosSin(double& c, double& s) const
+  {
+    if (theta == 0.0 && !std::signbit(theta)) return;
+    c = std::cos(theta);
+    s = std::sin(theta);
   }
 };
 

@@ -82,12 +82,14 @@ bool liesWithin(const Segment2& outer, const Segment2& inner, const FusionParams
 {
   const Vec2 d = outer.end - outer.start;
   const double length = d.norm();
-  if (!(length > 0.0) || !(headingDeviation(outer, inner) < 0.5 * linemap::kPi)) return false;
+  if (!(length > 0.0)) return false;
   const Vec2 u = d / length;
   const double a = (inner.start - outer.start).dot(u);
   const double b = (inner.end - outer.start).dot(u);
+  // The heading (two atan2) last: the outcome does not depend on the order.
   return std::min(a, b) >= 0.0 && std::max(a, b) <= length &&
-         verticalDistance(outer, inner) <= params.max_distance;
+         verticalDistance(outer, inner) <= params.max_distance &&
+         headingDeviation(outer, inner) < 0.5 * linemap::kPi;
 }
 
 void FusionMoments::add(const Segment2& s, double w)

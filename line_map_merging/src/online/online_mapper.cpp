@@ -119,7 +119,8 @@ ScanOutcome OnlineMapper::addScan(const StampedScan& scan)
     ++counters_.dropped;
     return ScanOutcome::kRejected;
   }
-  const linemap::Pose2 base = scan.laser * scan.mount.inverse();
+  const linemap::Pose2 laser_to_base = scan.mount.inverse();
+  const linemap::Pose2 base = scan.laser * laser_to_base;
   // A scan with the stamp of a keyframe is that keyframe again (a bag replayed with --loop):
   // merging it twice would only add duplicate leaves. The gate moves on from it as from a
   // keyframe, so a replay takes no keyframes in between.
@@ -131,7 +132,7 @@ ScanOutcome OnlineMapper::addScan(const StampedScan& scan)
   }
   // Every scan, keyframe or not, may be a node of the back end's trajectory.
   const linemap::Pose2 continuous = scan.odom ? *scan.odom : scan.laser;
-  history_.add(scan.stamp, continuous * scan.mount.inverse());
+  history_.add(scan.stamp, continuous * laser_to_base);
   if (params_.keyframe_source != KeyframeSource::kTf)
   {
     // Held for the trajectory that may name it a node (before the first one too: its nodes after

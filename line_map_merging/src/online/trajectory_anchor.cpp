@@ -10,13 +10,22 @@ namespace line_map_merging
 {
 void OdometryHistory::add(double stamp, const linemap::Pose2& pose)
 {
-  if (std::isfinite(stamp)) poses_.emplace(stamp, pose);
+  if (!std::isfinite(stamp)) return;
+  if (poses_.empty() || stamp > poses_.back().first)
+  {
+    poses_.emplace_back(stamp, pose);
+    return;
+  }
+  const auto at = std::lower_bound(poses_.begin(), poses_.end(), stamp,
+                                   [](const auto& p, double s) { return p.first < s; });
+  if (at->first != stamp) poses_.emplace(at, stamp, pose);
 }
 
 std::optional<linemap::Pose2> OdometryHistory::at(double stamp, double tolerance, double max_gap) const
 {
   if (poses_.empty() || !std::isfinite(stamp)) return std::nullopt;
-  const auto after = poses_.lower_bound(stamp);
+  const auto after = std::lower_bound(poses_.begin(), poses_.end(), stamp,
+                                      [](const auto& p, double s) { return p.first < s; });
   const auto before = after == poses_.begin() ? poses_.end() : std::prev(after);
   // The nearest recorded scan within the tolerance: a node of the back end is one of the scans.
   const double dt_after = after == poses_.end() ? INFINITY : after->first - stamp;
@@ -40,8 +49,10 @@ NodeCorrections nodeCorrections(const OdometryHistory& history,
                                 const std::vector<std::pair<double, linemap::Pose2>>& nodes, double tolerance,
                                 double max_gap)
 {
-  std::map<double, linemap::Pose2> by_stamp;
   NodeCorrections out;
+  auto& c = out.corrections;
+  c.reserve(nodes.size());
+  bool sorted = true;
   for (const auto& [stamp, pose] : nodes)
   {
     const auto odom = history.at(stamp, tolerance, max_gap);
@@ -50,9 +61,18 @@ NodeCorrections nodeCorrections(const OdometryHistory& history,
       ++out.unmatched;
       continue;
     }
-    by_stamp[stamp] = pose * odom->inverse();
+    sorted = sorted && (c.empty() || c.back().first < stamp);
+    c.emplace_back(stamp, pose * odom->inverse());
   }
-  out.corrections.assign(by_stamp.begin(), by_stamp.end());
+  // A back end lists its nodes in time order; otherwise in stamp order, the last of a repeated stamp.
+  if (!sorted)
+  {
+    std::stable_sort(c.begin(), c.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    auto last = c.begin();
+    for (auto it = c.begin(); it != c.end(); ++it)
+      if (it + 1 == c.end() || (it + 1)->first != it->first) *last++ = *it;
+    c.erase(last, c.end());
+  }
   return out;
 }
 

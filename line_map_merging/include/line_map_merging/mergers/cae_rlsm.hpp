@@ -17,9 +17,11 @@
 #include <tbb/task_arena.h>
 
 #include <Eigen/Core>
+#include <boost/container/flat_set.hpp>
 #include <boost/geometry.hpp>
 #include <boost/geometry/index/rtree.hpp>
 #include <cstdint>
+#include <functional>
 #include <set>
 #include <unordered_map>
 #include <vector>
@@ -129,8 +131,17 @@ class CaeRlsm : public Merger
   using Point = boost::geometry::model::point<double, 2, boost::geometry::cs::cartesian>;
   using Box = boost::geometry::model::box<Point>;
   using Entry = std::pair<Box, std::uint64_t>;
-  using RTree = boost::geometry::index::rtree<Entry, boost::geometry::index::quadratic<16>>;
+  using RTree = boost::geometry::index::rtree<Entry, boost::geometry::index::quadratic<8>>;
   using Transform = Eigen::Matrix<double, 2, 3>;  // [R | t] of a keyframe pose
+  /// Map segment ids to visit, smallest first, each once. Sorted downwards so the smallest leaves from
+  /// the back: these sets hold a handful of ids, and a tree would allocate for each.
+  using IdQueue = boost::container::flat_set<std::uint64_t, std::greater<std::uint64_t>>;
+  static std::uint64_t popSmallest(IdQueue& queue)
+  {
+    const std::uint64_t id = *std::prev(queue.end());
+    queue.erase(std::prev(queue.end()));
+    return id;
+  }
 
   struct LeafRecord
   {
@@ -163,16 +174,15 @@ class CaeRlsm : public Merger
   /// the conditions with, either way round, re-queueing the result, until none is left; the smallest
   /// id survives and takes the others' leaves. Returns how many map segments were merged away.
   /// `changed` (optional) receives the ids of the surviving segments that a merge changed.
-  std::size_t mergeMapSegments(std::set<std::uint64_t> pending, std::set<std::uint64_t>* changed = nullptr);
+  std::size_t mergeMapSegments(IdQueue pending, IdQueue* changed = nullptr);
   /// After a keyframe's originals are in (addKeyframe, regroup): the map merge and crossing resolution
   /// of what they touched. `offset` is the step of kKeyframeOtm to count the steps at.
-  void finishKeyframe(const std::set<std::uint64_t>& touched, std::size_t offset);
+  void finishKeyframe(const IdQueue& touched, std::size_t offset);
   /// Crossing resolution (crossing_resolution.cpp): resolves every crossing of the pending map segments,
   /// re-queueing what it changes, until none of them crosses another. Returns how many pairs it resolved.
-  std::size_t resolveCrossings(std::set<std::uint64_t> pending);
+  std::size_t resolveCrossings(IdQueue pending);
   /// One crossing pair at `x`, a < b. `trim_only`: cut, never move originals or merge.
-  void resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool trim_only,
-                   std::set<std::uint64_t>& pending);
+  void resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool trim_only, IdQueue& pending);
   /// A bent wall's pair: their originals split at the bend (the vertex moved with the split until it
   /// settles) and re-fused, `na` keeping the side before the bend when `a_before`; unchanged when the
   /// split does not settle.
@@ -188,8 +198,15 @@ class CaeRlsm : public Merger
   /// from `first_fresh`.
   void keepOldIds(const std::vector<std::uint64_t>& old_id, std::uint64_t first_fresh);
   Box paddedBox(const Segment2& s) const;  // padded by the fusion conditions' reach
+  /// The box a segment is stored under in the index: paddedBox with kIndexSlack to spare, so the
+  /// entry outlives small changes of the segment (searches filter their hits exactly).
+  Box indexedBox(const Segment2& s) const;
+  static constexpr double kIndexSlack = 0.25;  ///< [m]
   static Box boundingBox(const Segment2& s, double pad = 0.0);
+  /// A new map segment into the index; indexUpdate after it changed (re-stored only when it left its
+  /// stored box); indexRemove before it is erased.
   void indexInsert(std::uint64_t id, Node& node);
+  void indexUpdate(std::uint64_t id, Node& node);
   void indexRemove(std::uint64_t id, const Node& node);
 
   // MP-GMA (mp_gma.cpp).

@@ -36,7 +36,9 @@ class OdometryHistory
   std::size_t size() const { return poses_.size(); }
 
  private:
-  std::map<double, linemap::Pose2> poses_;
+  /// By stamp. Scans come in stamp order, so adding is an append, and the binary search of at() runs
+  /// over contiguous memory (a tree's nodes scattered in memory cost a cache miss per step).
+  std::vector<std::pair<double, linemap::Pose2>> poses_;
 };
 
 /// How a keyframe between two trajectory nodes is corrected.

@@ -74,7 +74,7 @@ AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
   transforms_.back() << c, -s, p.x, s, c, p.y;
 
   AddResult result;
-  std::set<std::uint64_t> touched;
+  IdQueue touched;
   {
     const StepTimes<kStepCount>::Scope timed(steps_, kKeyframeOtm);
     for (const Segment2& local : keyframe.segments)
@@ -96,9 +96,9 @@ AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
   return result;
 }
 
-void CaeRlsm::finishKeyframe(const std::set<std::uint64_t>& touched, std::size_t offset)
+void CaeRlsm::finishKeyframe(const IdQueue& touched, std::size_t offset)
 {
-  std::set<std::uint64_t> changed;
+  IdQueue changed;
   if (params_.map_merge)
   {
     const StepTimes<kStepCount>::Scope timed(steps_, offset + (kKeyframeMapMerge - kKeyframeOtm));

@@ -94,16 +94,14 @@ void CaeRlsm::absorbNode(std::uint64_t into, std::uint64_t from)
 {
   Node& target = nodes_.at(into);
   const auto other = nodes_.find(from);
-  indexRemove(into, target);
   indexRemove(from, other->second);
   target.leaves.insert(target.leaves.end(), other->second.leaves.begin(), other->second.leaves.end());
   nodes_.erase(other);
   refuse(target);
-  indexInsert(into, target);
+  indexUpdate(into, target);
 }
 
-void CaeRlsm::resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool trim_only,
-                          std::set<std::uint64_t>& pending)
+void CaeRlsm::resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool trim_only, IdQueue& pending)
 {
   Node& na = nodes_.at(a);
   Node& nb = nodes_.at(b);
@@ -118,8 +116,6 @@ void CaeRlsm::resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool 
   const Arms arms_a = armSupport(sa, world(na), x), arms_b = armSupport(sb, world(nb), x);
   pending.insert(a);
   pending.insert(b);
-  indexRemove(a, na);
-  indexRemove(b, nb);
 
   if (headingDeviation(sa, sb) > params_.crossing_chain_angle)
     cutWeakestArm(na.segment, nb.segment, arms_a, arms_b, x);
@@ -140,15 +136,15 @@ void CaeRlsm::resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool 
     // Pieces short enough to meet the fusion conditions are one segment within the tolerance.
     if (!trim_only && params_.map_merge && candidateMeets(na.segment, nb.segment, true))
     {
-      indexInsert(a, na);
-      indexInsert(b, nb);
+      indexUpdate(a, na);
+      indexUpdate(b, nb);
       absorbNode(a, b);
       pending.erase(b);
       return;
     }
   }
-  indexInsert(a, na);
-  indexInsert(b, nb);
+  indexUpdate(a, na);
+  indexUpdate(b, nb);
 }
 
 void CaeRlsm::splitAtBend(Node& na, Node& nb, const Vec2& x, bool a_before)
@@ -190,7 +186,7 @@ void CaeRlsm::splitAtBend(Node& na, Node& nb, const Vec2& x, bool a_before)
   keeps_after.segment = piece_after.segment;
 }
 
-std::size_t CaeRlsm::resolveCrossings(std::set<std::uint64_t> pending)
+std::size_t CaeRlsm::resolveCrossings(IdQueue pending)
 {
   std::size_t resolved = 0;
   // Splitting and merging can lengthen segments; past this many pairs only cutting, which only
@@ -199,8 +195,7 @@ std::size_t CaeRlsm::resolveCrossings(std::set<std::uint64_t> pending)
   std::vector<std::uint64_t> near;
   while (!pending.empty())
   {
-    const std::uint64_t id = *pending.begin();
-    pending.erase(pending.begin());
+    const std::uint64_t id = popSmallest(pending);
     const auto it = nodes_.find(id);
     if (it == nodes_.end()) continue;
     const Segment2& s = it->second.segment;

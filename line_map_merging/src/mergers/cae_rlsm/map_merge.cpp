@@ -12,14 +12,13 @@ namespace line_map_merging
 {
 namespace bgi = boost::geometry::index;
 
-std::size_t CaeRlsm::mergeMapSegments(std::set<std::uint64_t> pending, std::set<std::uint64_t>* changed)
+std::size_t CaeRlsm::mergeMapSegments(IdQueue pending, IdQueue* changed)
 {
   std::size_t merged = 0;
   std::vector<std::uint64_t> candidates;
   while (!pending.empty())
   {
-    const std::uint64_t id = *pending.begin();
-    pending.erase(pending.begin());
+    const std::uint64_t id = popSmallest(pending);
     const auto it = nodes_.find(id);
     if (it == nodes_.end()) continue;  // merged away meanwhile
     findCandidates(it->second.segment, id, candidates, true);
@@ -28,7 +27,6 @@ std::size_t CaeRlsm::mergeMapSegments(std::set<std::uint64_t> pending, std::set<
     std::sort(candidates.begin(), candidates.end());
     // As in OTM-ILSM: the smallest id survives, takes the others' leaves and their summed moments.
     Node& target = nodes_.at(candidates.front());
-    indexRemove(candidates.front(), target);
     FusionMoments moments = target.moments;
     for (std::size_t i = 1; i < candidates.size(); ++i) moments.add(nodes_.at(candidates[i]).moments);
     FusedLine line(moments, params_.fusion.weighting);
@@ -44,7 +42,7 @@ std::size_t CaeRlsm::mergeMapSegments(std::set<std::uint64_t> pending, std::set<
     }
     target.moments = moments;
     target.segment = line.segment();
-    indexInsert(candidates.front(), target);
+    indexUpdate(candidates.front(), target);
     if (changed) changed->insert(candidates.front());
     // The fused segment moved and grew: it may now meet others.
     pending.insert(candidates.front());

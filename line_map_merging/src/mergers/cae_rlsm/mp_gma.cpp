@@ -39,6 +39,12 @@ void parallelFor(tbb::task_arena& arena, std::size_t n, std::size_t grain, const
         });
   for (std::thread& t : threads) t.join();
 #else
+  if (n <= grain)
+  {
+    // One chunk: waking the arena's workers would cost more than the work.
+    for (std::size_t i = 0; i < n; ++i) body(i);
+    return;
+  }
   arena.execute(
       [&]
       {
@@ -119,9 +125,11 @@ void CaeRlsm::resolveAllCrossings()
 {
   // Re-fusing restored every segment's full extent from its leaves: the crossings come back.
   if (!params_.resolve_crossings) return;
-  std::set<std::uint64_t> all;
-  for (const auto& entry : nodes_) all.insert(all.end(), entry.first);
-  resolveCrossings(std::move(all));
+  std::vector<std::uint64_t> ids;
+  ids.reserve(nodes_.size());
+  for (const auto& entry : nodes_) ids.push_back(entry.first);
+  std::sort(ids.begin(), ids.end(), std::greater<std::uint64_t>());
+  resolveCrossings(IdQueue(boost::container::ordered_unique_range, ids.begin(), ids.end()));
 }
 
 void CaeRlsm::rebuildIndex()
@@ -132,7 +140,7 @@ void CaeRlsm::rebuildIndex()
   entries.reserve(nodes_.size());
   for (auto& [id, node] : nodes_)
   {
-    node.box = paddedBox(node.segment);
+    node.box = indexedBox(node.segment);
     entries.emplace_back(node.box, id);
   }
   index_ = RTree(entries);  // bulk loading (packing) is much faster than inserting one by one
@@ -170,7 +178,6 @@ std::size_t CaeRlsm::mergeConsistentSegments(tbb::task_arena& arena)
     candidates.push_back(id);
     std::sort(candidates.begin(), candidates.end());
     Node& target = nodes_.at(candidates.front());
-    indexRemove(candidates.front(), target);
     for (std::size_t i = 1; i < candidates.size(); ++i)
     {
       auto other = nodes_.find(candidates[i]);
@@ -180,14 +187,18 @@ std::size_t CaeRlsm::mergeConsistentSegments(tbb::task_arena& arena)
       ++merged;
     }
     refuse(target);
-    indexInsert(candidates.front(), target);
+    indexUpdate(candidates.front(), target);
     // The merged segment and its neighbours may now meet the conditions with more segments.
     pending.insert(candidates.front());
     if (params_.spatial_index && !index_stale_)
     {
+      // The stored boxes have slack: the segments whose exact boxes meet the target's.
       std::vector<Entry> near;
-      index_.query(bgi::intersects(target.box), std::back_inserter(near));
-      for (const Entry& e : near) pending.insert(e.second);
+      const Box exact = paddedBox(target.segment);
+      index_.query(bgi::intersects(exact), std::back_inserter(near));
+      for (const Entry& e : near)
+        if (boost::geometry::intersects(paddedBox(nodes_.at(e.second).segment), exact))
+          pending.insert(e.second);
     }
     else
     {

@@ -20,11 +20,26 @@ CaeRlsm::Box CaeRlsm::paddedBox(const Segment2& s) const
   return boundingBox(s, params_.fusion.searchPadding());
 }
 
+CaeRlsm::Box CaeRlsm::indexedBox(const Segment2& s) const
+{
+  return boundingBox(s, params_.fusion.searchPadding() + kIndexSlack);
+}
+
 void CaeRlsm::indexInsert(std::uint64_t id, Node& node)
 {
   if (!params_.spatial_index || index_stale_) return;
-  node.box = paddedBox(node.segment);
+  node.box = indexedBox(node.segment);
   index_.insert(Entry(node.box, id));
+}
+
+void CaeRlsm::indexUpdate(std::uint64_t id, Node& node)
+{
+  if (!params_.spatial_index || index_stale_) return;
+  // A segment that grew or moved a little still lies within its stored box: every search filters its
+  // hits by the exact test, so the entry stays (most merges only lengthen a segment by a few cm).
+  if (boost::geometry::covered_by(paddedBox(node.segment), node.box)) return;
+  index_.remove(Entry(node.box, id));
+  indexInsert(id, node);
 }
 
 void CaeRlsm::indexRemove(std::uint64_t id, const Node& node)
@@ -99,7 +114,6 @@ std::uint64_t CaeRlsm::insertSegment(const Segment2& world, std::uint32_t leaf)
   }
 
   Node& target = nodes_.at(candidates.front());
-  indexRemove(candidates.front(), target);
   FusionMoments moments = target.moments;
   for (std::size_t i = 1; i < candidates.size(); ++i) moments.add(nodes_.at(candidates[i]).moments);
   moments.add(world);
@@ -119,7 +133,7 @@ std::uint64_t CaeRlsm::insertSegment(const Segment2& world, std::uint32_t leaf)
   target.leaves.push_back(leaf);
   target.moments = moments;
   target.segment = line.segment();
-  indexInsert(candidates.front(), target);
+  indexUpdate(candidates.front(), target);
   return candidates.front();
 }
 

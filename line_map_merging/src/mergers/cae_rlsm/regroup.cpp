@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstring>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "line_map_merging/mergers/cae_rlsm.hpp"
@@ -37,7 +38,9 @@ std::size_t CaeRlsm::regroup()
   std::uint32_t first_leaf = 0;
   if (params_.incremental_regroup && checkpointStillHolds())
   {
-    nodes_ = checkpoint_.nodes;
+    // Taken, not copied: the checkpoint is made again at the end of this pass.
+    nodes_ = std::move(checkpoint_.nodes);
+    checkpoint_.valid = false;
     next_id_ = checkpoint_.next_id;
     first_leaf = checkpoint_.leaves;
     ++checkpoint_.resumed;
@@ -50,7 +53,7 @@ std::size_t CaeRlsm::regroup()
     index_stale_ = false;
     next_id_ = 0;
   }
-  std::set<std::uint64_t> touched;
+  IdQueue touched;
   for (std::uint32_t l = first_leaf; l < leaves_.size(); ++l)
   {
     if (l > first_leaf && leaves_[l].slot != leaves_[l - 1].slot)
@@ -90,12 +93,15 @@ void CaeRlsm::keepOldIds(const std::vector<std::uint64_t>& old_id, std::uint64_t
   }
   std::sort(order.begin(), order.end());
   std::unordered_map<std::uint64_t, Node> renamed;
-  std::set<std::uint64_t> taken;
+  renamed.reserve(nodes_.size());
+  std::unordered_set<std::uint64_t> taken;
+  taken.reserve(nodes_.size());
   next_id_ = first_fresh;
+  std::vector<std::uint64_t> mine;
   for (const auto& [smallest, temporary] : order)
   {
     Node& node = nodes_.at(temporary);
-    std::vector<std::uint64_t> mine;
+    mine.clear();
     for (std::uint32_t l : node.leaves) mine.push_back(old_id[l]);
     std::sort(mine.begin(), mine.end());
     std::uint64_t id = UINT64_MAX;
