@@ -40,12 +40,13 @@ inline line_map_merging::Keyframe extractKeyframe(line_extraction::LineExtractor
 }
 
 /// Every scan of a corrected CARMEN log as a keyframe at its laser pose, segments extracted with the
-/// default extractor (srg).
-inline std::vector<line_map_merging::Keyframe> intelKeyframes(const std::string& path)
+/// default extractor (srg) under `params` (the built-in defaults when empty).
+inline std::vector<line_map_merging::Keyframe> intelKeyframes(const std::string& path,
+                                                              const linemap::ParamSet& params = {})
 {
   const CarmenLog log = readCarmenLog(path);
   if (log.scans.empty()) throw std::runtime_error(path + ": no scans");
-  line_extraction::LineExtractor extractor{linemap::ParamSet()};
+  line_extraction::LineExtractor extractor{params};
   std::vector<line_map_merging::Keyframe> out;
   for (std::size_t i = 0; i < log.scans.size(); ++i)
   {

@@ -385,3 +385,45 @@ TEST(Batch, ConsistentAdjustmentOnTheLoopWorldEqualsTheMapOnTheTruePoses)
     }
   }
 }
+
+// The speed work must not change a map: the fast paths (the R-tree with slack, the regroup resumed from
+// its checkpoint) against the reference paths they replace (the linear search over every map segment,
+// the regroup from scratch), through the whole online path on real logs with their periodic
+// adjustments. The map files must be the same byte for byte.
+TEST(Batch, FastPathsWriteTheSameMapFileAsTheReferencePaths)
+{
+  const std::string dir = kRoot + "/../shared/datasets/";
+  for (const char* log : {"intel", "aces"})
+  {
+    const std::string raw = dir + log + ".clf.bz2", corrected = dir + log + "-corrected.log.gz";
+    if (!fs::exists(raw) || !fs::exists(corrected)) GTEST_SKIP() << log << " not found under " << dir;
+    const BatchDataset dataset = loadCarmenWithCorrection(raw, corrected);
+    std::string files[2];
+    std::size_t adjustments = 0;
+    for (int reference = 0; reference < 2; ++reference)
+    {
+      BatchOptions options = quietOptions();
+      options.adjust_every = 50;
+      options.mergers = {"cae"};
+      options.figure_formats = 0;
+      options.out_dir = (fs::temp_directory_path() / ("fast_paths_" + std::to_string(::getpid()) + "_" +
+                                                       std::to_string(reference)))
+                            .string();
+      if (reference)
+      {
+        applyOverride(options.params, "spatial_index=false");
+        applyOverride(options.params, "incremental_regroup=false");
+      }
+      const BatchResult result = runBatch(dataset, options);
+      adjustments = result.mergers.at(0).adjustments;
+      std::ifstream in(options.out_dir + "/cae/map.yaml");
+      std::stringstream text;
+      text << in.rdbuf();
+      files[reference] = text.str();
+      fs::remove_all(options.out_dir);
+    }
+    EXPECT_GE(adjustments, 8u) << log;
+    ASSERT_GT(files[0].size(), 1000u) << log;
+    EXPECT_TRUE(files[0] == files[1]) << log << ": the fast paths changed the map file";
+  }
+}

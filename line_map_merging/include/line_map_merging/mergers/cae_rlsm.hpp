@@ -219,6 +219,8 @@ class CaeRlsm : public Merger
   Segment2 worldLeaf(std::uint32_t leaf) const;
   void updateTransforms();
   void refuse(Node& node) const;
+  /// refuse() from the node's leaves already in the map frame (`world`, in the order of node.leaves).
+  void fuseWorld(Node& node, const std::vector<Segment2>& world) const;
   std::vector<std::uint32_t> splitInconsistentLeaves(Node& node) const;
   std::size_t mergeConsistentSegments(tbb::task_arena& arena);
   void rebuildIndex();

@@ -153,7 +153,12 @@ void CaeRlsm::splitAtBend(Node& na, Node& nb, const Vec2& x, bool a_before)
   std::vector<std::uint32_t> pool = na.leaves;
   pool.insert(pool.end(), nb.leaves.begin(), nb.leaves.end());
   std::sort(pool.begin(), pool.end());
+  // The leaves in the map frame once, for every round.
+  std::vector<Segment2> pool_world;
+  pool_world.reserve(pool.size());
+  for (std::uint32_t l : pool) pool_world.push_back(worldLeaf(l));
   std::vector<std::uint32_t> before, after, last_before;
+  std::vector<Segment2> world_before, world_after;
   Node piece_before, piece_after;
   Vec2 vertex = x;
   bool settled = false;
@@ -162,15 +167,21 @@ void CaeRlsm::splitAtBend(Node& na, Node& nb, const Vec2& x, bool a_before)
   {
     before.clear();
     after.clear();
-    for (std::uint32_t l : pool)
-      ((worldLeaf(l).midpoint() - vertex).dot(u) > 0.0 ? after : before).push_back(l);
+    world_before.clear();
+    world_after.clear();
+    for (std::size_t i = 0; i < pool.size(); ++i)
+    {
+      const bool is_after = (pool_world[i].midpoint() - vertex).dot(u) > 0.0;
+      (is_after ? after : before).push_back(pool[i]);
+      (is_after ? world_after : world_before).push_back(pool_world[i]);
+    }
     if (before.empty() || after.empty()) break;
     settled = before == last_before;
     last_before = before;
     piece_before.leaves = before;
     piece_after.leaves = after;
-    refuse(piece_before);
-    refuse(piece_after);
+    fuseWorld(piece_before, world_before);
+    fuseWorld(piece_after, world_after);
     Vec2 next;
     if (!lineIntersection(piece_before.segment, piece_after.segment, &next)) break;
     vertex = next;

@@ -78,10 +78,15 @@ void CaeRlsm::updateTransforms()
 
 void CaeRlsm::refuse(Node& node) const
 {
-  // Two passes over the leaves: the moments fix the line, then the endpoints fix its extent.
   thread_local std::vector<Segment2> world;
   world.clear();
   for (std::uint32_t l : node.leaves) world.push_back(worldLeaf(l));
+  fuseWorld(node, world);
+}
+
+void CaeRlsm::fuseWorld(Node& node, const std::vector<Segment2>& world) const
+{
+  // Two passes over the leaves: the moments fix the line, then the endpoints fix its extent.
   FusionMoments moments;
   for (const Segment2& s : world) moments.add(s);
   FusedLine line(moments, params_.fusion.weighting);
