@@ -13,7 +13,14 @@ if [ "${SANITIZE:-0}" = 1 ]; then
     "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined" "-DCMAKE_SHARED_LINKER_FLAGS=-fsanitize=address,undefined"
     "-DCMAKE_MODULE_LINKER_FLAGS=-fsanitize=address,undefined")
 fi
-build_cmd=(catkin_make --source "$LINEMAP_ROOT" --build "$BUILD_DIR/build"
+# A build directory configured while the devel space was sourced chains it into the install space
+# (env.sh): configure it again, now from the clean environment.
+force_cmake=()
+setup_util="$BUILD_DIR/build/catkin_generated/installspace/_setup_util.py"
+if [ -f "$setup_util" ] && grep -E "^ *CMAKE_PREFIX_PATH = r'[^']*(${LINEMAP_ROOT}|${BUILD_DIR})" "$setup_util" >/dev/null; then
+  force_cmake=(--force-cmake)
+fi
+build_cmd=(catkin_make ${force_cmake[@]+"${force_cmake[@]}"} --source "$LINEMAP_ROOT" --build "$BUILD_DIR/build"
   -DCATKIN_DEVEL_PREFIX="$BUILD_DIR/devel" -DCMAKE_BUILD_TYPE=Release
   -DCATKIN_WHITELIST_PACKAGES="${PACKAGES:-}" ${san_args[@]+"${san_args[@]}"} ${CMAKE_ARGS:-} -j"${JOBS:-2}" "$@")
 # LINEMAP_QUIET=1 (make demo, make test): the build's output goes to $BUILD_DIR/build.log, one line

@@ -14,6 +14,29 @@ fi
 BUILD_DIR="${BUILD_DIR:-${LINEMAP_ROOT}/.build}"
 case "$BUILD_DIR" in /*) ;; *) BUILD_DIR="${LINEMAP_ROOT}/${BUILD_DIR}" ;; esac
 export LINEMAP_ROOT BUILD_DIR
+
+# After `source .build/devel/setup.bash` (the README's step) the caller's search paths hold this
+# repository's own devel space and source tree. catkin bakes the CMAKE_PREFIX_PATH it is configured with
+# into the install space's setup files, so the install would then chain the devel space: the scripts start
+# from the caller's environment without the repository's paths (they source the devel space themselves).
+linemap_strip_repository_paths() {
+  local var value entry kept
+  local -a entries
+  for var in CMAKE_PREFIX_PATH ROS_PACKAGE_PATH LD_LIBRARY_PATH PYTHONPATH PKG_CONFIG_PATH; do
+    value="${!var:-}"
+    [ -n "$value" ] || continue
+    kept=""
+    IFS=: read -ra entries <<<"$value"
+    for entry in "${entries[@]}"; do
+      case "$entry" in
+        "" | "$LINEMAP_ROOT" | "$LINEMAP_ROOT"/* | "$BUILD_DIR" | "$BUILD_DIR"/*) ;;
+        *) kept="${kept:+$kept:}$entry" ;;
+      esac
+    done
+    if [ -n "$kept" ]; then export "$var=$kept"; else unset "$var"; fi
+  done
+}
+linemap_strip_repository_paths
 export ROS_HOME="${ROS_HOME:-${BUILD_DIR}/ros_home}"
 export ROS_LOG_DIR="${ROS_LOG_DIR:-${ROS_HOME}/log}"
 

@@ -118,6 +118,28 @@ def check_paths(checks, env, prefix, forbidden):
                "the sourced install space reaches the build or source tree" if bad else None, "\n".join(bad))
 
 
+def check_scripts_drop_the_devel_space(checks, repository, build):
+    """The workspace scripts (scripts/env.sh) start from the caller's environment without the repository's
+    own paths: a shell that sourced the devel space (the README's step) must not configure the build with it,
+    or catkin bakes it into the install space (what check_paths would then find)."""
+    devel = os.path.join(os.path.dirname(build), "devel")
+    polluted = {"PATH": "/usr/bin:/bin", "HOME": os.environ.get("HOME", "/tmp"),
+                "CMAKE_PREFIX_PATH": devel + ":/opt/elsewhere",
+                "ROS_PACKAGE_PATH": repository + ":/opt/elsewhere/share",
+                "LD_LIBRARY_PATH": os.path.join(devel, "lib"), "PYTHONPATH": "/opt/python:" + devel}
+    if os.path.dirname(build).startswith(repository):
+        polluted["BUILD_DIR"] = os.path.dirname(build)
+    script = 'source "$0/scripts/env.sh" && for v in CMAKE_PREFIX_PATH ROS_PACKAGE_PATH LD_LIBRARY_PATH ' \
+             'PYTHONPATH; do echo "$v=${!v-unset}"; done'
+    out = subprocess.run(["bash", "-c", script, repository], env=polluted, stdout=subprocess.PIPE,
+                         stderr=subprocess.STDOUT, universal_newlines=True).stdout
+    got = dict(line.split("=", 1) for line in out.splitlines() if "=" in line)
+    expected = {"CMAKE_PREFIX_PATH": "/opt/elsewhere", "ROS_PACKAGE_PATH": "/opt/elsewhere/share",
+                "LD_LIBRARY_PATH": "unset", "PYTHONPATH": "/opt/python"}
+    checks.add("scripts_drop_the_devel_space", None if got == expected else
+               "scripts/env.sh kept the repository's paths: %r, expected %r" % (got, expected), out)
+
+
 def plugin_classes(xml):
     """(class name, library file name) of a nodelet plugin description."""
     return [(c.get("name"), os.path.basename(library.get("path")) + ".so")
@@ -287,6 +309,7 @@ def main():
             env = install_environment(prefix, home)
             repository = os.path.realpath(os.path.join(os.path.dirname(__file__), "..", ".."))
             check_paths(checks, env, prefix, [repository, os.path.realpath(os.path.join(args.build, ".."))])
+            check_scripts_drop_the_devel_space(checks, repository, args.build)
             classes = check_packages_and_plugins(checks, env, prefix, repository)
             check_launch_files(checks, env, prefix)
             check_tools(checks, env, prefix, home)
