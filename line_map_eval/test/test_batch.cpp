@@ -406,8 +406,8 @@ TEST(Batch, FastPathsWriteTheSameMapFileAsTheReferencePaths)
       options.adjust_every = 50;
       options.mergers = {"cae"};
       options.figure_formats = 0;
-      options.out_dir = (fs::temp_directory_path() / ("fast_paths_" + std::to_string(::getpid()) + "_" +
-                                                       std::to_string(reference)))
+      options.out_dir = (fs::temp_directory_path() /
+                         ("fast_paths_" + std::to_string(::getpid()) + "_" + std::to_string(reference)))
                             .string();
       if (reference)
       {
@@ -426,4 +426,22 @@ TEST(Batch, FastPathsWriteTheSameMapFileAsTheReferencePaths)
     ASSERT_GT(files[0].size(), 1000u) << log;
     EXPECT_TRUE(files[0] == files[1]) << log << ": the fast paths changed the map file";
   }
+}
+
+// The large-space world (issue 36): a 60 x 40 m hall driven around the middle, 13-14 m from its
+// facades, with its own 1 degree laser. The faces the robot saw (ground truth) must be mapped: 94.3 %
+// today; an extraction that needs 25 points per line (a threshold fixed for a 0.25 degree laser) maps
+// 42.9 %. The floor is the issue's target.
+TEST(Batch, ExpoHallIsMappedFromTheMiddle)
+{
+  const BatchDataset expo = loadSimulatedWorld(kRoot + "/config/worlds/expo_hall.yaml");
+  BatchOptions options = quietOptions();
+  options.adjust_every = 50;
+  options.mergers = {"cae"};
+  const MergerRun r = runBatch(expo, options).mergers.at(0);
+  ASSERT_TRUE(r.ground_truth);
+  EXPECT_GE(r.ground_truth->coverage, 0.90);
+  EXPECT_GE(r.quality.quality, 93.0);
+  EXPECT_EQ(r.redundancy.pairs, 0u);
+  EXPECT_TRUE(r.crossing_pairs.empty());
 }

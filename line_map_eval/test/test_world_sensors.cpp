@@ -203,3 +203,51 @@ TEST(HallWorld, TheApseIsSeenAndScoredAsACurve)
   EXPECT_EQ(perfect.max_endpoint_error, 0.0);
   EXPECT_EQ(perfect.unmapped_ends, 0u);
 }
+
+TEST(ExpoHallWorld, ALargeHallDrivenFarFromItsFacades)
+{
+  const World expo = loadWorld(kConfig + "worlds/expo_hall.yaml");
+  EXPECT_EQ(expo.name, "expo_hall");
+  double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
+  for (const Wall& w : expo.walls)
+    for (const Vec2& p : {w.segment.start, w.segment.end})
+    {
+      x0 = std::min(x0, p.x());
+      x1 = std::max(x1, p.x());
+      y0 = std::min(y0, p.y());
+      y1 = std::max(y1, p.y());
+    }
+  EXPECT_GE(x1 - x0, 60.0);
+  EXPECT_GE(y1 - y0, 40.0);
+
+  // The glass stretch of the top wall (x 22-40 at y = 40): nothing longer than a mullion stands in it.
+  for (const Wall& w : expo.walls)
+  {
+    const Vec2 mid = w.segment.midpoint();
+    if (std::abs(mid.y() - 40.0) < 0.5 && mid.x() > 22.5 && mid.x() < 39.5)
+    {
+      EXPECT_LE(w.segment.length(), 0.2) << "a solid wall in the glass stretch at x = " << mid.x();
+    }
+  }
+
+  // Driven once around the middle: every point of the loop at least 12 m from the outer walls' box, and
+  // the clearance from every solid kept.
+  const auto& wp = expo.path.waypoints;
+  ASSERT_GE(wp.size(), 3u);
+  double nearest = 1e9, nearest_facade = 1e9;
+  for (std::size_t i = 0; i < wp.size(); ++i)
+  {
+    const Vec2 a = wp[i], b = wp[(i + 1) % wp.size()];
+    for (double t = 0.0; t <= 1.0; t += 0.01)
+    {
+      const Vec2 p = a + t * (b - a);
+      nearest_facade = std::min({nearest_facade, p.x() - x0, x1 - p.x(), p.y() - y0, y1 - p.y()});
+      for (const Wall& w : expo.walls)
+        nearest = std::min(nearest,
+                           linemap::distanceToSegment(p, w.segment.start, w.segment.end) - 0.5 * w.thickness);
+    }
+  }
+  EXPECT_GE(nearest_facade, 12.0);
+  EXPECT_GE(nearest, expo.path.clearance);
+  EXPECT_GT(pathLength(expo.path), 70.0);
+}
