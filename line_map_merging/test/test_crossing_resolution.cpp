@@ -221,3 +221,55 @@ TEST(CrossingResolution, BadParametersThrow)
   params.crossing_chain_angle = 0.5 * linemap::kPi;
   EXPECT_THROW(CaeRlsm{params}, linemap::ParameterError);
 }
+
+// After MP-GMA the crossings of the whole map are resolved; the indexed path first finds in parallel which
+// segments cross anything and skips the others unless a pair resolved near them. The linear path (no
+// index, no skipping) is the reference: both must leave the same map, in a clutter of bent walls and
+// walls across them whose full extents, restored by the re-fusion, cross again. A pre-check that lets a
+// crossing segment pass as clean leaves crossings and another map.
+TEST(CrossingResolution, WholeMapAfterMpGmaIndexedAndLinearAlike)
+{
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> at(0.0, 12.0), heading(-linemap::kPi, linemap::kPi),
+      length(0.5, 3.0), jitter(-0.05, 0.05);
+  std::vector<Keyframe> keyframes;
+  for (std::uint64_t k = 0; k < 40; ++k)
+  {
+    Keyframe kf;
+    kf.index = k;
+    kf.pose = Pose2(at(rng), 0.3 * at(rng), jitter(rng));
+    // Walls bent by a few degrees (chains, split at their bends, which can make new crossings) and
+    // walls across them (cut back to a T).
+    for (int i = 0; i < 6; ++i)
+    {
+      const bool across = i == 5;
+      const Vec2 a(jitter(rng) * 40.0, jitter(rng) * 8.0);
+      const double h = across ? 0.5 * linemap::kPi + jitter(rng) * 4.0 : jitter(rng) * 2.0, l = length(rng);
+      kf.segments.emplace_back(a, a + l * Vec2(std::cos(h), std::sin(h)));
+    }
+    keyframes.push_back(kf);
+  }
+  std::vector<std::pair<std::uint64_t, Pose2>> moved;
+  for (const Keyframe& k : keyframes)
+    moved.emplace_back(k.index,
+                       Pose2(k.pose.x + jitter(rng), k.pose.y + jitter(rng), k.pose.theta + jitter(rng)));
+  std::vector<MapSegment> maps[2];
+  for (int linear = 0; linear < 2; ++linear)
+  {
+    CaeParams p;
+    p.consistent_adjustment = false;  // MP-GMA as in the paper, then crossing resolution over the whole map
+    p.spatial_index = linear == 0;
+    CaeRlsm merger(p);
+    for (const Keyframe& k : keyframes) merger.addKeyframe(k);
+    merger.adjust(moved);
+    maps[linear] = merger.map();
+    EXPECT_TRUE(line_map_merging::findCrossingPairs(segmentsOf(maps[linear]), p.crossing_overhang).empty());
+  }
+  ASSERT_EQ(maps[0].size(), maps[1].size());
+  for (std::size_t i = 0; i < maps[0].size(); ++i)
+  {
+    EXPECT_EQ(maps[0][i].id, maps[1][i].id);
+    EXPECT_EQ(maps[0][i].segment.start, maps[1][i].segment.start);
+    EXPECT_EQ(maps[0][i].segment.end, maps[1][i].segment.end);
+  }
+}

@@ -24,6 +24,7 @@
 #include <functional>
 #include <set>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "line_map_merging/mergers/fusion.hpp"
@@ -180,7 +181,9 @@ class CaeRlsm : public Merger
   void finishKeyframe(const IdQueue& touched, std::size_t offset);
   /// Crossing resolution (crossing_resolution.cpp): resolves every crossing of the pending map segments,
   /// re-queueing what it changes, until none of them crosses another. Returns how many pairs it resolved.
-  std::size_t resolveCrossings(IdQueue pending);
+  /// With `suspects` (resolveAllCrossings): a pending segment not among them is skipped, and every
+  /// segment near a resolved pair joins them.
+  std::size_t resolveCrossings(IdQueue pending, std::unordered_set<std::uint64_t>* suspects = nullptr);
   /// One crossing pair at `x`, a < b. `trim_only`: cut, never move originals or merge.
   void resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool trim_only, IdQueue& pending);
   /// A bent wall's pair: their originals split at the bend (the vertex moved with the split until it
@@ -225,7 +228,7 @@ class CaeRlsm : public Merger
   std::size_t mergeConsistentSegments(tbb::task_arena& arena);
   void rebuildIndex();
   /// resolveCrossings over every map segment (with resolve_crossings), after re-fusing.
-  void resolveAllCrossings();
+  void resolveAllCrossings(tbb::task_arena& arena);
 
   // The parts of load() (map_file.cpp), on a fresh state; each throws MapFileError naming the field.
   /// The map file's "segments": every node with its leaves, by id.

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <tuple>
+#include <unordered_set>
 #include <vector>
 
 #include "line_map_merging/mergers/cae_rlsm.hpp"
@@ -197,7 +198,7 @@ void CaeRlsm::splitAtBend(Node& na, Node& nb, const Vec2& x, bool a_before)
   keeps_after.segment = piece_after.segment;
 }
 
-std::size_t CaeRlsm::resolveCrossings(IdQueue pending)
+std::size_t CaeRlsm::resolveCrossings(IdQueue pending, std::unordered_set<std::uint64_t>* suspects)
 {
   std::size_t resolved = 0;
   // Splitting and merging can lengthen segments; past this many pairs only cutting, which only
@@ -207,6 +208,7 @@ std::size_t CaeRlsm::resolveCrossings(IdQueue pending)
   while (!pending.empty())
   {
     const std::uint64_t id = popSmallest(pending);
+    if (suspects && !suspects->count(id)) continue;  // crossed nothing, and nothing near it changed since
     const auto it = nodes_.find(id);
     if (it == nodes_.end()) continue;
     const Segment2& s = it->second.segment;
@@ -230,6 +232,19 @@ std::size_t CaeRlsm::resolveCrossings(IdQueue pending)
       if (other == id || !segmentsCross(s, nodes_.at(other).segment, params_.crossing_overhang, &x)) continue;
       resolvePair(std::min(id, other), std::max(id, other), x, resolved >= budget, pending);
       ++resolved;
+      if (suspects)
+      {
+        // Whatever the changed pair may cross now is a suspect again (the index is fresh after a pair).
+        for (const std::uint64_t changed : {id, other})
+        {
+          const auto c = nodes_.find(changed);
+          if (c == nodes_.end()) continue;
+          suspects->insert(changed);
+          hits_.clear();
+          index_.query(bgi::intersects(boundingBox(c->second.segment)), std::back_inserter(hits_));
+          for (const Entry& e : hits_) suspects->insert(e.second);
+        }
+      }
       break;  // id is queued again: its next partner is found with its new segment
     }
   }

@@ -12,8 +12,10 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <unordered_set>
 
 #include "line_map_merging/mergers/cae_rlsm.hpp"
+#include "line_map_merging/mergers/crossing_pairs.hpp"
 
 namespace line_map_merging
 {
@@ -126,7 +128,7 @@ std::vector<std::uint32_t> CaeRlsm::splitInconsistentLeaves(Node& node) const
   }
 }
 
-void CaeRlsm::resolveAllCrossings()
+void CaeRlsm::resolveAllCrossings(tbb::task_arena& arena)
 {
   // Re-fusing restored every segment's full extent from its leaves: the crossings come back.
   if (!params_.resolve_crossings) return;
@@ -134,7 +136,36 @@ void CaeRlsm::resolveAllCrossings()
   ids.reserve(nodes_.size());
   for (const auto& entry : nodes_) ids.push_back(entry.first);
   std::sort(ids.begin(), ids.end(), std::greater<std::uint64_t>());
-  resolveCrossings(IdQueue(boost::container::ordered_unique_range, ids.begin(), ids.end()));
+  IdQueue all(boost::container::ordered_unique_range, ids.begin(), ids.end());
+  if (!params_.spatial_index)
+  {
+    resolveCrossings(std::move(all));
+    return;
+  }
+  // Most segments cross nothing: finding those that do is read-only and runs in parallel. The serial
+  // pass then skips the others unless a pair resolved near them (resolveCrossings' suspects), which is
+  // exactly when visiting them could find anything.
+  if (index_stale_) rebuildIndex();
+  std::vector<char> crosses(ids.size(), 0);
+  parallelFor(
+      arena, ids.size(), 256,
+      [&](std::size_t i)
+      {
+        thread_local std::vector<Entry> hits;
+        const Segment2& s = nodes_.at(ids[i]).segment;
+        hits.clear();
+        index_.query(bgi::intersects(boundingBox(s)), std::back_inserter(hits));
+        for (const Entry& e : hits)
+          if (e.second != ids[i] && segmentsCross(s, nodes_.at(e.second).segment, params_.crossing_overhang))
+          {
+            crosses[i] = 1;
+            return;
+          }
+      });
+  std::unordered_set<std::uint64_t> suspects;
+  for (std::size_t i = 0; i < ids.size(); ++i)
+    if (crosses[i]) suspects.insert(ids[i]);
+  resolveCrossings(std::move(all), &suspects);
 }
 
 void CaeRlsm::rebuildIndex()
@@ -287,7 +318,7 @@ void CaeRlsm::refuseAll(tbb::task_arena& arena, AdjustResult& result)
   index_stale_ = true;
   if (!params_.consistent_adjustment)
   {
-    resolveAllCrossings();
+    resolveAllCrossings(arena);
     return;
   }
 
@@ -298,7 +329,7 @@ void CaeRlsm::refuseAll(tbb::task_arena& arena, AdjustResult& result)
   result.split = orphans.size();
   for (std::uint32_t l : orphans) insertSegment(worldLeaf(l), l);
   result.merged = mergeConsistentSegments(arena);
-  resolveAllCrossings();
+  resolveAllCrossings(arena);
 }
 
 }  // namespace line_map_merging
