@@ -233,6 +233,30 @@ GmaFigures timeGma(const std::vector<Keyframe>& keyframes, int threads, bool con
   return {percentile(t, 0.5), percentile(next, 0.5), merger.leafCount(), merger.segmentCount()};
 }
 
+/// MP-GMA on 1 and 2 threads: the paper's (g), then with crossing resolution (x), then with the
+/// consistency pass, the defaults (c).
+struct GmaSet
+{
+  GmaFigures g1, g2, x1, x2, c1, c2;
+};
+
+GmaSet timeGmaSet(const std::vector<Keyframe>& synthetic, int runs)
+{
+  GmaSet s{timeGma(synthetic, 1, false, false, runs), timeGma(synthetic, 2, false, false, runs),
+           timeGma(synthetic, 1, false, true, runs),  timeGma(synthetic, 2, false, true, runs),
+           timeGma(synthetic, 1, true, true, runs),   timeGma(synthetic, 2, true, true, runs)};
+  std::printf(
+      "MP-GMA (paper), %zu leaves / %zu segments: 1 thread %.1f ms, 2 threads %.1f ms, speed-up %.2fx; "
+      "next OTM frame (R-tree rebuild) %.1f ms\n",
+      s.g1.leaves, s.g1.segments, s.g1.median_ms, s.g2.median_ms, s.g1.median_ms / s.g2.median_ms,
+      s.g2.next_frame_ms);
+  std::printf("MP-GMA + crossing resolution: 1 thread %.1f ms, 2 threads %.1f ms, speed-up %.2fx\n",
+              s.x1.median_ms, s.x2.median_ms, s.x1.median_ms / s.x2.median_ms);
+  std::printf("MP-GMA + consistency pass: 1 thread %.1f ms, 2 threads %.1f ms, speed-up %.2fx\n",
+              s.c1.median_ms, s.c2.median_ms, s.c1.median_ms / s.c2.median_ms);
+  return s;
+}
+
 /// OTM per frame on the Intel corrected keyframes, `runs` times.
 struct IntelFigures
 {
@@ -319,10 +343,9 @@ void timeCopy(const CaeRlsm& grown, int runs)
 }
 
 void writeJson(const std::string& json, const std::vector<OnlineFigures>& online, const IntelFigures& intel,
-               const IntelFigures& intel_paper_input, const GrowthFigures& growth, const GmaFigures& g1,
-               const GmaFigures& g2, const GmaFigures& x1, const GmaFigures& x2, const GmaFigures& c1,
-               const GmaFigures& c2)
+               const IntelFigures& intel_paper_input, const GrowthFigures& growth, const GmaSet& gma)
 {
+  const GmaFigures &g1 = gma.g1, &g2 = gma.g2, &x1 = gma.x1, &x2 = gma.x2, &c1 = gma.c1, &c2 = gma.c2;
   std::ofstream out(json);
   out << "{\n  \"online\": [";
   for (const OnlineFigures& f : online)
@@ -409,24 +432,9 @@ int main(int argc, char** argv)
     const GrowthFigures growth = timeGrowth(grown, synthetic, per_frame);
     timeCopy(grown, runs);
 
-    // 3. MP-GMA over all leaves, 1 and 2 threads: the paper's, then with crossing resolution, then with
-    // the consistency pass (the defaults).
-    const GmaFigures g1 = timeGma(synthetic, 1, false, false, runs);
-    const GmaFigures g2 = timeGma(synthetic, 2, false, false, runs);
-    const GmaFigures x1 = timeGma(synthetic, 1, false, true, runs);
-    const GmaFigures x2 = timeGma(synthetic, 2, false, true, runs);
-    const GmaFigures c1 = timeGma(synthetic, 1, true, true, runs);
-    const GmaFigures c2 = timeGma(synthetic, 2, true, true, runs);
-    std::printf(
-        "MP-GMA (paper), %zu leaves / %zu segments: 1 thread %.1f ms, 2 threads %.1f ms, speed-up %.2fx; "
-        "next OTM frame (R-tree rebuild) %.1f ms\n",
-        g1.leaves, g1.segments, g1.median_ms, g2.median_ms, g1.median_ms / g2.median_ms, g2.next_frame_ms);
-    std::printf(
-        "MP-GMA + crossing resolution (serial): 1 thread %.1f ms, 2 threads %.1f ms, speed-up %.2fx\n",
-        x1.median_ms, x2.median_ms, x1.median_ms / x2.median_ms);
-    std::printf("MP-GMA + consistency pass: 1 thread %.1f ms, 2 threads %.1f ms, speed-up %.2fx\n",
-                c1.median_ms, c2.median_ms, c1.median_ms / c2.median_ms);
-    writeJson(json, online, intel_figures, intel_paper_input, growth, g1, g2, x1, x2, c1, c2);
+    // 3. MP-GMA over all leaves, 1 and 2 threads.
+    const GmaSet gma = timeGmaSet(synthetic, runs);
+    writeJson(json, online, intel_figures, intel_paper_input, growth, gma);
     std::printf("wrote %s\n", json.c_str());
   }
   catch (const std::exception& e)
