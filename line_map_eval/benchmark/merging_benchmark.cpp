@@ -408,9 +408,7 @@ int main(int argc, char** argv)
     std::fprintf(stderr, "merging_benchmark: --segments must be >= 100\n");
     return 2;
   }
-
   if (intel.empty()) intel = datasets + "/intel-corrected.log.gz";
-
   try
   {
     // 0. The online path with its adjustments, step by step.
