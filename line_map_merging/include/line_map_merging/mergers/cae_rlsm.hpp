@@ -225,6 +225,8 @@ class CaeRlsm : public Merger
   /// refuse() from the node's leaves already in the map frame (`world`, in the order of node.leaves).
   void fuseWorld(Node& node, const std::vector<Segment2>& world) const;
   std::vector<std::uint32_t> splitInconsistentLeaves(Node& node) const;
+  /// The map segments that have a merge partner (read-only, in parallel; needs a fresh index).
+  std::set<std::uint64_t> segmentsWithPartners(tbb::task_arena& arena) const;
   std::size_t mergeConsistentSegments(tbb::task_arena& arena);
   void rebuildIndex();
   /// resolveCrossings over every map segment (with resolve_crossings), after re-fusing.

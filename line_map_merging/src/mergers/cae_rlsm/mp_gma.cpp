@@ -182,13 +182,8 @@ void CaeRlsm::rebuildIndex()
   index_ = RTree(entries);  // bulk loading (packing) is much faster than inserting one by one
 }
 
-std::size_t CaeRlsm::mergeConsistentSegments(tbb::task_arena& arena)
+std::set<std::uint64_t> CaeRlsm::segmentsWithPartners(tbb::task_arena& arena) const
 {
-  std::size_t merged = 0;
-  if (params_.spatial_index && index_stale_) rebuildIndex();
-  // Most segments have no partner: finding those that do is read-only and runs in parallel. Skipping
-  // the others changes nothing: a segment gains partners only through a merge near it, and every
-  // merge below re-queues the segments near its result.
   std::vector<std::pair<std::uint64_t, const Node*>> all;
   all.reserve(nodes_.size());
   for (const auto& entry : nodes_) all.emplace_back(entry.first, &entry.second);
@@ -199,9 +194,20 @@ std::size_t CaeRlsm::mergeConsistentSegments(tbb::task_arena& arena)
                 thread_local std::vector<Entry> hits;
                 has_partner[i] = hasCandidate(all[i].second->segment, all[i].first, hits, params_.map_merge);
               });
-  std::set<std::uint64_t> pending;
+  std::set<std::uint64_t> found;
   for (std::size_t i = 0; i < all.size(); ++i)
-    if (has_partner[i]) pending.insert(all[i].first);
+    if (has_partner[i]) found.insert(all[i].first);
+  return found;
+}
+
+std::size_t CaeRlsm::mergeConsistentSegments(tbb::task_arena& arena)
+{
+  std::size_t merged = 0;
+  if (params_.spatial_index && index_stale_) rebuildIndex();
+  // Most segments have no partner: finding those that do is read-only and runs in parallel. Skipping
+  // the others changes nothing: a segment gains partners only through a merge near it, and every
+  // merge below re-queues the segments near its result.
+  std::set<std::uint64_t> pending = segmentsWithPartners(arena);
   std::vector<std::uint64_t> candidates;
   while (!pending.empty())
   {
