@@ -22,12 +22,10 @@ void readWindow(const linemap::ParamSet& p, const std::string& block, SearchWind
   if (!(w.linear >= 0.0) || !(w.angular >= 0.0) || !(w.angular_step > 0.0))
     throw linemap::ParameterError(block + "/linear, /angular must be >= 0 and /angular_step > 0");
 }
-}  // namespace
 
-// A line per parameter: long, but a list rather than steps.
-LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
+/// The "front_end/..." keys.
+void readFrontEnd(const linemap::ParamSet& p, LaserSlamParams& s)
 {
-  LaserSlamParams s;
   s.max_range = positiveParam(p, "front_end/max_range", s.max_range);
   s.min_points = countParam(p, "front_end/min_points", s.min_points, 3);
   s.resolution = positiveParam(p, "front_end/resolution", s.resolution);
@@ -56,6 +54,11 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.max_odometry_step = positiveParam(p, "front_end/max_odometry_step", s.max_odometry_step);
   s.max_odometry_turn = positiveParam(p, "front_end/max_odometry_turn", s.max_odometry_turn);
   s.time_jump_tolerance = positiveParam(p, "front_end/time_jump_tolerance", s.time_jump_tolerance);
+}
+
+/// The "graph/..." keys.
+void readGraph(const linemap::ParamSet& p, LaserSlamParams& s)
+{
   s.edge_sigma_xy = positiveParam(p, "graph/edge_sigma_xy", s.edge_sigma_xy);
   s.edge_sigma_theta = positiveParam(p, "graph/edge_sigma_theta", s.edge_sigma_theta);
   s.odometry_sigma_xy = positiveParam(p, "graph/odometry_sigma_xy", s.odometry_sigma_xy);
@@ -64,6 +67,11 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.loop_sigma_xy = positiveParam(p, "graph/loop_sigma_xy", s.loop_sigma_xy);
   s.loop_sigma_theta = positiveParam(p, "graph/loop_sigma_theta", s.loop_sigma_theta);
   s.loop_loss_scale = positiveParam(p, "graph/loop_loss_scale", s.loop_loss_scale);
+}
+
+/// The "loop/..." keys.
+void readLoop(const linemap::ParamSet& p, LaserSlamParams& s)
+{
   s.loop_min_path = p.getDouble("loop/min_path", s.loop_min_path);
   s.loop_radius = positiveParam(p, "loop/radius", s.loop_radius);
   s.loop_radius_growth = p.getDouble("loop/radius_growth", s.loop_radius_growth);
@@ -99,6 +107,16 @@ LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
   s.loop_scale_by_disagreement = p.getDouble("loop/scale_by_disagreement", s.loop_scale_by_disagreement);
   s.loop_consistent_xy = p.getDouble("loop/consistent_xy", s.loop_consistent_xy);
   s.loop_consistent_theta = p.getDouble("loop/consistent_theta", s.loop_consistent_theta);
+}
+
+}  // namespace
+
+LaserSlamParams LaserSlamParams::fromParams(const linemap::ParamSet& p)
+{
+  LaserSlamParams s;
+  readFrontEnd(p, s);
+  readGraph(p, s);
+  readLoop(p, s);
   s.isotropic_ratio = p.getDouble("isotropic_ratio", s.isotropic_ratio);
   if (!(s.isotropic_ratio >= 0.0 && s.isotropic_ratio <= 1.0))
     throw linemap::ParameterError("parameter 'isotropic_ratio' must be in [0, 1]");
