@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -30,6 +31,17 @@ std::string profileError(const std::string& text)
     return e.what();
   }
   return "";
+}
+
+/// The walls' bounding box: x0, y0, x1, y1.
+std::array<double, 4> wallBox(const World& world)
+{
+  std::array<double, 4> box{1e9, 1e9, -1e9, -1e9};
+  for (const Wall& w : world.walls)
+    for (const Vec2& p : {w.segment.start, w.segment.end})
+      box = {std::min(box[0], p.x()), std::min(box[1], p.y()), std::max(box[2], p.x()),
+             std::max(box[3], p.y())};
+  return box;
 }
 
 /// Sample std of measured minus true range over `n` beams at true range `r`.
@@ -138,17 +150,10 @@ TEST(HallWorld, LoadsWithItsApseAndKeepsClearance)
   const World hall = loadWorld(kConfig + "worlds/hall.yaml");
   EXPECT_EQ(hall.name, "hall");
   // At least 40 x 30 m.
-  double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
+  const auto [x0, y0, x1, y1] = wallBox(hall);
   std::size_t apse = 0, column = 0;
   for (const Wall& w : hall.walls)
   {
-    for (const Vec2& p : {w.segment.start, w.segment.end})
-    {
-      x0 = std::min(x0, p.x());
-      x1 = std::max(x1, p.x());
-      y0 = std::min(y0, p.y());
-      y1 = std::max(y1, p.y());
-    }
     apse += w.arc == 0;
     column += w.arc == 1;
   }
@@ -208,15 +213,7 @@ TEST(ExpoHallWorld, ALargeHallDrivenFarFromItsFacades)
 {
   const World expo = loadWorld(kConfig + "worlds/expo_hall.yaml");
   EXPECT_EQ(expo.name, "expo_hall");
-  double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
-  for (const Wall& w : expo.walls)
-    for (const Vec2& p : {w.segment.start, w.segment.end})
-    {
-      x0 = std::min(x0, p.x());
-      x1 = std::max(x1, p.x());
-      y0 = std::min(y0, p.y());
-      y1 = std::max(y1, p.y());
-    }
+  const auto [x0, y0, x1, y1] = wallBox(expo);
   EXPECT_GE(x1 - x0, 60.0);
   EXPECT_GE(y1 - y0, 40.0);
 

@@ -21,6 +21,22 @@ ClosureGate::ClosureGate(const LaserSlamParams& params)
 {
 }
 
+bool ClosureGate::passesScreening(const LoopMatch& match, std::size_t attempt, SlamCounters& counters)
+{
+  if (match.match->score < params_.loop_min_score)
+  {
+    ++counters.loops_rejected_score;
+    return false;
+  }
+  if (params_.loop_ambiguity_distance > 0.0 && match.ambiguity >= params_.loop_ambiguity_ratio)
+  {
+    ++counters.loops_ambiguous;
+    attempts_[attempt].outcome = ClosureOutcome::kAmbiguous;
+    return false;
+  }
+  return true;
+}
+
 ClosureVerdict ClosureGate::consider(const LoopMatch& match, PoseGraph& graph, SlamCounters& counters)
 {
   if (!match.match)
@@ -32,17 +48,7 @@ ClosureVerdict ClosureGate::consider(const LoopMatch& match, PoseGraph& graph, S
   const MatchResult& found = *match.match;
   const std::size_t attempt = attempts_.size();
   attempts_.push_back({j, k, ClosureOutcome::kRejectedScore, found.score});
-  if (found.score < params_.loop_min_score)
-  {
-    ++counters.loops_rejected_score;
-    return {};
-  }
-  if (params_.loop_ambiguity_distance > 0.0 && match.ambiguity >= params_.loop_ambiguity_ratio)
-  {
-    ++counters.loops_ambiguous;
-    attempts_[attempt].outcome = ClosureOutcome::kAmbiguous;
-    return {};
-  }
+  if (!passesScreening(match, attempt, counters)) return {};
   const PoseGraphEdge& e = match.edge;
   if (!consistentWithGraph(graph, e))
   {

@@ -38,6 +38,8 @@ class ClosureGate
   const std::vector<ClosureAttempt>& attempts() const { return attempts_; }
 
  private:
+  /// The match's score and ambiguity: false (the refusal counted and recorded) when it goes no further.
+  bool passesScreening(const LoopMatch& match, std::size_t attempt, SlamCounters& counters);
   /// Whether closure edge e (not yet in the graph) disagrees with the estimate by no more than the
   /// consistency gate allows, in the metric of its covariance plus the estimate's (relativeCovariance).
   bool consistentWithGraph(const PoseGraph& graph, const PoseGraphEdge& e) const;
