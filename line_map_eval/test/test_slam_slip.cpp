@@ -1,16 +1,14 @@
-// Fault injection into the laser SLAM (config/slam.yaml with graph/edge_odometry_disagreement): the front end
-// slips by 0.3 m and
-// 5 degrees at a random scan of the first half of the simulated square room's lap, as after a false match
-// it cannot see; the rest of the lap passes the places before the slip again. The closures across the slip
-// must repair it. Measured against the relations of the ground truth: a SLAM whose loop gate trusts the
-// slipped chain over the closures refuses them (each disagrees with the chain beyond its covariance) and
-// keeps the slip: none of the 20 seeds within 4x the clean run's error (4.8-14x), as with the chain edges'
-// fixed sigmas. The floor: 3 of 20 within 4x, the most this SLAM reaches (the 2x in 19 of 20 is far
-// from reached: README, known limits).
+// Fault injection into the laser SLAM (the shipped config/slam.yaml): the front end slips by 0.3 m and 5
+// degrees at a random scan of the first half of a simulated drive, as after a false match it cannot see;
+// the rest of the drive passes the places before the slip again. The closures across the slip must
+// repair it. Measured against the relations of the ground truth. A SLAM whose loop gate trusts the
+// slipped chain over the closures refuses them (each disagrees with the chain beyond its covariance), and
+// one whose loop search looks for the revisit where the slipped chain puts it misses them: the slip stays.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "line_map_eval/batch/batch.hpp"
 #include "line_map_eval/batch/slam_robustness.hpp"
@@ -23,23 +21,23 @@ using linemap::Pose2;
 
 namespace
 {
-struct Lap
+struct Drive
 {
   Recording recording;
   std::vector<Relation> relations;
 };
 
-Lap squareRoom()
+Drive simulated(const std::string& world_file)
 {
-  const World world = loadWorld(LINEMAP_SOURCE_DIR "/config/worlds/square_room.yaml");
-  Lap out;
+  const World world = loadWorld(LINEMAP_SOURCE_DIR "/config/worlds/" + world_file);
+  Drive out;
   out.recording = simulate(world).recording;
   out.relations = truthRelations(out.recording);
   out.recording.keyframes.clear();
   return out;
 }
 
-double relationsErrorOf(const Lap& run, const SlamRecordingResult& slam)
+double relationsErrorOf(const Drive& run, const SlamRecordingResult& slam)
 {
   std::vector<std::pair<double, Pose2>> trajectory;
   for (std::size_t i = 0; i < slam.scan_poses.size(); ++i)
@@ -48,34 +46,49 @@ double relationsErrorOf(const Lap& run, const SlamRecordingResult& slam)
   EXPECT_GT(e.used, run.relations.size() / 2);
   return e.translation_mean;
 }
-}  // namespace
 
-TEST(SlamSlip, ASlipOfTheFrontEndIsRepairedByLaterClosures)
+/// How many of 20 seeded slips (the benchmark's: 0.3 m in a random direction and 5 degrees either way, at
+/// a random scan of the first half) end within `factor` times the clean run's error.
+std::size_t repairedOf20(const Drive& run, double factor, double clean_at_most)
 {
-  const Lap run = squareRoom();
-  // The shipped parameters with the chain edges widened by their disagreement with the odometry (off by
-  // default): the feature under test.
-  auto params = line_map_merging::LaserSlamParams::fromParams(
+  const auto params = line_map_merging::LaserSlamParams::fromParams(
       loadParameterFiles({LINEMAP_SOURCE_DIR "/config/slam.yaml"}));
-  params.edge_odometry_disagreement = true;
   const double clean = relationsErrorOf(run, runSlam(run.recording, params));
-  // The clean run itself is accurate, so 4x of it is a bound a kept slip breaks.
-  ASSERT_LT(clean, 0.01);
+  // The clean run itself is accurate, so a few times its error is a bound a kept slip breaks.
+  EXPECT_LT(clean, clean_at_most);
   std::size_t repaired = 0;
   for (std::uint32_t seed = 1; seed <= 20; ++seed)
   {
-    // The benchmark's slips (slam_robustness): 0.3 m in a random direction and 5 degrees either way, at a
-    // random scan of the first half.
     const FaultyRecording faulty = withFault(run.recording, InputFault::kFrontEndSlip, seed);
-    ASSERT_TRUE(faulty.slip.has_value());
+    EXPECT_TRUE(faulty.slip.has_value());
+    if (!faulty.slip) continue;
     const SlamRecordingResult slam = runSlam(faulty.recording, params, true, faulty.slip);
     const double error = relationsErrorOf(run, slam);
-    const bool ok = error <= 4.0 * clean;
+    const bool ok = error <= factor * clean;
     repaired += ok ? 1 : 0;
     std::printf("slip at scan %zu of %zu (%+.2f, %+.2f, %+.0f deg): %.4f m (clean %.4f m)%s; %s\n",
                 faulty.slip->scan, run.recording.scans.size(), faulty.slip->slip.x, faulty.slip->slip.y,
                 faulty.slip->slip.theta * 180.0 / linemap::kPi, error, clean, ok ? "" : " NOT REPAIRED",
                 line_map_merging::closureSummary(slam.counters).c_str());
   }
-  EXPECT_GE(repaired, 3u);
+  return repaired;
+}
+}  // namespace
+
+// The simulated office: a loop around the building's core with excursions into rooms, closed where it
+// started, so closures after the slip span it. The target: 2x the clean error in 19 of 20 seeds.
+// Without the chain edges widened by their disagreement with the odometry, 11 of 20 (the gate refuses the
+// closures across the slip, or they bend the loop); with them but the loop search's window not widened
+// for the suspect edge, 14 of 20 (the loop's end, turned 5 degrees about the slip, lies outside it).
+TEST(SlamSlip, OfficeSlipsAreRepairedByLaterClosures)
+{
+  EXPECT_GE(repairedOf20(simulated("office.yaml"), 2.0, 0.01), 19u);
+}
+
+// The square room: one lap of 2 x 2 m, every closure ambiguous in part (a square's walls), the few
+// accepted ones each 5 cm certain, so a repaired slip ends at 2-3.5x a clean error of millimetres. Without
+// the widening 0 of 20 within 4x (4.8-14x), without the widened window 13 of 20.
+TEST(SlamSlip, SquareRoomSlipsAreRepairedToAFewTimesTheCleanError)
+{
+  EXPECT_GE(repairedOf20(simulated("square_room.yaml"), 4.0, 0.01), 15u);
 }

@@ -27,7 +27,7 @@ struct Revisit
   PoseGraph graph;
   Pose2 offset{0.3, -0.2, 0.05};  ///< of keyframe 7's estimate from its truth (in its own frame)
 
-  Revisit()
+  explicit Revisit(const Pose2& estimate_offset = {0.3, -0.2, 0.05}) : offset(estimate_offset)
   {
     for (int i = 0; i < 7; ++i) truth.emplace_back(2.0 + 0.2 * i, 4.0, 0.0);
     truth.emplace_back(2.65, 4.1, 0.2);
@@ -87,7 +87,7 @@ TEST(ConstraintBuilder, WindowShrinksAfterAClosure)
   const LaserSlamParams p;
   ConstraintBuilder builder(p);
   const Revisit r;
-  builder.closureAccepted(r.keyframes[7].path);
+  builder.closureAccepted(r.keyframes[7].path, r.graph);
   const LoopSearch search = builder.search(r.keyframes, r.graph, 7);
   EXPECT_DOUBLE_EQ(search.radius, p.loop_radius);
   EXPECT_DOUBLE_EQ(search.angle, p.loop_angle);
@@ -102,5 +102,51 @@ TEST(ConstraintBuilder, RecentKeyframesAreNoCandidates)
   const ConstraintBuilder builder(p);
   Revisit r;
   r.keyframes[7].path = r.keyframes[6].path + 0.5 * p.loop_min_path;  // too close along the path
+  EXPECT_TRUE(builder.search(r.keyframes, r.graph, 7).candidates.empty());
+}
+
+TEST(ConstraintBuilder, ASuspectEdgeWidensTheWindowUntilAClosureSpansIt)
+{
+  const LaserSlamParams p;
+  ConstraintBuilder builder(p);
+  // Keyframe 7's estimate lies 0.98 m from the nearest older keyframe (6, at (3.2, 4.0)): beyond the
+  // window right after a closure, so nothing is searched.
+  Revisit r(Pose2{1.2, 0.5, 0.0});
+  builder.closureAccepted(r.keyframes[7].path, r.graph);
+  EXPECT_TRUE(builder.search(r.keyframes, r.graph, 7).candidates.empty());
+
+  // The chain edge into keyframe 7 disagreed with the odometry by 1 m and 0.1 rad: a slip that large may
+  // have put the keyframe there. The slip is at keyframe 7 itself (no lever arm): radius + 1 m, angle +
+  // 0.1 rad, for the candidates before it.
+  builder.suspectEdge(7, 1.0, 0.1);
+  const LoopSearch search = builder.search(r.keyframes, r.graph, 7);
+  EXPECT_DOUBLE_EQ(search.radius, p.loop_radius);  // the path rule alone
+  ASSERT_EQ(search.candidates.size(), 1u);
+  ASSERT_EQ(search.radii.size(), 1u);
+  EXPECT_DOUBLE_EQ(search.radii[0], p.loop_radius + 1.0);
+  EXPECT_DOUBLE_EQ(search.angles[0], p.loop_angle + 0.1);
+  const std::size_t j = search.candidates.front();
+  SlamCounters counters;
+  const LoopMatch m = builder.match(r.keyframes, r.graph, j, 7, search, counters);
+  ASSERT_TRUE(m.match);
+  const Pose2 expected = r.truth[j].inverse() * r.truth[7];
+  EXPECT_NEAR(m.match->pose.x, expected.x, 0.03);
+  EXPECT_NEAR(m.match->pose.y, expected.y, 0.03);
+  EXPECT_NEAR(linemap::normalizeAngle(m.match->pose.theta - expected.theta), 0.0, 0.01);
+
+  // A suspect edge at or before the candidate does not lie between them: no widening from it.
+  ConstraintBuilder before(p);
+  before.closureAccepted(r.keyframes[7].path, r.graph);
+  before.suspectEdge(1, 1.0, 0.1);
+  EXPECT_TRUE(before.search(r.keyframes, r.graph, 7).candidates.empty());
+
+  // A closure spanning the suspect edge went into the graph: the slip is observed, the window is back.
+  line_map_merging::PoseGraphEdge closure;
+  closure.from = 2;
+  closure.to = 7;
+  closure.measurement = r.truth[2].inverse() * r.truth[7];
+  closure.loop = true;
+  r.graph.addEdge(closure);
+  builder.closureAccepted(r.keyframes[7].path, r.graph);
   EXPECT_TRUE(builder.search(r.keyframes, r.graph, 7).candidates.empty());
 }

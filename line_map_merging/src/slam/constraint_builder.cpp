@@ -35,8 +35,39 @@ LoopSearch ConstraintBuilder::search(const std::vector<SlamKeyframe>& keyframes,
   const double since = keyframes[k].path - path_at_closure_;
   s.radius = std::min(params_.loop_max_radius, params_.loop_radius + params_.loop_radius_growth * since);
   s.angle = std::min(params_.loop_max_angle, params_.loop_angle + params_.loop_angle_growth * since);
-  s.candidates = loopCandidates(keyframes, graph, k, s.radius);
+  chooseCandidates(keyframes, graph, k, openSuspects(graph), s);
   return s;
+}
+
+std::vector<ConstraintBuilder::SuspectEdge> ConstraintBuilder::openSuspects(const PoseGraph& graph) const
+{
+  std::vector<SuspectEdge> open;
+  for (const SuspectEdge& s : suspects_)
+  {
+    const bool spanned =
+        std::any_of(graph.edges().begin(), graph.edges().end(),
+                    [&](const PoseGraphEdge& e)
+                    { return e.loop && std::min(e.from, e.to) < s.to && std::max(e.from, e.to) >= s.to; });
+    if (!spanned && s.to < graph.nodeCount()) open.push_back(s);
+  }
+  return open;
+}
+
+std::pair<double, double> ConstraintBuilder::slipAllowance(const PoseGraph& graph,
+                                                           const std::vector<SuspectEdge>& open,
+                                                           std::size_t j, std::size_t k)
+{
+  // A slip turning the chain by `turn` at keyframe s moves keyframe k about s by turn times their distance,
+  // and shifts it by `shift`: a slip's size is what its match disagreed with the odometry by.
+  double shift = 0.0, turn = 0.0;
+  const linemap::Vec2 here = graph.node(k).translation();
+  for (const SuspectEdge& s : open)
+  {
+    if (s.to <= j || s.to > k) continue;
+    shift += s.shift + s.turn * (here - graph.node(s.to).translation()).norm();
+    turn += s.turn;
+  }
+  return {shift, turn};
 }
 
 LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
@@ -48,7 +79,11 @@ LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, c
   m.from = j;
   m.to = k;
   const Pose2 guess = graph.node(j).inverse() * graph.node(k);
-  const auto found = matchLoop(keyframes, graph, j, k, guess, search.radius, search.angle);
+  const auto at = std::find(search.candidates.begin(), search.candidates.end(), j);
+  const std::size_t c = static_cast<std::size_t>(at - search.candidates.begin());
+  const bool own = at != search.candidates.end() && c < search.radii.size();
+  const auto found = matchLoop(keyframes, graph, j, k, guess, own ? search.radii[c] : search.radius,
+                               own ? search.angles[c] : search.angle);
   if (!found) return m;
   m.match = found->first;
   m.ambiguity = found->second;
@@ -112,30 +147,46 @@ std::optional<std::pair<MatchResult, double>> ConstraintBuilder::matchLoop(
   return std::make_pair(*best, ambiguity);
 }
 
-std::vector<std::size_t> ConstraintBuilder::loopCandidates(const std::vector<SlamKeyframe>& keyframes,
-                                                           const PoseGraph& graph, std::size_t k,
-                                                           double radius) const
+void ConstraintBuilder::chooseCandidates(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
+                                         std::size_t k, const std::vector<SuspectEdge>& open,
+                                         LoopSearch& search) const
 {
   const Pose2 here = graph.node(k);
-  std::vector<std::pair<double, std::size_t>> near;
+  struct Near
+  {
+    double distance;
+    std::size_t index;
+    double radius, angle;
+    bool operator<(const Near& o) const { return distance < o.distance; }
+  };
+  std::vector<Near> near;
   for (std::size_t j = 0; j < k; ++j)
   {
     if (keyframes[k].path - keyframes[j].path < params_.loop_min_path)
       break;  // paths only grow: the rest are recent too
     const Pose2 there = graph.node(j);
     const double d = std::hypot(there.x - here.x, there.y - here.y);
-    if (d <= radius) near.push_back({d, j});
+    double radius = search.radius, angle = search.angle;
+    if (!open.empty())
+    {
+      const auto [shift, turn] = slipAllowance(graph, open, j, k);
+      radius = std::max(radius, std::min(params_.loop_max_radius, search.radius + shift));
+      angle = std::max(angle, std::min(params_.loop_max_angle, search.angle + turn));
+    }
+    if (d <= radius) near.push_back({d, j, radius, angle});
   }
   std::sort(near.begin(), near.end());
-  std::vector<std::size_t> chosen;
-  for (const auto& [d, j] : near)
+  for (const Near& n : near)
   {
-    if (chosen.size() >= params_.loop_candidates) break;
+    if (search.candidates.size() >= params_.loop_candidates) break;
     bool overlaps = false;
-    for (std::size_t c : chosen) overlaps |= (j > c ? j - c : c - j) <= params_.submapKeyframes();
-    if (!overlaps) chosen.push_back(j);
+    for (std::size_t c : search.candidates)
+      overlaps |= (n.index > c ? n.index - c : c - n.index) <= params_.submapKeyframes();
+    if (overlaps) continue;
+    search.candidates.push_back(n.index);
+    search.radii.push_back(n.radius);
+    search.angles.push_back(n.angle);
   }
-  return chosen;
 }
 
 }  // namespace line_map_merging

@@ -141,9 +141,12 @@ void LaserSlam::widenBySlip(const Pose2& disagreement, PoseGraphEdge& e)
   // instead of bending the whole chain (and a slip of the odometry costs little: closures hold the rest).
   const double shift = std::hypot(disagreement.x, disagreement.y);
   const double turn = std::fabs(linemap::normalizeAngle(disagreement.theta));
-  constexpr std::size_t kHistory = 200, kEnough = 20;
+  constexpr std::size_t kHistory = 200, kShortHistory = 10;
   constexpr double kOutlier = 6.0;  // robust standard deviations: no noise of a working odometry reaches it
-  if (recent_disagreements_.size() >= kEnough)
+  // 1.4826 x the median absolute value: the standard deviation of a normal distribution. The edge's own
+  // sigmas keep the scale above zero, and judge the first steps of a run before any history exists.
+  double shift_scale = e.sigma_xy, turn_scale = e.sigma_theta;
+  if (!recent_disagreements_.empty())
   {
     std::vector<double> shifts, turns;
     for (const auto& [s, t] : recent_disagreements_)
@@ -151,16 +154,18 @@ void LaserSlam::widenBySlip(const Pose2& disagreement, PoseGraphEdge& e)
       shifts.push_back(s);
       turns.push_back(t);
     }
-    // 1.4826 x the median absolute value: the standard deviation of a normal distribution.
-    const double shift_scale = 1.4826 * linemap::median(shifts) + e.sigma_xy;
-    const double turn_scale = 1.4826 * linemap::median(turns) + e.sigma_theta;
-    if (shift > kOutlier * shift_scale || turn > kOutlier * turn_scale)
-    {
-      e.sigma_xy = std::hypot(e.sigma_xy, shift);
-      e.sigma_theta = std::hypot(e.sigma_theta, turn);
-      ++counters_.suspect_edges;
-      return;  // an outlier does not widen the noise it is judged by
-    }
+    shift_scale += 1.4826 * linemap::median(shifts);
+    turn_scale += 1.4826 * linemap::median(turns);
+  }
+  if (shift > kOutlier * shift_scale || turn > kOutlier * turn_scale)
+  {
+    e.sigma_xy = std::hypot(e.sigma_xy, shift);
+    e.sigma_theta = std::hypot(e.sigma_theta, turn);
+    ++counters_.suspect_edges;
+    constraints_.suspectEdge(e.to, shift, turn);
+    // An outlier does not widen the noise it is judged by, once there is enough of it to judge by (until
+    // then the median shrugs one off, and an odometry noisier than the edge's sigmas still gets its scale).
+    if (recent_disagreements_.size() >= kShortHistory) return;
   }
   recent_disagreements_.push_back({shift, turn});
   if (recent_disagreements_.size() > kHistory) recent_disagreements_.pop_front();
@@ -176,7 +181,7 @@ void LaserSlam::closeLoops()
     const ClosureVerdict verdict =
         gate_.consider(constraints_.match(keyframes_, graph_, j, k, search, counters_), graph_, counters_);
     graph_optimized_ |= verdict.optimized;
-    if (verdict.accepted) constraints_.closureAccepted(keyframes_[k].path);
+    if (verdict.accepted) constraints_.closureAccepted(keyframes_[k].path, graph_);
   }
 }
 

@@ -21,11 +21,14 @@ namespace line_map_merging
 /// Where to look for closures of one keyframe.
 struct LoopSearch
 {
-  double radius = 0.0;  ///< [m]
+  double radius = 0.0;  ///< [m] the window grown with the path since the last closure
   double angle = 0.0;   ///< [rad]
-  /// The older keyframes to match it against: nearest first within `radius`, at most loop_candidates,
-  /// no two within one submap's span.
+  /// The older keyframes to match it against: nearest first within their window, at most
+  /// loop_candidates, no two within one submap's span.
   std::vector<std::size_t> candidates;
+  /// Each candidate's window: `radius` and `angle`, widened by the suspect chain edges between it and
+  /// the keyframe that no closure spans yet (capped at loop/max_radius and loop/max_angle).
+  std::vector<double> radii, angles;
 };
 
 /// One attempted closure of keyframe `to` against the submap around keyframe `from`.
@@ -52,12 +55,32 @@ class ConstraintBuilder
   /// attempt, counted).
   LoopMatch match(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph, std::size_t j,
                   std::size_t k, const LoopSearch& search, SlamCounters& counters) const;
-  /// A closure of a keyframe at path `path` was accepted: the window shrinks back from there.
-  void closureAccepted(double path) { path_at_closure_ = path; }
+  /// A closure of a keyframe at path `path` went into `graph`: the window shrinks back from there, and the
+  /// suspect edges a closure now spans are forgotten (a kept closure stays in the graph).
+  void closureAccepted(double path, const PoseGraph& graph)
+  {
+    path_at_closure_ = path;
+    suspects_ = openSuspects(graph);
+  }
+  /// The chain edge into keyframe `to` may hide a slip of this size (its match disagreed with the
+  /// odometry far beyond their usual disagreement): until a closure spans it, the windows of closures
+  /// across it cover where the slip may have put the keyframe.
+  void suspectEdge(std::size_t to, double shift, double turn) { suspects_.push_back({to, shift, turn}); }
 
  private:
-  std::vector<std::size_t> loopCandidates(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
-                                          std::size_t k, double radius) const;
+  struct SuspectEdge
+  {
+    std::size_t to = 0;
+    double shift = 0.0, turn = 0.0;
+  };
+  /// The candidates and their windows (LoopSearch), `open` the suspect edges no closure spans.
+  void chooseCandidates(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph, std::size_t k,
+                        const std::vector<SuspectEdge>& open, LoopSearch& search) const;
+  /// How much the `open` suspect edges between keyframes j and k widen their window: (shift, turn).
+  static std::pair<double, double> slipAllowance(const PoseGraph& graph, const std::vector<SuspectEdge>& open,
+                                                 std::size_t j, std::size_t k);
+  /// The suspect edges no loop closure in the graph spans.
+  std::vector<SuspectEdge> openSuspects(const PoseGraph& graph) const;
   /// The refined match and its ambiguity (best coarse score away from the peak / the peak's).
   std::optional<std::pair<MatchResult, double>> matchLoop(const std::vector<SlamKeyframe>& keyframes,
                                                           const PoseGraph& graph, std::size_t candidate,
@@ -66,6 +89,7 @@ class ConstraintBuilder
 
   LaserSlamParams params_;
   double path_at_closure_ = 0.0;  ///< [m] front-end path of the last accepted closure's keyframe
+  std::vector<SuspectEdge> suspects_;
 };
 
 }  // namespace line_map_merging
