@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "line_map_merging/slam/chain_edge.hpp"
 #include "linemap/small_helpers.hpp"
@@ -12,6 +13,14 @@
 namespace line_map_merging
 {
 using linemap::Pose2;
+
+namespace
+{
+PoseGraphParams graphParams(const LaserSlamParams& params)
+{
+  return {params.loop_loss_scale, 50};
+}
+}  // namespace
 
 std::string closureSummary(const SlamCounters& c)
 {
@@ -29,7 +38,7 @@ LaserSlam::LaserSlam(const LaserSlamParams& params)
       front_end_(params),
       constraints_(params),
       gate_(params),
-      graph_(PoseGraphParams{params.loop_loss_scale, 50}),
+      graph_(graphParams(params)),
       time_jumps_(params.time_jump_tolerance, {"scan"})
 {
 }
@@ -300,6 +309,48 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
           {"scans stamped zero", n(c.zero_stamps)},
           {"new trajectories (time jumped back)", n(c.new_trajectories)},
           {"trajectories published", n(c.paths)}};
+}
+
+SlamSession LaserSlam::session() const
+{
+  SlamSession out;
+  out.keyframes = keyframes_;
+  out.nodes.reserve(graph_.nodeCount());
+  for (std::size_t i = 0; i < graph_.nodeCount(); ++i) out.nodes.push_back(graph_.node(i));
+  out.edges = graph_.edges();
+  out.scans.reserve(scans_.size());
+  for (const auto& s : scans_) out.scans.push_back({s.stamp, s.keyframe, s.relative});
+  return out;
+}
+
+void LaserSlam::restore(const SlamSession& session)
+{
+  const std::size_t n = session.keyframes.size();
+  if (session.nodes.size() != n)
+    throw std::invalid_argument("session: " + std::to_string(session.nodes.size()) + " graph nodes for " +
+                                std::to_string(n) + " keyframes");
+  PoseGraph graph(graphParams(params_));
+  for (const auto& node : session.nodes) graph.addNode(node);
+  for (const auto& e : session.edges) graph.addEdge(e);  // throws on a node it does not have
+  std::vector<ScanRecord> scans;
+  scans.reserve(session.scans.size());
+  for (const auto& s : session.scans)
+  {
+    if (s.keyframe != static_cast<std::size_t>(-1) && s.keyframe >= n)
+      throw std::invalid_argument("session: a scan on keyframe " + std::to_string(s.keyframe) + " of " +
+                                  std::to_string(n));
+    scans.push_back({s.stamp, s.keyframe, s.relative});
+  }
+  reset();
+  graph_ = std::move(graph);
+  keyframes_ = session.keyframes;
+  scans_ = std::move(scans);
+  front_end_.resumeFrom(keyframes_);
+  // The loop search's window from the newest keyframe a closure holds.
+  std::size_t newest_closed = 0;
+  for (const auto& e : graph_.edges())
+    if (e.loop) newest_closed = std::max({newest_closed, e.from, e.to});
+  if (!keyframes_.empty()) constraints_.closureAccepted(keyframes_[newest_closed].path, graph_);
 }
 
 }  // namespace line_map_merging

@@ -243,6 +243,18 @@ void LocalTrajectoryBuilder::injectSlip(const Pose2& slip)
   if (!recent_.empty()) rebuildLocalMap();
 }
 
+void LocalTrajectoryBuilder::resumeFrom(const std::vector<SlamKeyframe>& keyframes)
+{
+  *this = LocalTrajectoryBuilder(params_);
+  if (keyframes.empty()) return;
+  const std::size_t n = std::min(std::max<std::size_t>(params_.local_map_keyframes, 1), keyframes.size());
+  for (std::size_t i = keyframes.size() - n; i < keyframes.size(); ++i)
+    recent_.push_back({keyframes[i].local, keyframes[i].points, keyframes[i].joins});
+  last_local_ = last_matched_local_ = keyframes.back().local;
+  path_ = keyframes.back().path;
+  rebuildLocalMap();
+}
+
 void LocalTrajectoryBuilder::rebuildLocalMap()
 {
   std::vector<Vec2> points;

@@ -20,6 +20,7 @@
 #include "line_map_merging/slam/laser_slam_params.hpp"
 #include "line_map_merging/slam/local_trajectory_builder.hpp"
 #include "line_map_merging/slam/pose_graph.hpp"
+#include "line_map_merging/slam/session_file.hpp"
 #include "line_map_merging/slam/slam_types.hpp"
 #include "linemap/geometry.hpp"
 #include "linemap/time_jump_detector.hpp"
@@ -77,6 +78,13 @@ class LaserSlam
   void injectFrontEndSlip(const linemap::Pose2& slip) { front_end_.injectSlip(slip); }
   /// Forgets everything but the counters (a new trajectory starts at the origin).
   void reset();
+  /// What a session file keeps of the run (session_file.hpp): keyframes, graph, scans.
+  SlamSession session() const;
+  /// Takes over a saved session in place of the current run: its keyframes, graph and scans, the front end
+  /// going on from the newest keyframe. The loop gate's bookkeeping starts afresh. Throws
+  /// std::invalid_argument when the session is inconsistent (nodes and keyframes differ in number, an
+  /// edge or scan names a keyframe it does not have); the current run is then kept.
+  void restore(const SlamSession& session);
 
  private:
   /// Whether the stamp went back by more than time_jump_tolerance (counted).

@@ -47,6 +47,9 @@ class LocalTrajectoryBuilder
   LocalScanResult addScan(const SlamScan& scan, SlamCounters& counters);
   /// The last accepted scan's front-end pose.
   const linemap::Pose2& currentLocal() const { return last_local_; }
+  /// Starts afresh at the newest of `keyframes` (a restored session), with the newest of them as the
+  /// local map: the next scan is searched for around that keyframe's pose.
+  void resumeFrom(const std::vector<SlamKeyframe>& keyframes);
   /// Fault injection (tests, the robustness benchmark): the front end's estimate jumps by `slip`,
   /// composed onto the last scan's pose, as after a false match it cannot see; its local map moves with
   /// it, so the following scans are matched consistently in the slipped frame and only the graph's

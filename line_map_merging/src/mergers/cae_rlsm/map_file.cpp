@@ -1,8 +1,6 @@
 // CAE-RLSM map files: the whole provenance tree as YAML (format documented in README.md).
 // Saving writes a temporary file, fsyncs it and renames it over the target; loading parses and
 // validates into a fresh state and only then replaces the current one.
-#include <fcntl.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -13,6 +11,7 @@
 #include <unordered_set>
 
 #include "line_map_merging/mergers/cae_rlsm.hpp"
+#include "linemap/atomic_file.hpp"
 
 namespace line_map_merging
 {
@@ -22,40 +21,6 @@ namespace
 // files still load (see load()).
 constexpr int kFormatVersion = 3;
 constexpr int kOldestFormatVersion = 1;
-
-void writeFileAtomically(const std::string& path, const std::string& text)
-{
-  const std::string tmp = path + ".tmp" + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0)
-    throw MapFileError("map file '" + path + "': cannot create '" + tmp + "': " + std::strerror(errno));
-  std::size_t done = 0;
-  while (done < text.size())
-  {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0)
-    {
-      if (errno == EINTR) continue;
-      const std::string err = std::strerror(errno);
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      throw MapFileError("map file '" + path + "': write failed: " + err);
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0)
-  {
-    const std::string err = std::strerror(errno);
-    ::unlink(tmp.c_str());
-    throw MapFileError("map file '" + path + "': fsync/close failed: " + err);
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0)
-  {
-    const std::string err = std::strerror(errno);
-    ::unlink(tmp.c_str());
-    throw MapFileError("map file '" + path + "': rename failed: " + err);
-  }
-}
 
 std::string where(const std::string& path, const YAML::Node& node, const std::string& field)
 {
@@ -113,14 +78,13 @@ void emitNumbers(YAML::Emitter& out, std::initializer_list<double> values)
 }
 
 /// The file's YAML, checked to be a whole map file of a version this build reads, by `method`.
-YAML::Node parseMapFile(const std::string& path, const std::string& method)
+/// `path` names the map's origin in messages: a file, or a session file's record.
+YAML::Node parseMapText(const std::string& text, const std::string& path, const std::string& method)
 {
-  std::ifstream in(path);
-  if (!in) throw MapFileError("map file '" + path + "': cannot open: " + std::strerror(errno));
   YAML::Node root;
   try
   {
-    root = YAML::Load(in);
+    root = YAML::Load(text);
   }
   catch (const YAML::Exception& e)
   {
@@ -197,6 +161,19 @@ void emitParams(YAML::Emitter& out, const CaeParams& params)
 
 void CaeRlsm::save(const std::string& path) const
 {
+  const std::string text = mapText();
+  try
+  {
+    linemap::writeFileAtomically(path, text, "map file");
+  }
+  catch (const std::runtime_error& e)
+  {
+    throw MapFileError(e.what());
+  }
+}
+
+std::string CaeRlsm::mapText() const
+{
   YAML::Emitter out;
   out.SetDoublePrecision(17);  // round-trips every double exactly
   out << YAML::BeginMap;
@@ -220,8 +197,8 @@ void CaeRlsm::save(const std::string& path) const
   emitSegments(out);
   out << YAML::Key << "end_of_map" << YAML::Value << true;  // a file cut at a line boundary lacks it
   out << YAML::EndMap;
-  if (!out.good()) throw MapFileError("map file '" + path + "': cannot encode: " + out.GetLastError());
-  writeFileAtomically(path, std::string(out.c_str()) + "\n");
+  if (!out.good()) throw MapFileError("map file: cannot encode: " + out.GetLastError());
+  return std::string(out.c_str()) + "\n";
 }
 
 void CaeRlsm::emitSegments(YAML::Emitter& out) const
@@ -255,7 +232,21 @@ void CaeRlsm::emitSegments(YAML::Emitter& out) const
 
 void CaeRlsm::load(const std::string& path)
 {
-  const YAML::Node root = parseMapFile(path, name());
+  std::string text;
+  try
+  {
+    text = linemap::readWholeFile(path, "map file");
+  }
+  catch (const std::runtime_error& e)
+  {
+    throw MapFileError(e.what());
+  }
+  loadText(text, path);
+}
+
+void CaeRlsm::loadText(const std::string& text, const std::string& path)
+{
+  const YAML::Node root = parseMapText(text, path, name());
   CaeRlsm fresh(readParams(path, require(path, root, "parameters"), params_));
   fresh.next_id_ = read<std::uint64_t>(path, require(path, root, "next_id"), "next_id");
   fresh.loadKeyframes(path, root);
