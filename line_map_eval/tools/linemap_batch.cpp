@@ -25,6 +25,8 @@
 #include "line_map_eval/online/bag_replay.hpp"
 #include "line_map_eval/simulation/ground_truth.hpp"
 #include "line_map_merging/mergers/merger.hpp"
+#include "line_map_merging/slam/session_file.hpp"
+#include "linemap/atomic_file.hpp"
 #include "linemap/small_helpers.hpp"
 #include "tool_main.hpp"
 
@@ -37,8 +39,8 @@ const char* const kConfigFiles[] = {"line_extraction.yaml", "line_map_merging.ya
 
 void usage(std::ostream& out)
 {
-  out << "usage: linemap_batch DATASET [--corrected LOG | --slam [--relations FILE]] [--extractor NAME]\n"
-         "                     [--merger NAME]...\n"
+  out << "usage: linemap_batch DATASET [--corrected LOG | --slam [--relations FILE] [--save-session F]]\n"
+         "                     [--extractor NAME] [--merger NAME]...\n"
          "                     [--param key=value]... [--config FILE]... [--config-dir DIR] [--out DIR]\n"
          "                     [--every N] [--sensor FILE] [--no-progress] [--no-figures] [--time-steps]\n"
          "                     [--help]\n"
@@ -54,6 +56,8 @@ void usage(std::ostream& out)
          "  --relations FILE  with --slam: print the relations error of its trajectory against FILE\n"
          "                    (--slam writes DIR/slam.svg and .png: trajectory, scans, closures and the\n"
          "                    relations above 0.3 m)\n"
+         "  --save-session F  with --slam: write the session file F (the SLAM's keyframes, graph and scans,\n"
+         "                    and the cae map with its provenance: line_map_merging/README.md)\n"
          "  --extractor NAME  extraction algorithm (default: parameter 'algorithm')\n"
          "  --merger NAME     merger to run; repeatable (default: all of ";
   for (std::size_t i = 0; i < line_map_merging::mergerNames().size(); ++i)
@@ -114,7 +118,7 @@ struct Arguments
   std::string dataset, corrected, config_dir, out_dir = "linemap_batch_out";
   std::vector<std::string> configs, overrides;
   bool replay = false, slam = false;
-  std::string relations, sensor;
+  std::string relations, sensor, save_session;
   BatchOptions options;
 };
 
@@ -141,13 +145,14 @@ bool parseArguments(int argc, char** argv, Arguments& a)
   {
     const std::string& arg = cl.arg();
     if (arg == "--help" || arg == "-h") return false;
-    std::string* text = arg == "--corrected"    ? &a.corrected
-                        : arg == "--extractor"  ? &a.options.extractor
-                        : arg == "--config-dir" ? &a.config_dir
-                        : arg == "--out"        ? &a.out_dir
-                        : arg == "--sensor"     ? &a.sensor
-                        : arg == "--relations"  ? &a.relations
-                                                : nullptr;
+    std::string* text = arg == "--corrected"      ? &a.corrected
+                        : arg == "--extractor"    ? &a.options.extractor
+                        : arg == "--config-dir"   ? &a.config_dir
+                        : arg == "--out"          ? &a.out_dir
+                        : arg == "--sensor"       ? &a.sensor
+                        : arg == "--relations"    ? &a.relations
+                        : arg == "--save-session" ? &a.save_session
+                                                  : nullptr;
     std::vector<std::string>* list = arg == "--merger"   ? &a.options.mergers
                                      : arg == "--param"  ? &a.overrides
                                      : arg == "--config" ? &a.configs
@@ -176,6 +181,9 @@ bool parseArguments(int argc, char** argv, Arguments& a)
       throw std::invalid_argument("more than one dataset: " + a.dataset + ", " + arg);
   }
   if (a.dataset.empty()) throw std::invalid_argument("no dataset given");
+  if (!a.save_session.empty() && !a.slam)
+    throw std::invalid_argument(
+        "--save-session goes with --slam (a session is the SLAM's graph and its map)");
   return true;
 }
 
@@ -229,8 +237,10 @@ int runReplay(const Arguments& a)
   return 0;
 }
 
-/// A raw CARMEN log with the trajectory of our laser SLAM as the loop closure.
-BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_params)
+/// A raw CARMEN log with the trajectory of our laser SLAM as the loop closure; the SLAM's part of the
+/// session into `session`.
+BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_params,
+                         line_map_merging::SlamSession& session)
 {
   if (!a.corrected.empty() || isWorldFile(a.dataset) || fs::path(a.dataset).extension() == ".bag")
     throw std::invalid_argument("--slam goes with a raw CARMEN log alone, not with --corrected or " +
@@ -267,6 +277,7 @@ BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_param
                                    (fs::path(a.out_dir) / "slam").string());
     std::cout << "wrote the SLAM figure " << files.back() << "\n";
   }
+  session = run.session;
   return datasetFromRecording(withSlamKeyframes(std::move(recording), run), linemap::fileStem(a.dataset),
                               "carmen+slam");
 }
@@ -286,9 +297,10 @@ BatchDataset bagDataset(const std::string& path)
   return dataset;
 }
 
-BatchDataset loadDataset(const Arguments& a, const linemap::ParamSet& slam_params)
+BatchDataset loadDataset(const Arguments& a, const linemap::ParamSet& slam_params,
+                         line_map_merging::SlamSession& session)
 {
-  if (a.slam) return slamDataset(a, slam_params);
+  if (a.slam) return slamDataset(a, slam_params, session);
   const bool bag = fs::path(a.dataset).extension() == ".bag";
   if (!a.corrected.empty())
   {
@@ -326,6 +338,22 @@ void printResult(const BatchResult& result)
             << " mm): the error column's excess comes from the poses and the merging\n";
 }
 
+/// The SLAM's graph with CAE-RLSM's map (its map file, when cae ran) as a session file.
+void saveSession(const BatchResult& result, const std::string& path, line_map_merging::Session& session)
+{
+  for (const auto& run : result.mergers)
+    if (run.name == "cae")
+      for (const auto& file : run.files)
+        if (fs::path(file).filename() == "map.yaml")
+          session.line_map = linemap::readWholeFile(file, "map file");
+  if (session.line_map.empty())
+    std::cout << "note: the session holds no line map (--merger cae did not run): the SLAM's graph alone\n";
+  line_map_merging::writeSessionFile(path, session);
+  std::cout << "wrote the session " << path << ": " << session.slam.keyframes.size() << " keyframes, "
+            << session.slam.edges.size() << " edges" << (session.line_map.empty() ? "" : ", the cae map")
+            << "\n";
+}
+
 /// Everything after the command line: the dataset, the mergers, the reports.
 int run(Arguments& a)
 {
@@ -335,9 +363,11 @@ int run(Arguments& a)
   if (!a.sensor.empty() && !isWorldFile(a.dataset))
     throw std::invalid_argument("--sensor goes with a world file (config/worlds/*.yaml), not " + a.dataset);
   if (a.replay) return runReplay(a);
-  const BatchResult result = runBatch(loadDataset(a, slam_params), a.options);
+  line_map_merging::Session session;
+  const BatchResult result = runBatch(loadDataset(a, slam_params, session.slam), a.options);
   printResult(result);
   writeReports(result, a.out_dir);
+  if (!a.save_session.empty()) saveSession(result, a.save_session, session);
   const std::string& out_dir = a.out_dir;
   std::cout << "wrote " << (fs::path(out_dir) / "report.json").string() << ", "
             << (fs::path(out_dir) / "report.md").string() << " and the per-merger files under " << out_dir

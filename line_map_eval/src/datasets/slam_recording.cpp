@@ -51,6 +51,7 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
   for (const auto& e : slam.graph().edges())
     if (e.loop) result.loop_edges.push_back(e);
   result.counters = slam.counters();
+  result.session = slam.session();
   return result;
 }
 

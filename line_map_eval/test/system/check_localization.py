@@ -16,6 +16,7 @@ its trajectory must meet the relations to WHOLE_LOG_FLOOR, where a localizer tha
 the initial pose (a constant transform of the raw odometry) scores 7.37 m."""
 import math
 import os
+import struct
 import sys
 import tempfile
 import unittest
@@ -86,9 +87,18 @@ class CheckLocalization(unittest.TestCase):
 
         # The map, the bag and the offline reference.
         work = tempfile.mkdtemp(prefix="localization_")
+        session = os.path.join(work, "intel.session")
         rc, log = lt.run(["rosrun", "line_map_eval", "linemap_batch", raw, "--slam", "--merger", "cae",
-                          "--no-figures", "--no-progress", "--out", work], 900)
+                          "--no-figures", "--no-progress", "--out", work, "--save-session", session], 900)
         self.assertEqual(rc, 0, log)
+        # The session holds the SLAM's keyframes (as many as its graph's nodes) and the cae map file's
+        # text unchanged.
+        records = dict(lt.session_records(session))
+        keyframes = struct.unpack_from("<Q", records["KEYF"])[0]
+        self.assertEqual(keyframes, struct.unpack_from("<Q", records["NODE"])[0])
+        self.assertIn("wrote the session %s: %d keyframes" % (session, keyframes), log)
+        with open(os.path.join(work, "cae", "map.yaml"), "rb") as f:
+            self.assertEqual(records["LMAP"], f.read())
         bag = os.path.join(work, "intel.bag")
         rc, log = lt.run(["rosrun", "line_map_eval", "carmen_to_bag", raw, bag, "--max-scans", str(SCANS)], 300)
         self.assertEqual(rc, 0, log)

@@ -7,6 +7,7 @@ SLAM has handled every scan of the bag (its diagnostics), then checks the trajec
 the merger adjusted its map to them and holds map segments."""
 import math
 import os
+import struct
 import sys
 import tempfile
 import unittest
@@ -15,6 +16,7 @@ import rospy
 import rostest
 import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray
+from line_map_msgs.srv import LoadMap, SaveMap
 from nav_msgs.msg import Path
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
@@ -92,6 +94,36 @@ class CheckSlamPipeline(unittest.TestCase):
                                                            p.pose.orientation.z, p.pose.orientation.w)))
         # tf map -> odom at the last scan: the SLAM's.
         self.assertTrue(buf.can_transform("map", "odom", rospy.Time.from_sec(stamps[-1]), rospy.Duration(5.0)))
+        self.check_sessions(int(slam["keyframes"]), paths)
+
+    def check_sessions(self, keyframes, paths):
+        """~save_session writes the SLAM's graph with the merger's map (read here by an independent reader);
+        a damaged copy is refused naming its record, the running SLAM kept; the good file loads back."""
+        work = tempfile.mkdtemp(prefix="slam_session_")
+        path = os.path.join(work, "run.session")
+        rospy.wait_for_service("/slam/save_session", 30.0)
+        save = rospy.ServiceProxy("/slam/save_session", SaveMap)
+        load = rospy.ServiceProxy("/slam/load_session", LoadMap)
+        answer = save(path)
+        self.assertTrue(answer.success, answer.message)
+        records = dict(lt.session_records(path))
+        self.assertEqual(struct.unpack_from("<Q", records["KEYF"])[0], keyframes)
+        self.assertIn(b"method: cae", records.get("LMAP", b""), "the merger's map in the session")
+        with open(path, "rb") as f:
+            data = bytearray(f.read())
+        data[100] ^= 0xFF  # inside the keyframes' record
+        damaged = os.path.join(work, "damaged.session")
+        with open(damaged, "wb") as f:
+            f.write(data)
+        answer = load(damaged)
+        self.assertFalse(answer.success)
+        self.assertIn("record 'KEYF'", answer.message)
+        published = len(paths)
+        answer = load(path)
+        self.assertTrue(answer.success, answer.message)
+        self.assertIn("the line map to", answer.message)
+        lt.wait_until(lambda: len(paths) > published, "the loaded session's trajectory", lambda: str(len(paths)), 30.0)
+        self.assertEqual(len(paths[-1].poses), keyframes)
 
 
 def bisect(values, x):

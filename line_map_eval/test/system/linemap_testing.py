@@ -3,9 +3,11 @@ bags, the ground-truth wall coverage oracle, topic collection, the recorded regr
 the test artefact directory. Imported by the checker scripts next to this file."""
 import math
 import os
+import struct
 import subprocess
 import tempfile
 import time
+import zlib
 
 import rospkg
 import rospy
@@ -491,3 +493,23 @@ def precision(truth, segments, distance=0.1):
         total += length
         near += best * length
     return near / total if total else 0.0
+
+
+def session_records(path):
+    """The records of a session file read by this independent reader (line_map_merging's
+    session_file.hpp gives the layout): [(tag, payload)], each checksum verified with zlib's CRC-32."""
+    with open(path, "rb") as f:
+        data = f.read()
+    assert data[:16] == b"LINEMAP SESSION\n", data[:16]
+    assert struct.unpack_from("<I", data, 16)[0] == 1
+    records, at = [], 20
+    while at < len(data):
+        tag = data[at:at + 4].decode("ascii")
+        size, crc = struct.unpack_from("<QI", data, at + 4)
+        payload = data[at + 16:at + 16 + size]
+        assert len(payload) == size, "record %s truncated" % tag
+        assert zlib.crc32(payload) & 0xffffffff == crc, "record %s: checksum" % tag
+        records.append((tag, payload))
+        at += 16 + size
+    assert records[-1][0] == "END ", [t for t, _ in records]
+    return records

@@ -2,7 +2,11 @@
 // `scan`, takes odometry from tf odom -> base at the scan's stamp (optional), publishes tf
 // map -> odom (and, laser only, odom -> base from the front end), the optimised keyframe poses on
 // `optimized_trajectory` (nav_msgs/Path, each pose stamped with its scan's stamp) and diagnostics.
+// Services ~save_session and ~load_session write and read a session file (slam/session_file.hpp): the
+// SLAM's graph with the merging nodelet's map (its save_map/load_map services, parameter `merger`).
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <line_map_msgs/LoadMap.h>
+#include <line_map_msgs/SaveMap.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -13,12 +17,15 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "line_map_merging/slam/laser_slam.hpp"
+#include "line_map_merging/slam/session_file.hpp"
+#include "linemap/atomic_file.hpp"
 #include "linemap_ros/message_conversions.hpp"
 #include "linemap_ros/param_loader.hpp"
 #include "linemap_ros/tf_wait_queue.hpp"
@@ -70,6 +77,85 @@ class SlamNodelet : public nodelet::Nodelet
     waiting_->subscribe(nh, "scan", queue, [this](const ScanEvent& e) { return arrive(e); });
     diagnostics_ =
         std::make_unique<linemap_ros::WallDiagnostics>(nh, pnh, "laser slam", this, &SlamNodelet::diagnose);
+    merger_ = pnh.param<std::string>("merger", "line_map_merging");
+    save_srv_ = pnh.advertiseService("save_session", &SlamNodelet::onSaveSession, this);
+    load_srv_ = pnh.advertiseService("load_session", &SlamNodelet::onLoadSession, this);
+  }
+
+  /// The merging nodelet's map through a file beside `path`: its text (empty: no merger answered).
+  std::string mergerMap(const std::string& path, std::string& note)
+  {
+    line_map_msgs::SaveMap srv;
+    srv.request.path = path + ".map.tmp";
+    if (merger_.empty() || !ros::service::waitForService(merger_ + "/save_map", ros::Duration(1.0)) ||
+        !ros::service::call(merger_ + "/save_map", srv) || !srv.response.success)
+    {
+      note = "; no line map (merger '" + merger_ + "' " +
+             (srv.response.message.empty() ? "did not answer" : srv.response.message) + ")";
+      return {};
+    }
+    std::string text = linemap::readWholeFile(srv.request.path, "map file");
+    std::remove(srv.request.path.c_str());
+    return text;
+  }
+
+  bool onSaveSession(line_map_msgs::SaveMap::Request& req, line_map_msgs::SaveMap::Response& res)
+  {
+    Session session;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      session.slam = slam_->session();
+    }
+    std::string note;
+    try
+    {
+      session.line_map = mergerMap(req.path, note);  // outside the lock: scans go on meanwhile
+      writeSessionFile(req.path, session);
+      res.success = true;
+      res.message =
+          "saved " + std::to_string(session.slam.keyframes.size()) + " keyframes to " + req.path + note;
+    }
+    catch (const std::exception& e)
+    {
+      res.message = e.what();
+    }
+    return true;
+  }
+
+  bool onLoadSession(line_map_msgs::LoadMap::Request& req, line_map_msgs::LoadMap::Response& res)
+  {
+    try
+    {
+      const Session session = readSessionFile(req.path);  // everything checked before anything changes
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        slam_->restore(session.slam);
+        publishPath(ros::Time::now());
+      }
+      std::string note;
+      if (!session.line_map.empty()) note = loadMergerMap(req.path, session.line_map);
+      res.success = true;
+      res.message =
+          "loaded " + std::to_string(session.slam.keyframes.size()) + " keyframes from " + req.path + note;
+    }
+    catch (const std::exception& e)
+    {
+      res.message = e.what();  // the running SLAM is kept
+    }
+    return true;
+  }
+
+  std::string loadMergerMap(const std::string& path, const std::string& text)
+  {
+    line_map_msgs::LoadMap srv;
+    srv.request.path = path + ".map.tmp";
+    linemap::writeFileAtomically(srv.request.path, text, "map file");
+    const bool done = !merger_.empty() &&
+                      ros::service::waitForService(merger_ + "/load_map", ros::Duration(1.0)) &&
+                      ros::service::call(merger_ + "/load_map", srv) && srv.response.success;
+    std::remove(srv.request.path.c_str());
+    return done ? "; the line map to " + merger_
+                : "; the line map not loaded (merger '" + merger_ + "': " + srv.response.message + ")";
   }
 
   /// Before the tf wait (false: turned away): a zero stamp would be posed at the latest transform;
@@ -196,6 +282,8 @@ class SlamNodelet : public nodelet::Nodelet
   std::unique_ptr<linemap_ros::TfWaitQueue<sensor_msgs::LaserScan>> waiting_;
   tf2_ros::TransformBroadcaster broadcaster_;
   ros::Publisher path_pub_;
+  ros::ServiceServer save_srv_, load_srv_;
+  std::string merger_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
   std::string map_frame_, odom_frame_, base_frame_;
   bool use_odometry_ = true;

@@ -23,6 +23,9 @@ struct SlamRecordingResult
   /// The loop-closure edges in the final graph; `from` and `to` index `keyframes`.
   std::vector<line_map_merging::PoseGraphEdge> loop_edges;
   line_map_merging::SlamCounters counters;
+  /// What a session file keeps of the run (LaserSlam::session): keyframe and scan indices count the
+  /// scans the SLAM accepted.
+  line_map_merging::SlamSession session;
   double seconds = 0.0;      ///< front and back end, the whole recording (wall time)
   double cpu_seconds = 0.0;  ///< the same in CPU time of this thread
 };
