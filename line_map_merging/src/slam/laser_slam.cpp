@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -53,6 +54,7 @@ void LaserSlam::reset()
   scans_.clear();
   recent_disagreements_.clear();
   time_jumps_.reset();
+  continuation_.reset();
 }
 
 bool LaserSlam::observeStamp(double stamp)
@@ -84,7 +86,12 @@ SlamOutcome LaserSlam::addScan(const SlamScan& in)
   last_match_weights_ = local.match_weights;
   const std::size_t index = scans_.size();
   if (local.keyframe) addKeyframe(local, index);
-  if (keyframes_.empty())
+  if (continuation_ && keyframes_.size() == continuation_->first_keyframe)
+  {
+    // A continued trajectory before its first keyframe: posed in the map frame by its start.
+    scans_.push_back({local.scan.stamp, static_cast<std::size_t>(-1), continuation_->origin * local.pose});
+  }
+  else if (keyframes_.empty())
   {
     // No keyframe yet (the first scans were empty): nothing to hang the scan on.
     scans_.push_back({local.scan.stamp, static_cast<std::size_t>(-1), local.pose});
@@ -108,6 +115,11 @@ void LaserSlam::addKeyframe(LocalScanResult& scan, std::size_t scan_index)
   kf.path = scan.path;
   if (keyframes_.empty())
     graph_.addNode(kf.local);
+  else if (continuation_ && keyframes_.size() == continuation_->first_keyframe)
+  {
+    graph_.addNode(continuation_->origin * kf.local);
+    anchorContinuation(keyframes_.size());
+  }
   else
   {
     const Pose2 relative = keyframes_.back().local.inverse() * kf.local;
@@ -139,6 +151,28 @@ void LaserSlam::addKeyframe(LocalScanResult& scan, std::size_t scan_index)
     closeLoops();
     counters_.total_loop_ms += linemap::millisecondsSince(start);
   }
+}
+
+void LaserSlam::anchorContinuation(std::size_t k)
+{
+  const linemap::Vec2 here = graph_.node(k).translation();
+  std::size_t nearest = 0;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t j = 0; j < continuation_->first_keyframe; ++j)
+  {
+    const double d = (graph_.node(j).translation() - here).squaredNorm();
+    if (d < best) best = d, nearest = j;
+  }
+  // The start as a measurement from the saved keyframe nearest to it, robust as a closure is: the closures
+  // that follow outweigh a start known only roughly.
+  PoseGraphEdge e;
+  e.from = nearest;
+  e.to = k;
+  e.measurement = graph_.node(nearest).inverse() * graph_.node(k);
+  e.sigma_xy = continuation_->sigma_xy;
+  e.sigma_theta = continuation_->sigma_theta;
+  e.loop = true;
+  graph_.addEdge(e);
 }
 
 void LaserSlam::widenBySlip(const Pose2& disagreement, PoseGraphEdge& e)
@@ -219,6 +253,8 @@ std::vector<std::pair<double, Pose2>> LaserSlam::scanPoses() const
 Pose2 LaserSlam::currentPose() const
 {
   const Pose2& last_local = front_end_.currentLocal();
+  if (continuation_ && keyframes_.size() == continuation_->first_keyframe)
+    return continuation_->origin * last_local;
   if (keyframes_.empty()) return last_local;
   const std::size_t k = keyframes_.size() - 1;
   return graph_.node(k) * (keyframes_[k].local.inverse() * last_local);
@@ -351,6 +387,19 @@ void LaserSlam::restore(const SlamSession& session)
   for (const auto& e : graph_.edges())
     if (e.loop) newest_closed = std::max({newest_closed, e.from, e.to});
   if (!keyframes_.empty()) constraints_.closureAccepted(keyframes_[newest_closed].path, graph_);
+}
+
+void LaserSlam::continueFrom(const SlamSession& session, const Pose2& start, double sigma_xy,
+                             double sigma_theta)
+{
+  if (session.keyframes.empty()) throw std::invalid_argument("session: no keyframes to continue from");
+  if (!(sigma_xy > 0.0) || !(sigma_theta > 0.0))
+    throw std::invalid_argument("continueFrom: the start's sigmas must be positive");
+  restore(session);
+  // The new front end's path goes on past the saved one by a loop's minimum path, so every saved keyframe
+  // is a loop candidate of the new ones from the start (paths only grow along the keyframes).
+  front_end_.restart(keyframes_.back().path + params_.loop_min_path);
+  continuation_ = Continuation{keyframes_.size(), start, sigma_xy, sigma_theta};
 }
 
 }  // namespace line_map_merging

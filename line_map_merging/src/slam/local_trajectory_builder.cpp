@@ -255,6 +255,12 @@ void LocalTrajectoryBuilder::resumeFrom(const std::vector<SlamKeyframe>& keyfram
   rebuildLocalMap();
 }
 
+void LocalTrajectoryBuilder::restart(double path)
+{
+  *this = LocalTrajectoryBuilder(params_);
+  path_ = path;
+}
+
 void LocalTrajectoryBuilder::rebuildLocalMap()
 {
   std::vector<Vec2> points;

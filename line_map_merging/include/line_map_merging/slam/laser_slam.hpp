@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <deque>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -85,6 +86,12 @@ class LaserSlam
   /// std::invalid_argument when the session is inconsistent (nodes and keyframes differ in number, an
   /// edge or scan names a keyframe it does not have); the current run is then kept.
   void restore(const SlamSession& session);
+  /// Takes over a saved session (as restore()) and starts a new trajectory in it: the next scan's base pose
+  /// in the session's map frame is `start` (found by the caller: global localization, an initial pose),
+  /// known to `sigma_xy` and `sigma_theta`. Its first keyframe is tied to the saved keyframe nearest to it
+  /// by that pose, the rest by the chain and by loop closures to the saved keyframes as to its own.
+  void continueFrom(const SlamSession& session, const linemap::Pose2& start, double sigma_xy,
+                    double sigma_theta);
 
  private:
   /// Whether the stamp went back by more than time_jump_tolerance (counted).
@@ -119,6 +126,18 @@ class LaserSlam
   /// The recent chain edges' disagreements with the odometry (shift, turn): the odometry's own noise as
   /// this run sees it.
   std::deque<std::pair<double, double>> recent_disagreements_;
+  /// A new trajectory in a restored session (continueFrom): its first keyframe's index, the map pose of its
+  /// front end's origin, and how well that is known.
+  struct Continuation
+  {
+    std::size_t first_keyframe = 0;
+    linemap::Pose2 origin;
+    double sigma_xy = 0.0, sigma_theta = 0.0;
+  };
+  std::optional<Continuation> continuation_;
+  /// The continued trajectory's first keyframe `k`: its node at the start pose, tied to the nearest saved
+  /// keyframe.
+  void anchorContinuation(std::size_t k);
   bool keyframe_added_ = false, graph_optimized_ = false;
   SlamCounters counters_;
 };

@@ -50,6 +50,9 @@ class LocalTrajectoryBuilder
   /// Starts afresh at the newest of `keyframes` (a restored session), with the newest of them as the
   /// local map: the next scan is searched for around that keyframe's pose.
   void resumeFrom(const std::vector<SlamKeyframe>& keyframes);
+  /// Starts afresh in a new local frame (the next scan at its origin), the path counted on from `path`
+  /// (a new trajectory in a restored session: paths only grow along the keyframes).
+  void restart(double path);
   /// Fault injection (tests, the robustness benchmark): the front end's estimate jumps by `slip`,
   /// composed onto the last scan's pose, as after a false match it cannot see; its local map moves with
   /// it, so the following scans are matched consistently in the slipped frame and only the graph's
