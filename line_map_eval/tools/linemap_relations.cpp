@@ -22,6 +22,7 @@
 #include "line_map_eval/datasets/localization_recording.hpp"
 #include "line_map_eval/datasets/relations.hpp"
 #include "line_map_eval/datasets/slam_recording.hpp"
+#include "line_map_eval/datasets/slam_sessions.hpp"
 #include "linemap/small_helpers.hpp"
 #include "tool_main.hpp"
 
@@ -37,7 +38,7 @@ void usage(std::ostream& out)
          "                         [--corrected LOG] [--trajectory FILE]... [--param key=value]...\n"
          "                         [--config FILE] [--write FILE] [--out DIR] [--no-figures]\n"
          "                         [--localize MAP_FILE [--initial-pose X,Y,THETA] [--localize-config FILE]\n"
-         "                          [--localize-param key=value]...]\n"
+         "                          [--localize-param key=value]...] [--two-sessions]\n"
          "Prints the mean and standard deviation of the translational and rotational relation error of\n"
          "each trajectory (default: --slam).\n"
          "  --slam              laser SLAM on the log's scans and odometry\n"
@@ -58,7 +59,11 @@ void usage(std::ostream& out)
          "                      first scan's base pose in the map given by --initial-pose, or by global\n"
          "                      localization without it\n"
          "  --localize-config FILE  localization parameters (default: config/localization.yaml as above)\n"
-         "  --localize-param key=value  a localization parameter by its config/localization.yaml name\n";
+         "  --localize-param key=value  a localization parameter by its config/localization.yaml name\n"
+         "  --two-sessions      the SLAM in two sessions: the log cut at its middle scan, the first half\n"
+         "                      mapped and saved, the second half (odometry from zero, as after a\n"
+         "                      restart) globally localized in the first's keyframes and continuing its\n"
+         "                      session; the joined trajectory against the single run\n";
 }
 
 Trajectory readTrajectory(const std::string& path)
@@ -114,7 +119,7 @@ struct Arguments
   std::vector<std::string> positional, overrides, trajectories, localize_overrides;
   std::string corrected, config, write, localize, localize_config, out_dir = "linemap_relations_out";
   std::optional<Pose2> initial_pose;
-  bool slam = false, slam_no_odom = false, odometry = false, figures = true;
+  bool slam = false, slam_no_odom = false, odometry = false, figures = true, two_sessions = false;
 };
 
 Pose2 parsePose(const std::string& v)
@@ -155,6 +160,8 @@ bool parseArguments(int argc, char** argv, Arguments& a)
       a.slam_no_odom = true;
     else if (arg == "--odometry")
       a.odometry = true;
+    else if (arg == "--two-sessions")
+      a.two_sessions = true;
     else if (arg == "--no-figures")
       a.figures = false;
     else if (arg == "--initial-pose")
@@ -166,7 +173,7 @@ bool parseArguments(int argc, char** argv, Arguments& a)
   }
   if (a.positional.size() != 2) throw std::invalid_argument("expected RAW_LOG and RELATIONS");
   if (!a.slam && !a.slam_no_odom && !a.odometry && a.corrected.empty() && a.trajectories.empty() &&
-      a.localize.empty())
+      a.localize.empty() && !a.two_sessions)
     a.slam = true;
   return true;
 }
@@ -240,6 +247,32 @@ void reportSlam(const Evaluation& ev)
   }
 }
 
+void reportTwoSessions(const Evaluation& ev)
+{
+  const Arguments& a = ev.args;
+  linemap::ParamSet params = loadParameterFiles(configFiles(a.config, "config/slam.yaml"));
+  for (const auto& o : a.overrides) applyOverride(params, o);
+  linemap::ParamSet loc_params =
+      loadParameterFiles(configFiles(a.localize_config, "config/localization.yaml"));
+  for (const auto& o : a.localize_overrides) applyOverride(loc_params, o);
+  const std::size_t cut = ev.recording.scans.size() / 2;
+  const TwoSessionRun r =
+      runTwoSessions(ev.recording, cut, line_map_merging::LaserSlamParams::fromParams(params),
+                     line_map_merging::LocalizerParams::fromParams(loc_params), true);
+  Trajectory joined;
+  for (std::size_t i = 0; i < r.scan_poses.size() && i < ev.raw.scans.size(); ++i)
+    if (r.scan_poses[i]) joined.push_back({ev.raw.scans[i].timestamp, *r.scan_poses[i]});
+  std::ostringstream extra;
+  extra << std::setprecision(1) << std::fixed << r.cpu_seconds << " s CPU; cut at scan " << cut << "; ";
+  if (r.localized_at)
+    extra << "the second half localized at its scan " << *r.localized_at << ", " << r.closures_between
+          << " closures between the sessions, " << line_map_merging::closureSummary(r.second_counters);
+  else
+    extra << "the second half never localized: not mapped";
+  print("two sessions, joined", relationsError(ev.relations, joined), extra.str());
+  if (!a.write.empty()) writeTrajectory(a.write, joined);
+}
+
 void reportLocalization(const Evaluation& ev, const std::vector<linemap::Segment2>& segments)
 {
   const Arguments& a = ev.args;
@@ -286,6 +319,7 @@ int run(const Arguments& a)
   for (const auto& path : a.trajectories)
     print(fs::path(path).filename().string(), relationsError(relations, readTrajectory(path)), "");
   if (a.slam || a.slam_no_odom) reportSlam(ev);
+  if (a.two_sessions) reportTwoSessions(ev);
   if (!a.localize.empty()) reportLocalization(ev, map_segments);
   return 0;
 }

@@ -8,7 +8,8 @@
 namespace line_map_eval
 {
 SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::LaserSlamParams& params,
-                            bool use_odometry, const std::optional<FrontEndSlip>& slip)
+                            bool use_odometry, const std::optional<FrontEndSlip>& slip,
+                            const SlamContinuation* continuation)
 {
   SlamRecordingResult result;
   const auto start = std::chrono::steady_clock::now();
@@ -20,6 +21,10 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
   };
   const double cpu_start = cpu();
   line_map_merging::LaserSlam slam(params);
+  if (continuation)
+    slam.continueFrom(continuation->session, continuation->start, continuation->sigma_xy,
+                      continuation->sigma_theta);
+  const std::size_t saved_scans = continuation ? continuation->session.scans.size() : 0;
   std::vector<std::size_t> accepted;  // recording index of each scan the SLAM accepted
   for (std::size_t i = 0; i < recording.scans.size(); ++i)
   {
@@ -43,10 +48,13 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto poses = slam.scanPoses();
   result.scan_poses.assign(recording.scans.size(), Pose2());
-  for (std::size_t k = 0; k < poses.size() && k < accepted.size(); ++k)
-    result.scan_poses[accepted[k]] = poses[k].second;
-  for (std::size_t k = 0; k < slam.keyframes().size(); ++k)
-    result.keyframes.push_back({accepted[slam.keyframes()[k].scan], slam.graph().node(k)});
+  for (std::size_t k = 0; k < saved_scans && k < poses.size(); ++k)
+    result.continued_scan_poses.push_back(poses[k].second);
+  for (std::size_t k = saved_scans; k < poses.size() && k - saved_scans < accepted.size(); ++k)
+    result.scan_poses[accepted[k - saved_scans]] = poses[k].second;
+  const std::size_t saved_keyframes = continuation ? continuation->session.keyframes.size() : 0;
+  for (std::size_t k = saved_keyframes; k < slam.keyframes().size(); ++k)
+    result.keyframes.push_back({accepted[slam.keyframes()[k].scan - saved_scans], slam.graph().node(k)});
   result.closures = slam.closureAttempts();
   for (const auto& e : slam.graph().edges())
     if (e.loop) result.loop_edges.push_back(e);

@@ -26,8 +26,19 @@ struct SlamRecordingResult
   /// What a session file keeps of the run (LaserSlam::session): keyframe and scan indices count the
   /// scans the SLAM accepted.
   line_map_merging::SlamSession session;
+  /// Continuing a session: the saved scans' poses in the joined graph, in the session's scan order.
+  std::vector<Pose2> continued_scan_poses;
   double seconds = 0.0;      ///< front and back end, the whole recording (wall time)
   double cpu_seconds = 0.0;  ///< the same in CPU time of this thread
+};
+
+/// A saved session the run goes on from (LaserSlam::continueFrom): the recording's first scan is at `start`
+/// in the session's map frame, known to the sigmas.
+struct SlamContinuation
+{
+  line_map_merging::SlamSession session;
+  Pose2 start;
+  double sigma_xy = 0.1, sigma_theta = 0.05;
 };
 
 /// A front-end slip injected before one scan (LaserSlam::injectFrontEndSlip).
@@ -41,7 +52,8 @@ struct FrontEndSlip
 /// its odometry
 /// (`use_odometry` false: none, the laser-only case) to a LaserSlam.
 SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::LaserSlamParams& params,
-                            bool use_odometry = true, const std::optional<FrontEndSlip>& slip = std::nullopt);
+                            bool use_odometry = true, const std::optional<FrontEndSlip>& slip = std::nullopt,
+                            const SlamContinuation* continuation = nullptr);
 
 /// The recording with the SLAM keyframes as its corrected keyframes (a loop-closure dataset).
 Recording withSlamKeyframes(Recording recording, const SlamRecordingResult& slam);
