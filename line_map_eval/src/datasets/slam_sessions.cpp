@@ -34,7 +34,7 @@ std::vector<linemap::Segment2> sessionSurfaces(const line_map_merging::SlamSessi
 TwoSessionRun runTwoSessions(const Recording& recording, std::size_t cut,
                              const line_map_merging::LaserSlamParams& slam_params,
                              const line_map_merging::LocalizerParams& localizer_params, bool use_odometry,
-                             std::size_t localize_scans)
+                             const std::optional<Pose2>& start, std::size_t localize_scans)
 {
   TwoSessionRun out;
   out.cut = std::min(cut, recording.scans.size());
@@ -45,15 +45,21 @@ TwoSessionRun runTwoSessions(const Recording& recording, std::size_t cut,
   out.first_counters = a.counters;
   out.cpu_seconds = a.cpu_seconds;
   for (std::size_t i = 0; i < out.cut; ++i) out.scan_poses[i] = a.scan_poses[i];
-  // Where the second part starts, with no start pose given: global localization on the saved surfaces;
-  // the localizer carries the accepted pose back to the part's first scan by the odometry.
-  const LocalizationRunResult found =
-      runLocalization(second, sessionSurfaces(a.session), localizer_params, std::nullopt, 0,
-                      std::min(localize_scans, second.scans.size()));
-  out.cpu_seconds += found.cpu_seconds;
-  if (!found.recovered_at || found.scan_poses.empty()) return out;
-  out.localized_at = found.recovered_at;
-  SlamContinuation continuation{a.session, found.scan_poses.front()};
+  SlamContinuation continuation{a.session, start.value_or(Pose2()), 0.1, 0.05};
+  if (start)
+    out.localized_at = 0;
+  else
+  {
+    // Where the second part starts, with no start pose given: global localization on the saved surfaces;
+    // the localizer carries the accepted pose back to the part's first scan by the odometry.
+    const LocalizationRunResult found =
+        runLocalization(second, sessionSurfaces(a.session), localizer_params, std::nullopt, 0,
+                        std::min(localize_scans, second.scans.size()));
+    out.cpu_seconds += found.cpu_seconds;
+    if (!found.recovered_at || found.scan_poses.empty()) return out;
+    out.localized_at = found.recovered_at;
+    continuation.start = found.scan_poses.front();
+  }
   const SlamRecordingResult b = runSlam(second, slam_params, use_odometry, std::nullopt, &continuation);
   out.second_counters = b.counters;
   out.cpu_seconds += b.cpu_seconds;

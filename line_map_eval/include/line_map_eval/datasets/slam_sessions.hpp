@@ -25,8 +25,8 @@ struct TwoSessionRun
   /// none for the second part's scans before it was localized, or where the SLAM rejected a scan.
   std::vector<std::optional<Pose2>> scan_poses;
   std::size_t cut = 0;
-  /// The second part's scan at which global localization accepted a pose; none: never (then the second
-  /// part is not mapped).
+  /// The second part's scan at which global localization accepted a pose (0 with a given start); none:
+  /// never (then the second part is not mapped).
   std::optional<std::size_t> localized_at;
   std::size_t closures_between = 0;  ///< loop edges joining the two sessions' keyframes
   line_map_merging::SlamCounters first_counters, second_counters;
@@ -34,10 +34,13 @@ struct TwoSessionRun
 };
 
 /// Maps `recording` in two sessions cut at scan `cut` (above); the localization looks for the second part's
-/// start in its first `localize_scans` scans.
+/// start in its first `localize_scans` scans. A given `start` (the second part's first base pose in the
+/// first's map frame, as from an initial pose) is taken instead. Either is taken as known to 0.1 m and
+/// 0.05 rad.
 TwoSessionRun runTwoSessions(const Recording& recording, std::size_t cut,
                              const line_map_merging::LaserSlamParams& slam_params,
                              const line_map_merging::LocalizerParams& localizer_params, bool use_odometry,
+                             const std::optional<Pose2>& start = std::nullopt,
                              std::size_t localize_scans = 400);
 
 }  // namespace line_map_eval
