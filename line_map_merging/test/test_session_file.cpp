@@ -251,6 +251,17 @@ struct Drive
       odom.push_back(odom.back() * step);
     }
   }
+  /// The largest position error of a run's scan poses (the map frame is the first pose).
+  double worstError(const std::vector<std::pair<double, Pose2>>& poses) const
+  {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < poses.size(); ++i)
+    {
+      const Pose2 p = truth[0] * poses[i].second;
+      worst = std::max(worst, std::hypot(p.x - truth[i].x, p.y - truth[i].y));
+    }
+    return worst;
+  }
   SlamScan scan(std::size_t i) const
   {
     SlamScan s;
@@ -282,13 +293,7 @@ TEST(SlamSession, RestoredRunHasTheSameTrajectoryAndMapsOn)
   for (std::size_t i = half; i < drive.truth.size(); ++i) restored.addScan(drive.scan(i));
   const auto poses = restored.scanPoses();
   ASSERT_EQ(poses.size(), drive.truth.size());
-  double worst = 0.0;
-  for (std::size_t i = 0; i < poses.size(); ++i)
-  {
-    const Pose2 p = drive.truth[0] * poses[i].second;
-    worst = std::max(worst, std::hypot(p.x - drive.truth[i].x, p.y - drive.truth[i].y));
-  }
-  EXPECT_LT(worst, 0.1);
+  EXPECT_LT(drive.worstError(poses), 0.1);
   EXPECT_GT(restored.keyframes().size(), first.keyframes().size());
 }
 
@@ -335,13 +340,7 @@ TEST(SlamSession, AContinuedRunJoinsTheSavedGraph)
   }
   const auto poses = second.scanPoses();
   ASSERT_EQ(poses.size(), drive.truth.size());
-  double worst = 0.0;
-  for (std::size_t i = 0; i < poses.size(); ++i)
-  {
-    const Pose2 p = drive.truth[0] * poses[i].second;
-    worst = std::max(worst, std::hypot(p.x - drive.truth[i].x, p.y - drive.truth[i].y));
-  }
-  EXPECT_LT(worst, 0.1);
+  EXPECT_LT(drive.worstError(poses), 0.1);
   std::size_t across = 0;
   for (const auto& e : second.graph().edges())
     across += e.loop && std::min(e.from, e.to) < saved.keyframes.size() &&

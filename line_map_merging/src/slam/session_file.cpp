@@ -43,6 +43,11 @@ class Encoder
     f64(p.y);
     f64(p.theta);
   }
+  void point(const Vec2& p)
+  {
+    f64(p.x());
+    f64(p.y());
+  }
   void bytes(const std::string& s) { out_ += s; }
   std::string& str() { return out_; }
 
@@ -75,18 +80,12 @@ std::string keyframesPayload(const std::vector<SlamKeyframe>& keyframes)
     e.pose(k.local);
     e.f64(k.path);
     e.u64(k.points.size());
-    for (const Vec2& p : k.points)
-    {
-      e.f64(p.x());
-      e.f64(p.y());
-    }
+    for (const Vec2& p : k.points) e.point(p);
     e.u64(k.joins.size());
     for (const auto& s : k.joins)
     {
-      e.f64(s.start.x());
-      e.f64(s.start.y());
-      e.f64(s.end.x());
-      e.f64(s.end.y());
+      e.point(s.start);
+      e.point(s.end);
     }
   }
   return std::move(e.str());
