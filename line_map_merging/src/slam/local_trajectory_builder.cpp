@@ -151,20 +151,24 @@ std::optional<Pose2> LocalTrajectoryBuilder::matchFrontEnd(const SlamScan& scan,
     return std::nullopt;
   }
   typical_score_ = typical_score_ > 0.0 ? 0.9 * typical_score_ + 0.1 * best->score : best->score;
-  Pose2 pose = best->pose;
-  if (prediction.odometry_usable)
+  if (!prediction.odometry_usable) return best->pose;
+  return heldToOdometry(*best, predicted, weights, counters);
+}
+
+Pose2 LocalTrajectoryBuilder::heldToOdometry(const MatchResult& match, const Pose2& predicted,
+                                             Eigen::Matrix2d& weights, SlamCounters& counters) const
+{
+  // The match's translation where it determines one, the odometry's elsewhere.
+  const TranslationShape shape = matchShape(match, params_);
+  weights = shape.weights;
+  Pose2 pose = match.pose;
+  if (shape.degenerate)
   {
-    // The match's translation where it determines one, the odometry's elsewhere.
-    const TranslationShape shape = matchShape(*best, params_);
-    weights = shape.weights;
-    if (shape.degenerate)
-    {
-      const Vec2 t =
-          predicted.translation() + shape.weights * (best->pose.translation() - predicted.translation());
-      pose.x = t.x();
-      pose.y = t.y();
-      ++counters.degenerate_matches;
-    }
+    const Vec2 t =
+        predicted.translation() + shape.weights * (match.pose.translation() - predicted.translation());
+    pose.x = t.x();
+    pose.y = t.y();
+    ++counters.degenerate_matches;
   }
   return pose;
 }

@@ -58,9 +58,9 @@ struct LaserSlamParams
   double odometry_sigma_xy = 0.2, odometry_sigma_theta = 0.05;  ///< chain edges with unmatched scans
   /// A matched chain edge whose disagreement with the odometry's motion over the same keyframe step lies far
   /// beyond the run's usual ones (a slip of the front end or of the odometry) is no more certain than the
-  /// two agree (the disagreement added in quadrature to its sigmas). Off by default: it repairs some
-  /// injected slips and makes others worse (README, known limits).
-  bool edge_odometry_disagreement = false;
+  /// two agree (the disagreement added in quadrature to its sigmas), and the loop search looks across it
+  /// until a closure spans it (ConstraintBuilder::suspectEdge).
+  bool edge_odometry_disagreement = true;
   double loop_sigma_xy = 0.05, loop_sigma_theta = 0.01;
   double loop_loss_scale = 1.0;      ///< Cauchy scale, in standard deviations
   double loop_min_path = 5.0;        ///< [m] path between a keyframe and a candidate

@@ -14,6 +14,7 @@
 
 #include "line_map_merging/slam/laser_slam_params.hpp"
 #include "line_map_merging/slam/likelihood_grid.hpp"
+#include "line_map_merging/slam/scan_matcher.hpp"
 #include "line_map_merging/slam/slam_types.hpp"
 #include "linemap/geometry.hpp"
 
@@ -94,6 +95,10 @@ class LocalTrajectoryBuilder
   void addKeyframe(const linemap::Pose2& pose, const std::vector<linemap::Vec2>& points,
                    const std::vector<linemap::Segment2>& joins);
   void rebuildLocalMap();
+  /// A match made with usable odometry: its translation where it determines one, the prediction's along a
+  /// direction it leaves open; `weights` its translation shape.
+  linemap::Pose2 heldToOdometry(const MatchResult& match, const linemap::Pose2& predicted,
+                                Eigen::Matrix2d& weights, SlamCounters& counters) const;
 
   LaserSlamParams params_;
   double typical_score_ = 0.0;  ///< running mean of the accepted match scores
