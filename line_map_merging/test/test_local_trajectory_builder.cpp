@@ -122,3 +122,35 @@ TEST(LocalTrajectoryBuilder, OlderScanIsRejectedAndChangesNothing)
   EXPECT_TRUE(first.chain_matched);
   EXPECT_FALSE(first.joins.empty());
 }
+
+// In the middle of a round hall every heading sees the same scan. The robot turns 1 rad between two scans
+// (a gap in the log): the odometry's step exceeds max_odometry_turn, so it counts as a jump, and both its
+// pose and the constant-velocity prediction (no turn) are searched. Both match perfectly; the odometry's
+// measured motion must stand, not the assumption (which keeps the old heading, 1 rad off).
+TEST(LocalTrajectoryBuilder, AcrossAnOdometryJumpTheMeasuredTurnStands)
+{
+  std::vector<linemap::Segment2> hall;
+  constexpr int kSides = 120;
+  for (int i = 0; i < kSides; ++i)
+  {
+    const double a = 2.0 * linemap::kPi * i / kSides, b = 2.0 * linemap::kPi * (i + 1) / kSides;
+    hall.emplace_back(linemap::Vec2(4.0 * std::cos(a), 4.0 * std::sin(a)),
+                      linemap::Vec2(4.0 * std::cos(b), 4.0 * std::sin(b)));
+  }
+  const LaserSlamParams p;
+  ASSERT_GT(1.0, p.max_odometry_turn);
+  LocalTrajectoryBuilder builder(p);
+  SlamCounters counters;
+  for (int i = 0; i < 3; ++i)
+  {
+    SlamScan s;
+    s.stamp = 1.0 + 0.1 * i;
+    const double heading = i < 2 ? 0.0 : 1.0;
+    s.points = slam_world::scan(hall, Pose2(0.0, 0.0, heading), 180, 20.0, 0.0);
+    s.odom = Pose2(0.0, 0.0, heading);
+    const LocalScanResult r = builder.addScan(s, counters);
+    // The hall's 120 sides look alike every 0.052 rad: within that of the truth, not 1 rad off.
+    EXPECT_NEAR(linemap::normalizeAngle(r.pose.theta - heading), 0.0, 0.1) << "scan " << i;
+  }
+  EXPECT_EQ(counters.odometry_jumps, 1u);
+}

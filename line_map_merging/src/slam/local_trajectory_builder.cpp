@@ -142,8 +142,12 @@ std::optional<Pose2> LocalTrajectoryBuilder::matchFrontEnd(const SlamScan& scan,
   if (!best || best->score < enough || at_edge)
   {
     if (prediction.odometry_usable) ++counters.wide_searches;
-    attempt(predicted, true);
+    // Across an odometry jump the odometry's motion is a measurement and the constant velocity an
+    // assumption: the odometry's pose stands unless its match is refused. (Where many headings look alike,
+    // a round hall, the assumption finds a match as good or better: against a keyframe the front end posed
+    // wrongly just before, after a gap in the log.)
     if (prediction.jumped) attempt(*prediction.jumped, true);
+    if (!prediction.jumped || !best || best->score < params_.min_score) attempt(predicted, true);
   }
   if (!best || best->score < params_.min_score)
   {
