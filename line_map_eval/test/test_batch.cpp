@@ -429,13 +429,16 @@ TEST(Batch, FastPathsWriteTheSameMapFileAsTheReferencePaths)
 }
 
 // The large-space world (issue 36): a 60 x 40 m hall driven around the middle, 13-14 m from its
-// facades, with its own 1 degree laser. The faces the robot saw (ground truth) must be mapped: 94.3 %
-// today; an extraction that needs 25 points per line (a threshold fixed for a 0.25 degree laser) maps
-// 42.9 %. The floor is the issue's target.
+// facades, with its own 1 degree laser. The faces the robot saw in one scan's sight (ground truth)
+// must be mapped: 94.3 % today; an extraction that needs 25 points per line (a threshold fixed for a
+// 0.25 degree laser) maps 42.9 %. The floor is the issue's target, set for sights of one scan; the
+// booth panels and pillar faces that only all scans together see (accumulate_sightings, the default)
+// are not mapped yet (README, Known limits).
 TEST(Batch, ExpoHallIsMappedFromTheMiddle)
 {
   const BatchDataset expo = loadSimulatedWorld(kRoot + "/config/worlds/expo_hall.yaml");
   BatchOptions options = quietOptions();
+  applyOverride(options.params, "eval/gt_accumulate_sightings=false");
   options.adjust_every = 50;
   options.mergers = {"cae"};
   const MergerRun r = runBatch(expo, options).mergers.at(0);

@@ -258,7 +258,10 @@ TEST(GroundTruthMetrics, APerfectMapOfWhatWasSeenScoresPerfectlyOnTheOffice)
   const auto sim = line_map_eval::simulate(
       line_map_eval::loadWorld(std::string(LINEMAP_SOURCE_DIR) + "/config/worlds/office.yaml"), opt);
   const GroundTruthParams p = defaults();
-  const SeenParts seen = line_map_eval::seenParts(sim.truth, p.min_seen_length, p.min_seen_beams);
+  // Seen: in one scan's sight, or by all scans together (accumulate_sightings).
+  const SeenParts seen = line_map_eval::unionOfSeenParts(
+      line_map_eval::seenParts(sim.truth, p.min_seen_length, p.min_seen_beams),
+      line_map_eval::accumulatedSeenParts(sim.truth, p.min_seen_length, p.min_seen_beams));
   std::vector<Segment2> map;
   std::size_t seen_faces = 0;
   for (std::size_t f = 0; f < seen.size(); ++f)

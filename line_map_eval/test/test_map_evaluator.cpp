@@ -231,7 +231,9 @@ TEST(MapEvaluator, CoverageDropsWhenAWallIsLeftOut)
 
   // Straight structure, classified once with the table: the four walls, bar at most the 19 points
   // within 0.1 m of each corner (structure_coverage.hpp). All covered by the four walls; without
-  // the west wall, its points but the 11 near the ends are uncovered: 3.9 m unmapped.
+  // the west wall, its points but the 11 near the ends are uncovered: 3.9 m unmapped, less what the
+  // smeared scale's band of a neighbouring wall (up to its half-width, 0.25 m, from each corner)
+  // covers through its feet on that wall's line.
   const auto& structure = eval.structure();
   EXPECT_EQ(structure.points, points.size());
   EXPECT_GE(structure.indices.size(), points.size() - 4 * 19);
@@ -240,7 +242,8 @@ TEST(MapEvaluator, CoverageDropsWhenAWallIsLeftOut)
   EXPECT_EQ(all.structure_coverage.unmapped_length, 0.0);
   EXPECT_NEAR(all.structure_coverage.length, 16.0, 0.45);  // to a 0.1 m column per wall
   EXPECT_NEAR(static_cast<double>(m.structure_coverage.uncovered.size()), per_wall - 11.0, 20.0);
-  EXPECT_NEAR(m.structure_coverage.unmapped_length, 3.9, 0.15);
+  EXPECT_GE(m.structure_coverage.unmapped_length, 3.9 - 2 * 0.25 - 0.15);
+  EXPECT_LE(m.structure_coverage.unmapped_length, 3.9 + 0.15);
   // Corners are no crossings; a segment through the north wall, 0.5 m past it either way, is one.
   EXPECT_TRUE(all.crossing_pairs.empty());
   std::vector<Segment2> crossed = kWalls;

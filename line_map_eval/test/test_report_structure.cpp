@@ -12,7 +12,7 @@ using namespace line_map_eval;
 
 namespace
 {
-MergerRun run(const std::string& name, std::size_t covered, std::size_t crossings)
+MergerRun run(const std::string& name, std::size_t covered, std::size_t crossings, double unmapped)
 {
   MergerRun r;
   r.name = name;
@@ -27,8 +27,8 @@ MergerRun run(const std::string& name, std::size_t covered, std::size_t crossing
   r.length_coverage.covered = 97.8;
   r.structure_coverage.points = 800;
   r.structure_coverage.covered = covered;
-  r.structure_coverage.length = 437.3;
-  r.structure_coverage.unmapped_length = 1234.56;  // wider than any real one
+  r.structure_coverage.length = 4938.24;
+  r.structure_coverage.unmapped_length = unmapped;
   r.redundancy.pairs = 93;
   for (std::size_t k = 0; k < crossings; ++k)
     r.crossing_pairs.push_back({static_cast<int>(k), static_cast<int>(k + 1), linemap::Vec2(1.0, 2.0)});
@@ -46,7 +46,8 @@ BatchResult result()
   b.scan_points = 1000;
   b.table_ms = 10.0;
   b.structure_ms = 150.0;
-  b.mergers = {run("cae", 600, 0), run("cae_offline", 700, 12)};
+  // Unmapped 1234.56 m (wider than any real one) and 617.28 m of 4938.24: 75 % and 87.5 % covered.
+  b.mergers = {run("cae", 600, 0, 1234.56), run("cae_offline", 700, 12, 617.28)};
   b.mergers[1].evaluation_ms = 40.0;
   return b;
 }
@@ -63,9 +64,10 @@ TEST(ReportStructure, TerminalTableFitsAndShowsTheNewColumns)
   EXPECT_NE(rows[0].find("struct"), std::string::npos);
   EXPECT_NE(rows[0].find("unmap."), std::string::npos);
   EXPECT_NE(rows[0].find("cross"), std::string::npos);
-  // 600 / 800 = 75.0 %, 700 / 800 = 87.5 %; 1234.56 m to 0.1 m; point coverage 69.0 % as before.
+  // 1 - 1234.56 / 4938.24 = 75.0 %, 1 - 617.28 / 4938.24 = 87.5 %; lengths to 0.1 m; point coverage
+  // 69.0 % as before.
   EXPECT_NE(rows[2].find(" 75.0 1234.6 "), std::string::npos) << rows[2];
-  EXPECT_NE(rows[3].find(" 87.5 1234.6 "), std::string::npos) << rows[3];
+  EXPECT_NE(rows[3].find(" 87.5  617.3 "), std::string::npos) << rows[3];
   EXPECT_NE(rows[2].find(" 69.0 "), std::string::npos) << rows[2];
   // The last column: crossing pairs.
   EXPECT_EQ(rows[2].back(), '0');
@@ -83,7 +85,10 @@ TEST(ReportStructure, JsonKeys)
   EXPECT_EQ(cae["covered_structure_points"].as<std::size_t>(), 600u);
   EXPECT_DOUBLE_EQ(cae["structure_coverage_pct"].as<double>(), 75.0);
   EXPECT_DOUBLE_EQ(offline["structure_coverage_pct"].as<double>(), 87.5);
-  EXPECT_DOUBLE_EQ(cae["structure_length_m"].as<double>(), 437.3);
+  // The share of the structure points: 600 / 800, 700 / 800.
+  EXPECT_DOUBLE_EQ(cae["structure_point_coverage_pct"].as<double>(), 75.0);
+  EXPECT_DOUBLE_EQ(offline["structure_point_coverage_pct"].as<double>(), 87.5);
+  EXPECT_DOUBLE_EQ(cae["structure_length_m"].as<double>(), 4938.24);
   EXPECT_DOUBLE_EQ(cae["unmapped_structure_length_m"].as<double>(), 1234.56);
   EXPECT_EQ(cae["crossing_pairs"].as<std::size_t>(), 0u);
   EXPECT_EQ(offline["crossing_pairs"].as<std::size_t>(), 12u);
@@ -97,5 +102,5 @@ TEST(ReportStructure, MarkdownColumns)
   for (const char* header : {"| structure cov % |", "| unmapped structure m |", "| crossing pairs |"})
     EXPECT_NE(md.find(header), std::string::npos) << header;
   EXPECT_NE(md.find("| 75.00 | 1234.56 |"), std::string::npos);
-  EXPECT_NE(md.find("straight structure: 800 of the registered points (437.3 m)"), std::string::npos);
+  EXPECT_NE(md.find("straight structure: 800 of the registered points (4938.2 m)"), std::string::npos);
 }

@@ -149,11 +149,71 @@ TEST(StructureCoverage, ThickBandWithinToleranceOnly)
       for (double along = 0.0; along <= 3.0 + 1e-9; along += 0.01) cloud.push_back(along * u + across * n);
     return cloud;
   };
+  StructureParams fine_only;
+  fine_only.smear_band = 0.0;
   const auto thin = band(0.06);
-  const StructurePoints s = classifyStructure(thin, kSigma, {});
+  const StructurePoints s = classifyStructure(thin, kSigma, fine_only);
   EXPECT_EQ(s.indices.size(), thin.size());
   EXPECT_NEAR(s.length, 3.0, 0.2);
-  EXPECT_TRUE(classifyStructure(band(0.16), kSigma, {}).indices.empty());
+  EXPECT_TRUE(classifyStructure(band(0.16), kSigma, fine_only).indices.empty());
+  // At the smeared scale (the defaults) 16 cm is a smeared wall (RMS 4.6 cm, under 8 cm), none of it
+  // fine; a band 60 cm thick (RMS 17 cm) is no structure at either scale.
+  const auto smeared = band(0.16);
+  const StructurePoints wide = classifyStructure(smeared, kSigma, {});
+  EXPECT_EQ(wide.indices.size(), smeared.size());
+  EXPECT_EQ(std::count(wide.fine.begin(), wide.fine.end(), 1), 0);
+  EXPECT_TRUE(classifyStructure(band(0.6), kSigma, {}).indices.empty());
+}
+
+// A 6 m wall registered from 8 poses that disagree across it by up to 10 cm (offsets evenly spaced in
+// [-0.1, 0.1] m: RMS 6.5 cm, so the band's reach is sqrt(3) x 6.5 = 11.3 cm): every point is structure,
+// a segment on the central line covers all of them (those beyond 5 cm through their foot on the
+// smeared line), and a parallel segment 0.5 m away none.
+TEST(StructureCoverage, SmearedWallIsStructureAndItsLineCoversIt)
+{
+  std::vector<Vec2> cloud;
+  Jitter j;
+  for (int k = 0; k < 8; ++k)
+  {
+    const double offset = -0.1 + 0.2 * k / 7.0;
+    addLine(cloud, Vec2(0.0, offset), Vec2(6.0, offset), 0.02, 0.01, &j);
+  }
+  const StructurePoints s = classifyStructure(cloud, kSigma, {});
+  EXPECT_EQ(s.indices.size(), cloud.size());
+  const auto coverOf = [&](double y)
+  {
+    const std::vector<Segment2> map{{Vec2(0.0, y), Vec2(6.0, y)}};
+    return computeStructureCoverage(s, computePointCoverage(cloud, map, kSigma), map, kSigma);
+  };
+  EXPECT_EQ(coverOf(0.0).fraction(), 1.0);
+  EXPECT_EQ(coverOf(0.5).fraction(), 0.0);
+  // Fine structure alone: only the copies within 5 cm of the line would count as covered.
+  StructureParams fine_only;
+  fine_only.smear_band = 0.0;
+  const StructurePoints f = classifyStructure(cloud, kSigma, fine_only);
+  const std::vector<Segment2> centre{{Vec2(0.0, 0.0), Vec2(6.0, 0.0)}};
+  EXPECT_LT(computeStructureCoverage(f, computePointCoverage(cloud, centre, kSigma), centre, kSigma).covered,
+            cloud.size() * 3 / 4);
+}
+
+// A wall seen only from afar: 40 points at random along 6 m (one per 15 cm on average, 1 cm noise),
+// too sparse for the fine band's fill, straight at the smeared scale: structure. A filled 1 x 3 m
+// table top is not (RMS 29 cm).
+TEST(StructureCoverage, SparseWallSeenFromAfarIsStructure)
+{
+  std::vector<Vec2> sparse;
+  std::mt19937 gen(3);
+  std::uniform_real_distribution<double> along(0.0, 6.0), across(-0.01, 0.01);
+  for (int k = 0; k < 40; ++k) sparse.emplace_back(along(gen), across(gen));
+  StructureParams fine_only;
+  fine_only.smear_band = 0.0;
+  EXPECT_LT(classifyStructure(sparse, kSigma, fine_only).indices.size(), sparse.size() / 2);
+  EXPECT_EQ(classifyStructure(sparse, kSigma, {}).indices.size(), sparse.size());
+
+  std::vector<Vec2> table;
+  for (double x = 0.0; x <= 3.0 + 1e-9; x += 0.02)
+    for (double y = 0.0; y <= 1.0 + 1e-9; y += 0.02) table.emplace_back(x, y);
+  EXPECT_TRUE(classifyStructure(table, kSigma, {}).indices.empty());
 }
 
 // A wall registered twice, the copies 3 cm apart: one band of RMS 1.5 cm, structure, and its length
@@ -274,24 +334,31 @@ TEST(StructureCoverage, HalfMappedWall)
   const StructurePoints s = classifyStructure(cloud, kSigma, {});
   EXPECT_EQ(s.indices.size(), wall_points);
   const auto points = computePointCoverage(cloud, map, kSigma);
-  const auto c = computeStructureCoverage(s, points);
+  const auto c = computeStructureCoverage(s, points, map, kSigma);
   EXPECT_EQ(c.points, wall_points);
-  EXPECT_NEAR(c.fraction(), 2.05 / 4.0, 0.005);
+  EXPECT_NEAR(c.pointFraction(), 2.05 / 4.0, 0.005);
+  // By length: the unmapped 1.95 m of 4 m, each to the 0.1 m columns of the length grid.
+  EXPECT_DOUBLE_EQ(c.fraction(), 1.0 - c.unmapped_length / c.length);
+  EXPECT_NEAR(c.fraction(), 2.05 / 4.0, 0.06);
   EXPECT_NEAR(c.unmapped_length, 1.95, 0.15);
   EXPECT_NEAR(c.length, 4.0, 0.15);
   EXPECT_EQ(c.covered + c.uncovered.size(), c.points);
   for (const std::size_t i : c.uncovered) EXPECT_GT((cloud[i] - a).dot(at(phi, 1.0)), 2.0);
-  // Point coverage counts the 441 clutter points as misses too.
-  EXPECT_NEAR(points.fraction(), c.covered / static_cast<double>(cloud.size()), 1e-12);
+  // Point coverage counts the 441 clutter points as misses too (the structure's covered points are the
+  // same but for the few just past the segment's end whose feet on the wall's line, 1 cm nearer, are
+  // within reach).
+  EXPECT_NEAR(points.fraction(), c.covered / static_cast<double>(cloud.size()), 2e-3);
 
   // An empty map leaves the whole wall unmapped; a map on the whole wall none of it.
-  const auto none = computeStructureCoverage(s, computePointCoverage(cloud, {}, kSigma));
+  const auto none = computeStructureCoverage(s, computePointCoverage(cloud, {}, kSigma), {}, kSigma);
   EXPECT_EQ(none.fraction(), 0.0);
   EXPECT_NEAR(none.unmapped_length, 4.0, 0.15);
-  const auto all = computeStructureCoverage(s, computePointCoverage(cloud, {{a, a + at(phi, 4.0)}}, kSigma));
+  const std::vector<Segment2> whole{{a, a + at(phi, 4.0)}};
+  const auto all = computeStructureCoverage(s, computePointCoverage(cloud, whole, kSigma), whole, kSigma);
   EXPECT_EQ(all.fraction(), 1.0);
   EXPECT_EQ(all.unmapped_length, 0.0);
-  EXPECT_THROW(computeStructureCoverage(s, computePointCoverage({}, map, kSigma)), std::invalid_argument);
+  EXPECT_THROW(computeStructureCoverage(s, computePointCoverage({}, map, kSigma), map, kSigma),
+               std::invalid_argument);
 }
 
 // computeMapMetrics classifies when not given the classification, with the same result.

@@ -42,7 +42,8 @@ void usage(std::ostream& out)
   out << "usage: linemap_batch DATASET [--corrected LOG | --slam [--relations FILE] [--save-session F]]\n"
          "                     [--extractor NAME] [--merger NAME]...\n"
          "                     [--param key=value]... [--config FILE]... [--config-dir DIR] [--out DIR]\n"
-         "                     [--every N] [--sensor FILE] [--no-progress] [--no-figures] [--time-steps]\n"
+         "                     [--every N] [--sensor FILE] [--pose-noise P,H[,L]] [--no-progress] "
+         "[--no-figures] [--time-steps]\n"
          "                     [--help]\n"
          "\n"
          "DATASET is a raw CARMEN log (with --corrected: its corrected keyframe log), a corrected or\n"
@@ -75,6 +76,8 @@ void usage(std::ostream& out)
          "                    the end); a .bag's own trajectories are used as they are\n"
          "  --sensor FILE     (a world file) simulate with this sensor profile (config/sensors/*.yaml):\n"
          "                    its laser block replaces the world's key by key\n"
+         "  --pose-noise P,H[,L]  (a world file) the keyframes' registered poses err: std P [m] of x\n"
+         "                    and y, H [deg] of the heading, correlated over L m of path (default 10)\n"
          "  --no-progress     no progress bars\n"
          "  --no-figures      write the reports and map files only\n"
          "  --time-steps      time each step of the mergers that name theirs (CAE-RLSM: OTM-ILSM, map\n"
@@ -119,6 +122,7 @@ struct Arguments
   std::vector<std::string> configs, overrides;
   bool replay = false, slam = false;
   std::string relations, sensor, save_session;
+  std::optional<line_map_eval::RegistrationModel> pose_noise;
   BatchOptions options;
 };
 
@@ -171,6 +175,8 @@ bool parseArguments(int argc, char** argv, Arguments& a)
       a.options.time_steps = true;
     else if (arg == "--slam")
       a.slam = true;
+    else if (arg == "--pose-noise")
+      a.pose_noise = line_map_eval::parseRegistrationOption(arg, cl.value());
     else if (arg == "--replay")
       a.replay = true;
     else if (!arg.empty() && arg[0] == '-')
@@ -315,6 +321,7 @@ BatchDataset loadDataset(const Arguments& a, const linemap::ParamSet& slam_param
     sim.on_scan = [&bar](std::size_t done, std::size_t) { bar.update(done); };
     World world = loadWorld(a.dataset);
     if (!a.sensor.empty()) world = withSensorProfile(world, a.sensor);
+    sim.registration = a.pose_noise;
     BatchDataset dataset = simulatedDataset(world, sim);
     bar.finish();
     return dataset;
@@ -362,6 +369,9 @@ int run(Arguments& a)
   a.options.out_dir = a.out_dir;
   if (!a.sensor.empty() && !isWorldFile(a.dataset))
     throw std::invalid_argument("--sensor goes with a world file (config/worlds/*.yaml), not " + a.dataset);
+  if (a.pose_noise && !isWorldFile(a.dataset))
+    throw std::invalid_argument("--pose-noise goes with a world file (config/worlds/*.yaml), not " +
+                                a.dataset);
   if (a.replay) return runReplay(a);
   line_map_merging::Session session;
   const BatchResult result = runBatch(loadDataset(a, slam_params, session.slam), a.options);

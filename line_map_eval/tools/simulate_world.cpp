@@ -28,7 +28,8 @@ const char* kUsage = R"(usage: rosrun line_map_eval simulate_world WORLD.yaml OU
 Simulates one lap of the world's closed path and writes
   OUT.bag         scan (sensor_msgs/LaserScan), tf odom->base_link (drifting odometry),
                   tf_static base_link->laser, tf map->odom, optimized_trajectory (nav_msgs/Path:
-                  the TRUE base poses of every scan, emitted once at the end = the loop closure)
+                  the true base poses of every scan (with --pose-noise
+                  or the world's `registration`: registered poses that err), emitted once at the end = the loop closure)
   OUT.truth.yaml  ground truth (format linemap_truth/2): the walls (solids with thickness), the
                   true lines (their faces, free side on the left), and per scan the true laser
                   pose and the visible face pieces
@@ -42,6 +43,8 @@ options (override the world file):
   --noise SIGMA      Gaussian range noise [m]
   --spurious F       fraction of readings replaced by uniform [0, range_max) (e.g. 0.2)
   --no-drift         odometry equals the true motion
+  --pose-noise P,H[,L]  registration error of the trajectory: std P [m] of x and y, H [deg] of the
+                     heading, correlated over L m of path (default 10; the world's `registration`)
   --every N          publish the trajectory every N keyframes as well (default: only at the end)
   --no-progress      no progress bar
   --help             this text
@@ -105,6 +108,8 @@ bool parseOption(const std::string& arg, const std::function<const char*()>& val
     a.options.spurious = parseNumber(arg, value(), 0.0, 1.0);
   else if (arg == "--no-drift")
     a.options.drift = false;
+  else if (arg == "--pose-noise")
+    a.options.registration = line_map_eval::parseRegistrationOption(arg, value());
   else if (arg == "--every")
     a.every = parseCount(arg, value(), 1, 10000000);
   else if (arg == "--no-progress")

@@ -357,6 +357,7 @@ SharedEvaluation shareEvaluation(const BatchSetup& setup, BatchResult& result)
   shared.table = LookupTable::build(shared.scan_points, setup.table);
   result.table_ms = linemap::millisecondsSince(table_start);
   result.scan_points = shared.scan_points.size();
+  result.registered_points = shared.scan_points;
   const auto structure_start = Clock::now();
   shared.structure =
       classifyStructure(shared.scan_points, setup.table.sigma, setup.metrics.coverage.structure);

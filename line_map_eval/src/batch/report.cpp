@@ -176,6 +176,7 @@ void emitCoverage(YAML::Emitter& out, const MergerRun& r)
   field(out, "structure_points", r.structure_coverage.points);
   field(out, "covered_structure_points", r.structure_coverage.covered);
   measure(out, "structure_coverage_pct", r.structure_coverage.fraction() * 100.0);
+  measure(out, "structure_point_coverage_pct", r.structure_coverage.pointFraction() * 100.0);
   measure(out, "structure_length_m", r.structure_coverage.length);
   measure(out, "unmapped_structure_length_m", r.structure_coverage.unmapped_length);
   field(out, "crossing_pairs", r.crossing_pairs.size());
@@ -431,9 +432,11 @@ std::string toMarkdown(const BatchResult& result)
         "originals assigned to one (unassigned: the others). Point coverage is the share of the registered "
         "scan points within one lookup-table sigma of a map segment; length coverage the share of the "
         "originals' length lying within d_max and theta_max of a map segment. Structure coverage is the "
-        "share of the registered points on straight structure (thin, straight, continuous bands of points: "
-        "walls, not clutter) within that same radius of a map segment; unmapped structure the length of "
-        "the straight structure left uncovered. Redundant pairs are pairs of map segments meeting the "
+        "share of the length of straight structure in the registered points (straight, continuous bands of "
+        "points, thin or smeared across by the poses: walls, not clutter) that the map covers; unmapped "
+        "structure the length left uncovered (a structure point is covered within that same radius of a "
+        "map segment, or, on a smeared band, when its foot on the band's line is within the band's width). "
+        "Redundant pairs are pairs of map segments meeting the "
         "fusion conditions with each other (overlap: their summed overlap along the line); crossing pairs "
         "are map segments crossing in an X, both running on past the crossing by more than the "
         "point-coverage radius. Per-frame runtime is the median addKeyframe time of online mergers; total "

@@ -178,7 +178,7 @@ class WorldParser
     if (!root.IsDefined() || root.IsNull()) fail("(top level)", "the file is empty", root);
     checkKeys(root, "",
               {"name", "seed", "walls", "wall_thickness", "arc_sagitta", "path", "laser", "odometry",
-               "min_visible_beams"});
+               "registration", "min_visible_beams"});
     parseSettings(root, w);
     parseWalls(root, w);
     parsePath(root, w.path);
@@ -190,6 +190,15 @@ class WorldParser
       optionalNumber(odo, "odometry", "rotation_noise", w.odometry.rotation_noise, 0.0, false);
       optionalNumber(odo, "odometry", "heading_noise", w.odometry.heading_noise, 0.0, false);
       optionalNumber(odo, "odometry", "heading_bias", w.odometry.heading_bias, -HUGE_VAL, false);
+    }
+    if (const YAML::Node reg = root["registration"])
+    {
+      checkKeys(reg, "registration", {"position", "heading_deg", "correlation_length"});
+      optionalNumber(reg, "registration", "position", w.registration.position, 0.0, false);
+      double heading_deg = w.registration.heading * 180.0 / linemap::kPi;
+      optionalNumber(reg, "registration", "heading_deg", heading_deg, 0.0, false);
+      w.registration.heading = heading_deg * linemap::kPi / 180.0;
+      optionalNumber(reg, "registration", "correlation_length", w.registration.correlation_length, 0.0, true);
     }
     return w;
   }
@@ -401,6 +410,41 @@ void validateWorld(const World& w)
       }
     }
   }
+}
+
+RegistrationModel parseRegistrationOption(const std::string& option, const std::string& value)
+{
+  std::vector<double> numbers;
+  std::stringstream in(value);
+  for (std::string item; std::getline(in, item, ',');)
+  {
+    std::size_t used = 0;
+    double v = 0.0;
+    try
+    {
+      v = std::stod(item, &used);
+    }
+    catch (const std::exception&)
+    {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(v) || v < 0.0)
+      throw std::invalid_argument(option + ": '" + item +
+                                  "' is not a number >= 0 (expected POSITION,HEADING_DEG[,LENGTH])");
+    numbers.push_back(v);
+  }
+  if (numbers.size() < 2 || numbers.size() > 3)
+    throw std::invalid_argument(
+        option + " takes POSITION,HEADING_DEG[,LENGTH] (metres, degrees, metres), got '" + value + "'");
+  RegistrationModel m;
+  m.position = numbers[0];
+  m.heading = numbers[1] * linemap::kPi / 180.0;
+  if (numbers.size() == 3)
+  {
+    if (!(numbers[2] > 0.0)) throw std::invalid_argument(option + ": the correlation length must be > 0");
+    m.correlation_length = numbers[2];
+  }
+  return m;
 }
 
 double pathLength(const PathModel& path)

@@ -30,6 +30,19 @@ double headingDifference(const Segment2& a, const Segment2& b, bool directed)
 /// Whether map segment m lies along the face: headings within the angle, an overlap of positive
 /// length along the face, and within association_distance of the face's line over that overlap.
 /// (Not by the midpoint alone: a segment running on over two collinear faces belongs to both.)
+/// Sorts intervals and joins those that overlap or touch.
+void mergeIntervals(std::vector<std::pair<double, double>>& parts)
+{
+  std::sort(parts.begin(), parts.end());
+  std::size_t n = 0;
+  for (const auto& p : parts)
+    if (n > 0 && p.first <= parts[n - 1].second)
+      parts[n - 1].second = std::max(parts[n - 1].second, p.second);
+    else
+      parts[n++] = p;
+  parts.resize(n);
+}
+
 bool associated(const Segment2& m, const Segment2& face, const GroundTruthParams& params)
 {
   if (headingDifference(m, face, params.directed) > params.association_angle) return false;
@@ -100,6 +113,8 @@ GroundTruthParams GroundTruthParams::fromParams(const linemap::ParamSet& params)
   constexpr double deg = linemap::kPi / 180.0;
   GroundTruthParams p;
   p.coverage_tolerance = params.getDouble("eval/gt_coverage_tolerance", p.coverage_tolerance);
+  p.registration_sigmas = params.getDouble("eval/gt_registration_sigmas", p.registration_sigmas);
+  p.accumulate_sightings = params.getBool("eval/gt_accumulate_sightings", p.accumulate_sightings);
   p.sample_spacing = params.getDouble("eval/gt_sample_spacing", p.sample_spacing);
   p.association_angle = deg * params.getDouble("eval/gt_association_angle_deg", p.association_angle / deg);
   p.association_distance = params.getDouble("eval/gt_association_distance", p.association_distance);
@@ -118,6 +133,9 @@ GroundTruthParams GroundTruthParams::fromParams(const linemap::ParamSet& params)
 void GroundTruthParams::validate() const
 {
   requirePositive(coverage_tolerance, "eval/gt_coverage_tolerance");
+  if (!(registration_sigmas >= 0.0) || !std::isfinite(registration_sigmas))
+    throw linemap::ParameterError("parameter 'eval/gt_registration_sigmas' must be >= 0, got " +
+                                  std::to_string(registration_sigmas));
   requirePositive(sample_spacing, "eval/gt_sample_spacing");
   requirePositive(association_distance, "eval/gt_association_distance");
   requirePositive(corner_tolerance, "eval/gt_corner_tolerance");
@@ -175,18 +193,99 @@ SeenParts seenParts(const GroundTruth& truth, double min_piece_length, std::size
           if (interval.second > interval.first) seen[visible[i].wall].push_back(interval);
     }
   }
-  for (auto& parts : seen)
+  for (auto& parts : seen) mergeIntervals(parts);
+  return seen;
+}
+
+SeenParts accumulatedSeenParts(const GroundTruth& truth, double min_length, std::size_t min_beams, double bin)
+{
+  if (!(bin > 0.0) || !(min_length >= 0.0))
+    throw std::invalid_argument("accumulated seen parts: the bin must be positive, the length >= 0");
+  // Per face, the hits per bin of all scans.
+  std::vector<std::vector<double>> hits(truth.walls.size());
+  for (std::size_t w = 0; w < truth.walls.size(); ++w)
+    hits[w].assign(static_cast<std::size_t>(std::ceil(truth.walls[w].length() / bin)) + 1, 0.0);
+  for (std::size_t k = 0; k < truth.scans.size(); ++k)
+    for (const VisibleWall& v : truth.scans[k].visible)
+    {
+      if (v.wall >= truth.walls.size())
+        throw std::invalid_argument("ground truth: scans[" + std::to_string(k) + "] sees wall " +
+                                    std::to_string(v.wall) + " of " + std::to_string(truth.walls.size()));
+      const Segment2& face = truth.walls[v.wall];
+      const double length = face.length();
+      const Vec2 u = (face.end - face.start) / length;
+      std::vector<std::pair<double, double>> runs;
+      double seen_length = 0.0;
+      for (const Segment2& run : v.runs.empty() ? std::vector<Segment2>{v.segment} : v.runs)
+      {
+        double a = std::clamp(u.dot(run.start - face.start), 0.0, length);
+        double b = std::clamp(u.dot(run.end - face.start), 0.0, length);
+        if (a > b) std::swap(a, b);
+        runs.emplace_back(a, b);
+        seen_length += b - a;
+      }
+      std::vector<double>& h = hits[v.wall];
+      if (!(seen_length > 0.0))
+      {
+        h[static_cast<std::size_t>(runs.front().first / bin)] += static_cast<double>(v.beams);
+        continue;
+      }
+      const double density = static_cast<double>(v.beams) / seen_length;
+      for (const auto& [a, b] : runs)
+        for (auto i = static_cast<std::size_t>(a / bin); i < h.size() && static_cast<double>(i) * bin < b;
+             ++i)
+        {
+          const double overlap =
+              std::min(b, (static_cast<double>(i) + 1.0) * bin) - std::max(a, static_cast<double>(i) * bin);
+          if (overlap > 0.0) h[i] += density * overlap;
+        }
+    }
+  SeenParts seen(truth.walls.size());
+  const auto half = static_cast<std::ptrdiff_t>(std::lround(0.5 * min_length / bin));
+  for (std::size_t w = 0; w < truth.walls.size(); ++w)
   {
-    std::sort(parts.begin(), parts.end());
-    std::size_t n = 0;
-    for (const auto& p : parts)
-      if (n > 0 && p.first <= parts[n - 1].second)
-        parts[n - 1].second = std::max(parts[n - 1].second, p.second);
-      else
-        parts[n++] = p;
-    parts.resize(n);
+    const std::vector<double>& h = hits[w];
+    const auto n = static_cast<std::ptrdiff_t>(h.size());
+    // Prefix sums: the hits of the window of min_length centred on each bin.
+    std::vector<double> prefix(h.size() + 1, 0.0);
+    for (std::size_t i = 0; i < h.size(); ++i) prefix[i + 1] = prefix[i] + h[i];
+    const double length = truth.walls[w].length();
+    std::ptrdiff_t start = -1;
+    for (std::ptrdiff_t i = 0; i <= n; ++i)
+    {
+      bool dense = false;
+      if (i < n)
+      {
+        const std::ptrdiff_t lo = std::max<std::ptrdiff_t>(0, i - half), hi = std::min(n, i + half + 1);
+        dense = h[static_cast<std::size_t>(i)] > 0.0 &&
+                prefix[static_cast<std::size_t>(hi)] - prefix[static_cast<std::size_t>(lo)] >=
+                    static_cast<double>(min_beams);
+      }
+      if (dense && start < 0) start = i;
+      if (!dense && start >= 0)
+      {
+        const double from = static_cast<double>(start) * bin,
+                     to = std::min(length, static_cast<double>(i) * bin);
+        if (to - from >= min_length) seen[w].emplace_back(from, to);
+        start = -1;
+      }
+    }
   }
   return seen;
+}
+
+SeenParts unionOfSeenParts(const SeenParts& a, const SeenParts& b)
+{
+  if (a.size() != b.size())
+    throw std::invalid_argument("seen parts: " + std::to_string(a.size()) + " faces and " +
+                                std::to_string(b.size()));
+  SeenParts out = a;
+  for (std::size_t w = 0; w < out.size(); ++w)
+  {
+    out[w].insert(out[w].end(), b[w].begin(), b[w].end());
+    mergeIntervals(out[w]);
+  }
+  return out;
 }
 
 std::vector<Vec2> findCorners(const std::vector<Segment2>& walls, const GroundTruthParams& params)
@@ -199,13 +298,17 @@ std::vector<Vec2> findCorners(const std::vector<Segment2>& walls, const GroundTr
 GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls, const SeenParts& seen,
                                              const std::vector<Segment2>& map,
                                              const GroundTruthParams& params,
-                                             const std::vector<std::vector<std::size_t>>& curves)
+                                             const std::vector<std::vector<std::size_t>>& curves,
+                                             const std::vector<double>& slack)
 {
   params.validate();
   checkFinite(walls, "face");
   checkFinite(map, "map segment");
   if (seen.size() != walls.size())
     throw std::invalid_argument("ground truth metrics: seen parts for " + std::to_string(seen.size()) +
+                                " faces, but there are " + std::to_string(walls.size()));
+  if (!slack.empty() && slack.size() != walls.size())
+    throw std::invalid_argument("ground truth metrics: slack for " + std::to_string(slack.size()) +
                                 " faces, but there are " + std::to_string(walls.size()));
   GroundTruthResult r;
   double covered_length = 0.0, seen_total = 0.0, endpoint_sum = 0.0, vertex_sum = 0.0;
@@ -243,8 +346,14 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
     WallScore score;
     score.face = w;
     score.length = length;
+    GroundTruthParams face_params = params;
+    if (!slack.empty())
+    {
+      face_params.coverage_tolerance += slack[w];
+      face_params.association_distance += slack[w];
+    }
     for (std::size_t m = 0; m < map.size(); ++m)
-      if (associated(map[m], wall, params)) assoc[w].push_back(m);
+      if (associated(map[m], wall, face_params)) assoc[w].push_back(m);
     score.associated = assoc[w].size();
 
     std::size_t samples = 0, covered = 0;
@@ -260,7 +369,7 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
         const Vec2 p = wall.start + t * u;
         ++samples;
         for (const std::size_t m : assoc[w])
-          if (linemap::distanceToSegment(p, map[m].start, map[m].end) <= params.coverage_tolerance)
+          if (linemap::distanceToSegment(p, map[m].start, map[m].end) <= face_params.coverage_tolerance)
           {
             ++covered;
             break;
@@ -349,9 +458,33 @@ GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth, const std
                                              const GroundTruthParams& params)
 {
   params.validate();
-  return evaluateAgainstGroundTruth(truth.walls,
-                                    seenParts(truth, params.min_seen_length, params.min_seen_beams), map,
-                                    params, truth.curves);
+  SeenParts seen = seenParts(truth, params.min_seen_length, params.min_seen_beams);
+  if (params.accumulate_sightings)
+    seen = unionOfSeenParts(seen, accumulatedSeenParts(truth, params.min_seen_length, params.min_seen_beams));
+  return evaluateAgainstGroundTruth(truth.walls, seen, map, params, truth.curves,
+                                    registrationSlack(truth, params.registration_sigmas));
+}
+
+std::vector<double> registrationSlack(const GroundTruth& truth, double registration_sigmas)
+{
+  std::vector<double> slack(truth.walls.size(), 0.0);
+  if (truth.registration_position == 0.0 && truth.registration_heading == 0.0) return slack;
+  std::vector<double> range_sum(truth.walls.size(), 0.0);
+  std::vector<std::size_t> sightings(truth.walls.size(), 0);
+  for (const TruthScan& scan : truth.scans)
+    for (const VisibleWall& v : scan.visible)
+    {
+      if (v.wall >= slack.size()) continue;
+      range_sum[v.wall] += (0.5 * (v.segment.start + v.segment.end) - scan.pose.translation()).norm();
+      ++sightings[v.wall];
+    }
+  for (std::size_t w = 0; w < slack.size(); ++w)
+  {
+    const double range = sightings[w] ? range_sum[w] / static_cast<double>(sightings[w]) : 0.0;
+    slack[w] =
+        registration_sigmas * std::hypot(truth.registration_position, truth.registration_heading * range);
+  }
+  return slack;
 }
 
 GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,

@@ -38,10 +38,11 @@ MapMetrics computeMapMetrics(const LookupTable& table, const std::vector<linemap
   const double radius = params.coverage.point_sigmas * table.params().sigma;
   m.point_coverage = computePointCoverage(scan_points, map, radius);
   if (structure)
-    m.structure_coverage = computeStructureCoverage(*structure, m.point_coverage);
+    m.structure_coverage = computeStructureCoverage(*structure, m.point_coverage, map, radius);
   else
     m.structure_coverage = computeStructureCoverage(
-        classifyStructure(scan_points, table.params().sigma, params.coverage.structure), m.point_coverage);
+        classifyStructure(scan_points, table.params().sigma, params.coverage.structure), m.point_coverage,
+        map, radius);
   m.length_coverage =
       computeLengthCoverage(originals, map, params.fusion.max_distance, params.fusion.max_angle);
   m.redundancy = findRedundantPairs(map, params.fusion);

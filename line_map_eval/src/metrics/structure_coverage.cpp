@@ -13,6 +13,8 @@
 #include <tuple>
 #include <utility>
 
+#include "line_map_eval/metrics/segment_tree.hpp"
+
 namespace line_map_eval
 {
 using linemap::kPi;
@@ -22,8 +24,12 @@ namespace
 {
 constexpr int kMaxIterations = 8;  // the band settles in two to four refits; a cap against cycling
 constexpr double kMaxGridCells = 1e8;
-constexpr int kHeadingClasses = 8;     // length cells aligned to the nearest of 8 headings (22.5 deg apart)
-constexpr double kAcrossShare = 0.25;  // across a line, cells of a quarter of the length cell
+constexpr int kHeadingClasses = 8;  // length cells aligned to the nearest of 8 headings (22.5 deg apart)
+constexpr double kAcrossShare = 0.25;
+// At the smeared scale the RMS is taken over this share of the band's points nearest its line: a wall
+// with a row of objects beside it within the band is still thin at its core; clutter filling the band
+// is not (a uniform band's core is 0.8 of its width).
+constexpr double kSmearCore = 0.8;  // across a line, cells of a quarter of the length cell
 
 void require(bool ok, const char* key, const std::string& what, double value)
 {
@@ -95,8 +101,190 @@ struct VoxelLine
   bool structure = false;
   Vec2 point = Vec2::Zero();
   Vec2 axis = Vec2::UnitX();
-  double heading = 0.0;  ///< of the axis, in [0, pi)
+  double heading = 0.0;     ///< of the axis, in [0, pi)
+  double half_width = 0.0;  ///< [m] the band's: its points within this of the line are structure
+  double reach = 0.0;       ///< [m] 0: fine; else a map segment this close to a foot covers it
 };
+
+/// One scale of the band test (see the header).
+struct BandTest
+{
+  double radius;      ///< [m] neighbourhood
+  double half_width;  ///< [m] g
+  double max_minor;   ///< [m^2] largest variance across the line
+  double min_share;
+  double min_length;  ///< [m]
+  double min_fill;
+  double fill_bin;    ///< [m]
+  double min_points;  ///< in the band (the smeared scale)
+  double smeared;     ///< 1: the smeared scale (feet covered within the band's own width)
+};
+
+/// The voxel means in a grid of cells of half a radius (compressed rows): the 5 x 5 cells around a
+/// voxel's hold its disc in twice its area.
+class VoxelGrid
+{
+ public:
+  VoxelGrid(const std::vector<Voxel>& voxels, double radius)
+      : voxels_(voxels), radius_(radius), cell_(0.5 * radius)
+  {
+    double max_x = -std::numeric_limits<double>::infinity(), max_y = max_x;
+    for (const Voxel& v : voxels)
+    {
+      min_x_ = std::min(min_x_, v.mean.x());
+      min_y_ = std::min(min_y_, v.mean.y());
+      max_x = std::max(max_x, v.mean.x());
+      max_y = std::max(max_y, v.mean.y());
+    }
+    const double gw = std::floor((max_x - min_x_) / cell_) + 1.0,
+                 gh = std::floor((max_y - min_y_) / cell_) + 1.0;
+    if (gw * gh > kMaxGridCells)
+      throw linemap::ParameterError("structure coverage: the cloud spans more than 1e8 cells of " +
+                                    std::to_string(cell_) +
+                                    " m (parameters eval/structure_radius, "
+                                    "eval/structure_smear_radius)");
+    width_ = static_cast<std::size_t>(gw);
+    height_ = static_cast<std::size_t>(gh);
+    start_.assign(width_ * height_ + 1, 0);
+    members_.resize(voxels.size());
+    for (const Voxel& v : voxels) ++start_[cellOf(v.mean) + 1];
+    for (std::size_t c = 0; c + 1 < start_.size(); ++c) start_[c + 1] += start_[c];
+    std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < voxels.size(); ++i)
+      members_[fill[cellOf(voxels[i].mean)]++] = static_cast<std::uint32_t>(i);
+  }
+
+  /// The voxels whose means lie within the radius of `o`.
+  void near(const Vec2& o, std::vector<std::uint32_t>& out) const
+  {
+    out.clear();
+    const auto cx = static_cast<std::size_t>((o.x() - min_x_) / cell_),
+               cy = static_cast<std::size_t>((o.y() - min_y_) / cell_);
+    for (std::size_t y = cy > 1 ? cy - 2 : 0; y <= std::min(cy + 2, height_ - 1); ++y)
+      for (std::size_t x = cx > 1 ? cx - 2 : 0; x <= std::min(cx + 2, width_ - 1); ++x)
+        for (std::uint32_t k = start_[y * width_ + x]; k < start_[y * width_ + x + 1]; ++k)
+          if ((voxels_[members_[k]].mean - o).squaredNorm() <= radius_ * radius_) out.push_back(members_[k]);
+  }
+
+ private:
+  std::size_t cellOf(const Vec2& m) const
+  {
+    const auto cx = static_cast<std::size_t>((m.x() - min_x_) / cell_),
+               cy = static_cast<std::size_t>((m.y() - min_y_) / cell_);
+    return std::min(cy, height_ - 1) * width_ + std::min(cx, width_ - 1);
+  }
+
+  const std::vector<Voxel>& voxels_;
+  double radius_, cell_;
+  double min_x_ = std::numeric_limits<double>::infinity(), min_y_ = min_x_;
+  std::size_t width_ = 0, height_ = 0;
+  std::vector<std::uint32_t> start_, members_;
+};
+
+/// Variance across the line through `point` along `axis` of the share `core` of the band's points
+/// nearest it (by voxel means; each voxel's own scatter included): 1 gives the band's whole variance.
+double coreVariance(const std::vector<Voxel>& voxels, const std::vector<std::uint32_t>& band,
+                    const Vec2& point, const Vec2& axis, double core)
+{
+  const Vec2 normal(-axis.y(), axis.x());
+  std::vector<std::pair<double, std::uint32_t>> by_offset;
+  double total = 0.0;
+  for (const std::uint32_t k : band)
+  {
+    by_offset.emplace_back(std::abs(normal.dot(voxels[k].mean - point)), k);
+    total += voxels[k].n;
+  }
+  if (core < 1.0) std::sort(by_offset.begin(), by_offset.end());
+  double n = 0.0, sum = 0.0;
+  for (const auto& [offset, k] : by_offset)
+  {
+    if (n >= core * total) break;
+    const Voxel& v = voxels[k];
+    // The voxel's scatter across the line: its covariance projected on the normal.
+    const double inner = normal.x() * normal.x() * v.sxx + 2.0 * normal.x() * normal.y() * v.sxy +
+                         normal.y() * normal.y() * v.syy;
+    n += v.n;
+    sum += v.n * offset * offset + inner;
+  }
+  return n > 0.0 ? sum / n : 0.0;
+}
+
+/// The band test of `test` for every voxel (in parallel: each voxel's band is independent of the
+/// others').
+void classifyVoxels(const std::vector<Voxel>& voxels, const BandTest& test, std::vector<VoxelLine>& lines)
+{
+  const VoxelGrid grid(voxels, test.radius);
+  const double g = test.half_width;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, voxels.size(), 256),
+      [&](const tbb::blocked_range<std::size_t>& range)
+      {
+        std::vector<std::uint32_t> near, band, next;
+        std::vector<std::int64_t> bins;
+        for (std::size_t i = range.begin(); i != range.end(); ++i)
+        {
+          const Vec2& o = voxels[i].mean;
+          grid.near(o, near);
+          Fit fit = fitVoxels(voxels, near, o);
+          Vec2 point = o, axis = fit.axis;
+          band.clear();
+          for (int it = 0; it < kMaxIterations; ++it)
+          {
+            const Vec2 normal(-axis.y(), axis.x());
+            next.clear();
+            for (const std::uint32_t k : near)
+              if (std::abs(normal.dot(voxels[k].mean - point)) <= g) next.push_back(k);
+            if (next.empty())
+            {
+              band.clear();
+              break;
+            }
+            fit = fitVoxels(voxels, next, o);
+            point = fit.mean;
+            axis = fit.axis;
+            const bool settled = next == band;
+            band.swap(next);
+            if (settled) break;
+          }
+          if (band.empty()) continue;
+          if (coreVariance(voxels, band, point, axis, test.smeared > 0.0 ? kSmearCore : 1.0) > test.max_minor)
+            continue;
+          if (static_cast<double>(band.size()) < test.min_share * static_cast<double>(near.size())) continue;
+          double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+          for (const std::uint32_t k : band)
+          {
+            const double t = axis.dot(voxels[k].mean - point);
+            lo = std::min(lo, t);
+            hi = std::max(hi, t);
+          }
+          if (hi - lo < test.min_length) continue;
+          // Continuity: a wall fills its line, a row of chair legs does not.
+          bins.clear();
+          for (const std::uint32_t k : band)
+            bins.push_back(static_cast<std::int64_t>(
+                std::floor((axis.dot(voxels[k].mean - point) - lo) / test.fill_bin)));
+          std::sort(bins.begin(), bins.end());
+          const auto filled = std::unique(bins.begin(), bins.end()) - bins.begin();
+          const double bin_count = std::floor((hi - lo) / test.fill_bin + 1.0);
+          double expected = bin_count;
+          if (test.smeared > 0.0)
+          {
+            // The bins n points spread evenly at random along the line would fill: a wall seen sparsely
+            // from afar fills about that many; posts seen by many scans pile their points into few.
+            double n = 0.0;
+            for (const std::uint32_t k : band) n += voxels[k].n;
+            if (n < test.min_points) continue;
+            expected = bin_count * (1.0 - std::exp(-n / bin_count));
+          }
+          if (static_cast<double>(filled) < test.min_fill * expected) continue;
+          double heading = std::atan2(axis.y(), axis.x());
+          if (heading < 0.0) heading += kPi;
+          // A smeared band's points lie about its line like a uniform band sqrt(3) RMS wide each way.
+          const double reach = test.smeared > 0.0 ? std::min(g, std::sqrt(3.0 * fit.minor)) : 0.0;
+          lines[i] = {true, point, axis, heading < kPi ? heading : 0.0, g, reach};
+        }
+      });
+}
 
 }  // namespace
 
@@ -111,6 +299,14 @@ StructureParams StructureParams::fromParams(const linemap::ParamSet& params)
   p.min_fill = params.getDouble("eval/structure_min_fill", p.min_fill);
   p.voxel = params.getDouble("eval/structure_voxel", p.voxel);
   p.length_cell = params.getDouble("eval/structure_length_cell", p.length_cell);
+  p.smear_band = params.getDouble("eval/structure_smear_band", p.smear_band);
+  p.smear_radius = params.getDouble("eval/structure_smear_radius", p.smear_radius);
+  p.smear_max_rms = params.getDouble("eval/structure_smear_max_rms", p.smear_max_rms);
+  p.smear_min_share = params.getDouble("eval/structure_smear_min_share", p.smear_min_share);
+  p.smear_min_length = params.getDouble("eval/structure_smear_min_length", p.smear_min_length);
+  p.smear_min_fill = params.getDouble("eval/structure_smear_min_fill", p.smear_min_fill);
+  p.smear_fill_bin = params.getDouble("eval/structure_smear_fill_bin", p.smear_fill_bin);
+  p.smear_min_points = params.getInt("eval/structure_smear_min_points", p.smear_min_points);
   p.validate();
   return p;
 }
@@ -128,6 +324,23 @@ void StructureParams::validate() const
   require(positive(voxel) && voxel <= radius, "eval/structure_voxel",
           "a positive number of metres, at most eval/structure_radius", voxel);
   require(positive(length_cell), "eval/structure_length_cell", "a positive number of metres", length_cell);
+  require(smear_band >= 0.0 && std::isfinite(smear_band), "eval/structure_smear_band",
+          "a number of metres >= 0 (0: no smeared scale)", smear_band);
+  if (smear_band == 0.0) return;
+  require(positive(smear_radius) && smear_radius >= voxel, "eval/structure_smear_radius",
+          "a positive number of metres, at least eval/structure_voxel", smear_radius);
+  require(positive(smear_max_rms), "eval/structure_smear_max_rms", "a positive number of metres",
+          smear_max_rms);
+  require(smear_min_share >= 0.0 && smear_min_share <= 1.0, "eval/structure_smear_min_share", "in [0, 1]",
+          smear_min_share);
+  require(smear_min_length >= 0.0 && smear_min_length <= 2.0 * smear_radius,
+          "eval/structure_smear_min_length", "in [0, 2 * eval/structure_smear_radius] metres",
+          smear_min_length);
+  require(smear_min_fill >= 0.0 && smear_min_fill <= 1.0, "eval/structure_smear_min_fill", "in [0, 1]",
+          smear_min_fill);
+  require(positive(smear_fill_bin), "eval/structure_smear_fill_bin", "a positive number of metres",
+          smear_fill_bin);
+  require(smear_min_points >= 2, "eval/structure_smear_min_points", "at least 2", smear_min_points);
 }
 
 StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
@@ -171,110 +384,33 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
     b = e;
   }
 
-  // Neighbourhood grid of the voxel means, cells of half a radius (compressed rows): the 5 x 5 cells
-  // around a voxel's hold its disc in twice its area (3 x 3 cells of one radius: 2.9 times).
-  const double r = params.radius, cell = 0.5 * r;
-  double min_x = std::numeric_limits<double>::infinity(), min_y = min_x, max_x = -min_x, max_y = -min_x;
-  for (const Voxel& v : voxels)
-  {
-    min_x = std::min(min_x, v.mean.x());
-    min_y = std::min(min_y, v.mean.y());
-    max_x = std::max(max_x, v.mean.x());
-    max_y = std::max(max_y, v.mean.y());
-  }
-  const double gw = std::floor((max_x - min_x) / cell) + 1.0, gh = std::floor((max_y - min_y) / cell) + 1.0;
-  if (gw * gh > kMaxGridCells)
-    throw linemap::ParameterError(
-        "parameter 'eval/structure_radius': the cloud spans more than 1e8 cells of " + std::to_string(cell) +
-        " m");
-  const auto width = static_cast<std::size_t>(gw), height = static_cast<std::size_t>(gh);
-  const auto cellOf = [&](const Vec2& m)
-  {
-    return std::make_pair(static_cast<std::size_t>((m.x() - min_x) / cell),
-                          static_cast<std::size_t>((m.y() - min_y) / cell));
-  };
-  std::vector<std::uint32_t> start(width * height + 1, 0), members(voxels.size());
-  for (const Voxel& v : voxels)
-  {
-    const auto [cx, cy] = cellOf(v.mean);
-    ++start[std::min(cy, height - 1) * width + std::min(cx, width - 1) + 1];
-  }
-  for (std::size_t c = 0; c + 1 < start.size(); ++c) start[c + 1] += start[c];
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t i = 0; i < voxels.size(); ++i)
-    {
-      const auto [cx, cy] = cellOf(voxels[i].mean);
-      members[fill[std::min(cy, height - 1) * width + std::min(cx, width - 1)]++] =
-          static_cast<std::uint32_t>(i);
-    }
-  }
-
-  // Each voxel's band (see the header): independent of the others, so in parallel.
-  const double g = params.band_sigmas * sigma;
-  const double max_minor = std::pow(params.max_rms_sigmas * sigma, 2);
+  // Each voxel's band (see the header): independent of the others, so in parallel. The fine test
+  // first; the voxels it refuses get the smeared one, at its larger scale.
   std::vector<VoxelLine> lines(voxels.size());
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, voxels.size(), 256),
-      [&](const tbb::blocked_range<std::size_t>& range)
-      {
-        std::vector<std::uint32_t> near, band, next;
-        std::vector<std::int64_t> bins;
-        for (std::size_t i = range.begin(); i != range.end(); ++i)
-        {
-          const Vec2& o = voxels[i].mean;
-          const auto [cx, cy] = cellOf(o);
-          near.clear();
-          for (std::size_t y = cy > 1 ? cy - 2 : 0; y <= std::min(cy + 2, height - 1); ++y)
-            for (std::size_t x = cx > 1 ? cx - 2 : 0; x <= std::min(cx + 2, width - 1); ++x)
-              for (std::uint32_t k = start[y * width + x]; k < start[y * width + x + 1]; ++k)
-                if ((voxels[members[k]].mean - o).squaredNorm() <= r * r) near.push_back(members[k]);
-          Fit fit = fitVoxels(voxels, near, o);
-          Vec2 point = o, axis = fit.axis;
-          band.clear();
-          for (int it = 0; it < kMaxIterations; ++it)
-          {
-            const Vec2 normal(-axis.y(), axis.x());
-            next.clear();
-            for (const std::uint32_t k : near)
-              if (std::abs(normal.dot(voxels[k].mean - point)) <= g) next.push_back(k);
-            if (next.empty())
-            {
-              band.clear();
-              break;
-            }
-            fit = fitVoxels(voxels, next, o);
-            point = fit.mean;
-            axis = fit.axis;
-            const bool settled = next == band;
-            band.swap(next);
-            if (settled) break;
-          }
-          if (band.empty()) continue;
-          if (fit.minor > max_minor) continue;
-          if (static_cast<double>(band.size()) < params.min_share * static_cast<double>(near.size()))
-            continue;
-          double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-          for (const std::uint32_t k : band)
-          {
-            const double t = axis.dot(voxels[k].mean - point);
-            lo = std::min(lo, t);
-            hi = std::max(hi, t);
-          }
-          if (hi - lo < params.min_length) continue;
-          // Continuity: a wall fills its line, a row of chair legs does not.
-          bins.clear();
-          for (const std::uint32_t k : band)
-            bins.push_back(
-                static_cast<std::int64_t>(std::floor((axis.dot(voxels[k].mean - point) - lo) / h)));
-          std::sort(bins.begin(), bins.end());
-          const auto filled = std::unique(bins.begin(), bins.end()) - bins.begin();
-          if (static_cast<double>(filled) < params.min_fill * std::floor((hi - lo) / h + 1.0)) continue;
-          double heading = std::atan2(axis.y(), axis.x());
-          if (heading < 0.0) heading += kPi;
-          lines[i] = {true, point, axis, heading < kPi ? heading : 0.0};
-        }
-      });
+  const BandTest fine{params.radius,
+                      params.band_sigmas * sigma,
+                      std::pow(params.max_rms_sigmas * sigma, 2),
+                      params.min_share,
+                      params.min_length,
+                      params.min_fill,
+                      h,
+                      0.0,
+                      0.0};
+  classifyVoxels(voxels, fine, lines);
+  std::vector<VoxelLine> smeared_lines(voxels.size());
+  if (params.smear_band > 0.0)
+  {
+    const BandTest smeared{params.smear_radius,
+                           params.smear_band,
+                           params.smear_max_rms * params.smear_max_rms,
+                           params.smear_min_share,
+                           params.smear_min_length,
+                           params.smear_min_fill,
+                           params.smear_fill_bin,
+                           static_cast<double>(params.smear_min_points),
+                           1.0};
+    classifyVoxels(voxels, smeared, smeared_lines);
+  }
 
   // The points of structure voxels within the band of their voxel's line, in index order.
   std::vector<std::uint32_t> voxel_of(points.size());
@@ -286,14 +422,33 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
       voxel_of[order[k].second] = static_cast<std::uint32_t>(i);
   for (std::size_t i = 0; i < points.size(); ++i)
   {
-    const VoxelLine& l = lines[voxel_of[i]];
-    if (!l.structure) continue;
+    // On fine structure within its band, else on smeared structure within its band; the smeared
+    // line (when there is one) also tells whether a map segment covers the point.
+    const VoxelLine& fine_line = lines[voxel_of[i]];
+    const VoxelLine& smeared_line = smeared_lines[voxel_of[i]];
+    const auto offset = [&](const VoxelLine& l)
+    { return Vec2(-l.axis.y(), l.axis.x()).dot(points[i] - l.point); };
+    const bool on_fine = fine_line.structure && std::abs(offset(fine_line)) <= fine_line.half_width;
+    const bool on_smeared =
+        smeared_line.structure && std::abs(offset(smeared_line)) <= smeared_line.half_width;
+    if (!on_fine && !on_smeared) continue;
+    const VoxelLine& l = on_fine ? fine_line : smeared_line;
     const Vec2 normal(-l.axis.y(), l.axis.x());
-    const double d = normal.dot(points[i] - l.point);
-    if (std::abs(d) > g) continue;
     out.indices.push_back(i);
-    out.feet.push_back(points[i] - d * normal);
+    out.feet.push_back(points[i] - offset(l) * normal);
     out.headings.push_back(l.heading);
+    out.fine.push_back(on_fine ? 1 : 0);
+    if (on_smeared)
+    {
+      const Vec2 smeared_normal(-smeared_line.axis.y(), smeared_line.axis.x());
+      out.smeared_feet.push_back(points[i] - offset(smeared_line) * smeared_normal);
+      out.reach.push_back(static_cast<float>(smeared_line.reach));
+    }
+    else
+    {
+      out.smeared_feet.push_back(points[i]);
+      out.reach.push_back(0.0F);
+    }
   }
   out.runs = structureRuns(out.feet, out.headings, params.length_cell);
   out.length = out.runs.length();
@@ -445,7 +600,8 @@ double structureLength(const std::vector<Vec2>& feet, const std::vector<double>&
   return structureRuns(feet, headings, cell).length(uncovered);
 }
 
-StructureCoverage computeStructureCoverage(const StructurePoints& structure, const PointCoverage& coverage)
+StructureCoverage computeStructureCoverage(const StructurePoints& structure, const PointCoverage& coverage,
+                                           const std::vector<linemap::Segment2>& map, double radius)
 {
   if (structure.points != coverage.points)
     throw std::invalid_argument("structure coverage: structure of " + std::to_string(structure.points) +
@@ -454,17 +610,33 @@ StructureCoverage computeStructureCoverage(const StructurePoints& structure, con
   c.points = structure.indices.size();
   c.length = structure.length;
   std::vector<std::uint8_t> uncovered(structure.indices.size(), 0);
+  // Covered: a fine point within the point-coverage radius of a segment, or a point of a smeared band
+  // whose foot on the band's line lies within the band's reach of one (the map's line of a wall whose
+  // registered points smear lies inside their band, not on every one of them).
+  float widest = 0.0F;
+  for (const float reach : structure.reach) widest = std::max(widest, reach);
+  const SegmentTree tree = segmentTree(map, std::max<double>(widest, radius), "structure coverage");
+  const auto smearCovered = [&](std::size_t k)
+  {
+    if (k >= structure.reach.size() || !(structure.reach[k] > 0.0F)) return false;
+    const Vec2& p = structure.smeared_feet[k];
+    const double reach = std::max<double>(structure.reach[k], radius);
+    for (auto it = tree.qbegin(boost::geometry::index::intersects(SegmentPoint(p.x(), p.y())));
+         it != tree.qend(); ++it)
+      if (linemap::distanceToSegment(p, map[it->second].start, map[it->second].end) <= reach) return true;
+    return false;
+  };
   // Both index lists ascend: one merge pass.
   auto u = coverage.uncovered.begin();
   for (std::size_t k = 0; k < structure.indices.size(); ++k)
   {
     const std::size_t i = structure.indices[k];
     while (u != coverage.uncovered.end() && *u < i) ++u;
-    if (u != coverage.uncovered.end() && *u == i)
-    {
-      c.uncovered.push_back(i);
-      uncovered[k] = 1;
-    }
+    const bool point_covered = !(u != coverage.uncovered.end() && *u == i);
+    const bool fine = k < structure.fine.size() ? structure.fine[k] != 0 : true;
+    if ((fine && point_covered) || smearCovered(k)) continue;
+    c.uncovered.push_back(i);
+    uncovered[k] = 1;
   }
   c.covered = c.points - c.uncovered.size();
   c.unmapped_length = c.uncovered.empty() ? 0.0 : structure.runs.length(uncovered);

@@ -264,6 +264,15 @@ class TruthParser
     t.laser = parseLaser(require(root, "laser", "laser"));
     t.base_to_laser = pose(require(root, "base_to_laser", "base_to_laser"), "base_to_laser");
     if (root["min_beams"]) t.min_beams = count(root["min_beams"], "min_beams");
+    if (const YAML::Node reg = root["registration"])
+    {
+      t.registration_position =
+          number(require(reg, "position", "registration/position"), "registration/position");
+      t.registration_heading =
+          number(require(reg, "heading", "registration/heading"), "registration/heading");
+      if (!(t.registration_position >= 0.0) || !(t.registration_heading >= 0.0))
+        fail("registration", "position and heading must be >= 0", reg);
+    }
     parseSolids(require(root, "solids", "solids"), t);
     const YAML::Node walls = require(root, "walls", "walls");
     if (!walls.IsSequence()) fail("walls", "expected a list", walls);
@@ -395,6 +404,9 @@ void writeGroundTruth(const GroundTruth& t, const std::string& path)
   out << "}\n";
   out << "base_to_laser: " << list({t.base_to_laser.x, t.base_to_laser.y, t.base_to_laser.theta}) << "\n";
   out << "min_beams: " << t.min_beams << "\n";
+  if (t.registration_position != 0.0 || t.registration_heading != 0.0)
+    out << "registration: {position: " << num(t.registration_position)
+        << ", heading: " << num(t.registration_heading) << "}\n";
   out << "# the world's walls: centre line and thickness (0: thin, seen from both sides)\n";
   out << "solids:" << (t.solids.empty() ? " []" : "") << "\n";
   for (const auto& w : t.solids)

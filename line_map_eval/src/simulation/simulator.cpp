@@ -184,6 +184,32 @@ std::vector<Pose2> driftOdometry(const std::vector<Pose2>& truth, const Odometry
   return odom;
 }
 
+std::vector<Pose2> registrationErrors(const std::vector<Pose2>& truth, const RegistrationModel& m,
+                                      Random& rng)
+{
+  std::vector<Pose2> registered;
+  registered.reserve(truth.size());
+  double ex = 0.0, ey = 0.0, eh = 0.0;
+  for (std::size_t k = 0; k < truth.size(); ++k)
+  {
+    // First-order (Ornstein-Uhlenbeck) process over the travelled distance: stationary at the model's
+    // stds, and correlated over correlation_length of path.
+    double rho = 0.0;
+    if (k > 0)
+    {
+      const Pose2 d = truth[k - 1].inverse() * truth[k];
+      rho = std::exp(-(std::hypot(d.x, d.y) + std::abs(d.theta)) / m.correlation_length);
+    }
+    const double fresh = std::sqrt(1.0 - rho * rho);
+    ex = rho * ex + fresh * m.position * rng.normal();
+    ey = rho * ey + fresh * m.position * rng.normal();
+    eh = rho * eh + fresh * m.heading * rng.normal();
+    const Pose2& t = truth[k];
+    registered.emplace_back(t.x + ex, t.y + ey, linemap::normalizeAngle(t.theta + eh));
+  }
+  return registered;
+}
+
 World applyOptions(const World& world, const SimulationOptions& o)
 {
   World w = world;
@@ -211,6 +237,16 @@ World applyOptions(const World& world, const SimulationOptions& o)
     w.laser.spurious = *o.spurious;
   }
   if (!o.drift) w.odometry = OdometryModel{};
+  if (o.registration)
+  {
+    const RegistrationModel& r = *o.registration;
+    if (!(r.position >= 0.0) || !(r.heading >= 0.0) || !(r.correlation_length > 0.0) ||
+        !std::isfinite(r.position + r.heading + r.correlation_length))
+      throw std::invalid_argument(
+          "registration error: position and heading must be >= 0, correlation "
+          "length > 0");
+    w.registration = r;
+  }
   return w;
 }
 
@@ -284,11 +320,16 @@ SimulationResult simulate(const World& input, const SimulationOptions& options)
   for (std::size_t k = 0; k < count; ++k) truth_base[k] = follower.poseAt(static_cast<double>(k) * period);
   Random odom_rng(w.seed, 2);
   const std::vector<Pose2> odom = driftOdometry(truth_base, w.odometry, odom_rng);
+  Random registration_rng(w.seed, 3);
+  const std::vector<Pose2> registered =
+      w.registration.isZero() ? truth_base : registrationErrors(truth_base, w.registration, registration_rng);
 
   Recording& rec = res.recording;
   GroundTruth& gt = res.truth;
   beginRecording(w, rec);
   beginTruth(w, gt);
+  gt.registration_position = w.registration.position;
+  gt.registration_heading = w.registration.heading;
 
   Random laser_rng(w.seed, 1);
   for (std::size_t k = 0; k < count; ++k)
@@ -303,7 +344,7 @@ SimulationResult simulate(const World& input, const SimulationOptions& options)
     scan.ranges.assign(ranges.begin(), ranges.end());
     scan.odom = odom[k];
     rec.scans.push_back(std::move(scan));
-    rec.keyframes.push_back({k, truth_base[k]});
+    rec.keyframes.push_back({k, registered[k]});
     gt.scans.push_back({stamp, laser_pose, visibleFaces(hits, laser_pose, w, gt)});
     if (options.on_scan) options.on_scan(k + 1, count);
   }

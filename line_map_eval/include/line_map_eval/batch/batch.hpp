@@ -153,10 +153,11 @@ struct BatchResult
   /// error metric (originals against their map segment) they tell extraction noise from registration.
   double original_fit_rms = 0.0;
   double original_line_sigma = 0.0;
-  std::size_t scan_points = 0;  ///< registered points in the lookup table
-  double extraction_ms = 0.0;   ///< all keyframes
-  double table_ms = 0.0;        ///< lookup table of the registered scans
-  double structure_ms = 0.0;    ///< classifying them as straight structure or not (once, for every map)
+  std::size_t scan_points = 0;                   ///< registered points in the lookup table
+  std::vector<linemap::Vec2> registered_points;  ///< those points
+  double extraction_ms = 0.0;                    ///< all keyframes
+  double table_ms = 0.0;                         ///< lookup table of the registered scans
+  double structure_ms = 0.0;  ///< classifying them as straight structure or not (once, for every map)
   std::vector<MergerRun> mergers;
 };
 

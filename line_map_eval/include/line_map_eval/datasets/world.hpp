@@ -45,6 +45,19 @@ struct OdometryModel
   }
 };
 
+/// Error of the keyframes' registered ("corrected") poses, as a SLAM back end or a corrected log leaves
+/// it: a stationary random process along the path (first order, correlation length in metres of
+/// travel), so neighbouring keyframes agree and distant ones do not, and a wall seen from many of them
+/// is smeared across by their disagreement. The scans, the odometry and the ground truth are unchanged.
+struct RegistrationModel
+{
+  double position = 0.0;             ///< [m] std of x and of y
+  double heading = 0.0;              ///< [rad] std; YAML key heading_deg in degrees
+  double correlation_length = 10.0;  ///< [m] of path (a turn in place counts 1 m per rad)
+
+  bool isZero() const { return position == 0.0 && heading == 0.0; }
+};
+
 /// The closed path: the robot starts at waypoints[0] facing waypoints[1], drives each leg
 /// straight at `speed`, turns in place at `turn_rate` at each waypoint, and after the last
 /// waypoint drives back to the first. A scan is taken every `scan_period` over one lap.
@@ -78,6 +91,7 @@ struct World
   PathModel path;
   LaserModel laser;
   OdometryModel odometry;
+  RegistrationModel registration;
   std::size_t min_visible_beams = 5;  ///< a wall counts as seen by a scan when hit by this many beams
   std::uint32_t seed = 1;
 };
@@ -103,6 +117,10 @@ SensorProfile parseSensorProfile(const std::string& yaml_text, const std::string
 
 /// `world` seen with the sensor of `profile_path`: its laser replaced, its name "<world> / <profile>".
 World withSensorProfile(const World& world, const std::string& profile_path);
+
+/// The value of a `--pose-noise POSITION,HEADING_DEG[,CORRELATION_LENGTH]` option (metres, degrees,
+/// metres); throws std::invalid_argument naming `option` for a malformed or negative value.
+RegistrationModel parseRegistrationOption(const std::string& option, const std::string& value);
 
 /// Checks the values and that every leg of the path keeps `clearance` from every wall's surface
 /// (its centre line less half its thickness); throws std::runtime_error naming `world.source`

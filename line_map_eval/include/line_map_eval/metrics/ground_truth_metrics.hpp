@@ -32,6 +32,13 @@ struct GroundTruthParams
   double corner_tolerance = 0.01;                       ///< face endpoints this close meet [m]
   double corner_min_angle = 20.0 * linemap::kPi / 180;  ///< faces meeting straighter are no corner [rad]
   double vertex_radius = 0.3;                           ///< map endpoints within this of a corner [m]
+  /// Under a registration error (GroundTruth::registration_*), a face's coverage tolerance and
+  /// association distance grow by this many stds of the error expected at its mean sighting range.
+  double registration_sigmas = 2.0;
+  /// A face part is also seen when all scans together hit it with min_seen_beams beams per
+  /// min_seen_length (accumulatedSeenParts): a wall seen from afar by a few beams per scan, as the map
+  /// as a whole sees it.
+  bool accumulate_sightings = true;
 
   static GroundTruthParams fromParams(const linemap::ParamSet& params);
   void validate() const;
@@ -45,6 +52,15 @@ using SeenParts = std::vector<std::vector<std::pair<double, double>>>;
 /// the piece alone, or the run of consecutive faces of a curve it is part of) is at least
 /// `min_piece_length` long and hit by at least `min_piece_beams` beams in total.
 SeenParts seenParts(const GroundTruth& truth, double min_piece_length, std::size_t min_piece_beams = 0);
+
+/// Per face, the parts whose hits over all scans (each visible piece's beams spread evenly over its
+/// runs) reach min_beams within every window of min_length about them, in stretches at least
+/// min_length long; resolved to `bin` metres. Sorted, disjoint, like seenParts.
+SeenParts accumulatedSeenParts(const GroundTruth& truth, double min_length, std::size_t min_beams,
+                               double bin = 0.05);
+
+/// The union of two sets of seen parts of the same faces.
+SeenParts unionOfSeenParts(const SeenParts& a, const SeenParts& b);
 
 struct WallScore
 {
@@ -106,13 +122,19 @@ struct GroundTruthResult
 /// non-finite coordinates or a zero-length face, or when `seen` does not have one entry per face.
 /// Where consecutive faces of one of `curves` meet is a joint of chords, not the end of a wall: such
 /// ends are never seen, mapped or scored, so the endpoint figures keep to the true wall ends.
+/// `slack` (per face, or empty) is added to a face's coverage tolerance and association distance.
 GroundTruthResult evaluateAgainstGroundTruth(const std::vector<linemap::Segment2>& walls,
                                              const SeenParts& seen, const std::vector<linemap::Segment2>& map,
                                              const GroundTruthParams& params,
-                                             const std::vector<std::vector<std::size_t>>& curves = {});
+                                             const std::vector<std::vector<std::size_t>>& curves = {},
+                                             const std::vector<double>& slack = {});
+
+/// Per face of `truth`, registration_sigmas times the std of the registration error at the mean
+/// range of the scans that saw it (all 0 without a registration error).
+std::vector<double> registrationSlack(const GroundTruth& truth, double registration_sigmas);
 
 /// Against a simulation's ground truth: its faces over their parts seen in sights (seenParts with
-/// min_seen_length and min_seen_beams), its curves' joints excluded.
+/// min_seen_length and min_seen_beams), its curves' joints excluded, with its registrationSlack.
 GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth,
                                              const std::vector<linemap::Segment2>& map,
                                              const GroundTruthParams& params);

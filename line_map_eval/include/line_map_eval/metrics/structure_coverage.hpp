@@ -26,6 +26,7 @@
 // so rho below about min_length^2 / (8 g) = 0.4 m (a pillar) is not structure, a gently curved wall is.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -48,6 +49,17 @@ struct StructureParams
   double min_fill = 0.5;        ///< smallest share of the band's extent its voxels fill (voxel bins)
   double voxel = 0.05;          ///< [m] voxel size of the reduced cloud
   double length_cell = 0.1;     ///< [m] cell size of the unmapped length
+  /// The smeared scale, for voxels the fine test refuses (0 smear_band: off).
+  double smear_band = 0.25;       ///< [m] band half-width
+  double smear_radius = 2.0;      ///< [m] neighbourhood
+  double smear_max_rms = 0.08;    ///< [m] largest RMS scatter about the line
+  double smear_min_share = 0.4;   ///< smallest share of the neighbourhood's voxels in the band
+  double smear_min_length = 1.5;  ///< [m] the band's extent along its line
+  /// Smallest share of the bins along the band's extent it fills, of those its points would fill
+  /// spread evenly at random.
+  double smear_min_fill = 0.6;
+  double smear_fill_bin = 0.05;  ///< [m] bins of that fill
+  int smear_min_points = 10;     ///< points in the band
 
   static StructureParams fromParams(const linemap::ParamSet& params);
   /// Throws linemap::ParameterError naming the key.
@@ -78,8 +90,15 @@ struct StructurePoints
   std::vector<std::size_t> indices;  ///< ascending indices of the points on straight structure
   std::vector<linemap::Vec2> feet;   ///< per structure point: its foot on the local line
   std::vector<double> headings;      ///< per structure point: the local line's heading in [0, pi)
-  StructureRuns runs;                ///< of the feet, with the cell size eval/structure_length_cell
-  double length = 0.0;               ///< [m] structureLength of all of them
+  /// Per structure point: 1 when on fine structure (feet and headings are then the fine line's), 0 on
+  /// smeared structure alone.
+  std::vector<std::uint8_t> fine;
+  /// Per structure point: its foot on its voxel's smeared line, and the distance [m] from that foot
+  /// within which a map segment covers it (the band's own width); 0 without a smeared line.
+  std::vector<linemap::Vec2> smeared_feet;
+  std::vector<float> reach;
+  StructureRuns runs;   ///< of the feet, with the cell size eval/structure_length_cell
+  double length = 0.0;  ///< [m] structureLength of all of them
 };
 
 /// Classifies `points` (see the file comment); `sigma` is the lookup table's. Parallel over voxels.
@@ -110,15 +129,22 @@ struct StructureCoverage
   std::vector<std::size_t> uncovered;  ///< scan-point indices of the others, ascending (for figures)
   double length = 0.0;                 ///< [m] of all straight structure (structureLength)
   double unmapped_length = 0.0;        ///< [m] structureLength of the runs of mostly uncovered points
-  /// covered / points in [0, 1]; 0 without structure.
-  double fraction() const
+  /// The share of the straight structure's length the map covers, 1 - unmapped_length / length, in
+  /// [0, 1]; 0 without structure. By length, as the ground truth scores the faces the robot saw: a
+  /// wall seen from afar by sparse points weighs what a wall beside the path does.
+  double fraction() const { return length > 0.0 ? std::max(0.0, 1.0 - unmapped_length / length) : 0.0; }
+  /// covered / points in [0, 1]; 0 without structure points.
+  double pointFraction() const
   {
     return points ? static_cast<double>(covered) / static_cast<double>(points) : 0.0;
   }
 };
 
-/// The structure points' coverage, read from the point coverage of the same cloud (the same radius).
-/// Throws std::invalid_argument when the two were computed for clouds of different sizes.
-StructureCoverage computeStructureCoverage(const StructurePoints& structure, const PointCoverage& coverage);
+/// The structure points' coverage: a fine one is covered when the point coverage of the same cloud
+/// (computed with `radius`) covers it; any one on a smeared line also when a segment of `map` passes
+/// within its reach (at least `radius`) of its foot on that line. Throws std::invalid_argument when the two
+/// were computed for clouds of different sizes.
+StructureCoverage computeStructureCoverage(const StructurePoints& structure, const PointCoverage& coverage,
+                                           const std::vector<linemap::Segment2>& map, double radius);
 
 }  // namespace line_map_eval

@@ -71,6 +71,11 @@ struct GroundTruth
   /// lines across the chords of a curve (key `curves`, absent: none).
   std::vector<std::vector<std::size_t>> curves;
   std::vector<TruthScan> scans;
+  /// Stds of the error of the registered keyframe poses the map is built on (world key
+  /// `registration`; key `registration` here, absent: 0): a wall seen from range r is expected that
+  /// far off in the map, sqrt(position^2 + (heading r)^2), and is scored with that much slack.
+  double registration_position = 0.0;  ///< [m]
+  double registration_heading = 0.0;   ///< [rad]
 };
 
 /// The wall pieces one scan sees: `hit_wall[i]` is the wall (face) beam i's noiseless ray ends

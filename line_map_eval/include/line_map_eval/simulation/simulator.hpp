@@ -84,6 +84,10 @@ class PathFollower
 std::vector<linemap::Pose2> driftOdometry(const std::vector<linemap::Pose2>& truth,
                                           const OdometryModel& model, Random& rng);
 
+/// Registered keyframe poses: `truth` with the error of `model` (RegistrationModel), one draw per pose.
+std::vector<linemap::Pose2> registrationErrors(const std::vector<linemap::Pose2>& truth,
+                                               const RegistrationModel& model, Random& rng);
+
 /// Overrides of the world's settings (the simulate_world command line).
 struct SimulationOptions
 {
@@ -92,7 +96,8 @@ struct SimulationOptions
   std::optional<std::size_t> beams;  ///< keeps the field of view
   std::optional<double> sigma;
   std::optional<double> spurious;
-  bool drift = true;        ///< false: odometry equals the true motion
+  std::optional<RegistrationModel> registration;  ///< replaces the world's `registration`
+  bool drift = true;                              ///< false: odometry equals the true motion
   double start_time = 1.0;  ///< stamp of the first scan [s] (0 would mean "unset" to ROS)
   /// Called after each scan with (scans done, total), e.g. for a progress bar.
   std::function<void(std::size_t, std::size_t)> on_scan;
@@ -101,7 +106,8 @@ struct SimulationOptions
 struct SimulationResult
 {
   World world;  ///< the world with the options applied
-  /// Scans with drifting odometry in `odom`, and every scan as a keyframe with its true base pose.
+  /// Scans with drifting odometry in `odom`, and every scan as a keyframe with its true base pose
+  /// (with the world's registration error, when it has one).
   Recording recording;
   GroundTruth truth;
   double path_length = 0.0;  ///< of one lap [m]
