@@ -223,6 +223,49 @@ TEST(GroundTruthMetrics, SeenPartsAreTheUnionOfLongEnoughPieces)
   EXPECT_EQ(line_map_eval::seenParts(truth, 0.6, 4)[0].size(), 2u);
 }
 
+// A face 4 m long seen by scans hitting [1, 3] with 4 beams each (2 hits per metre): no single sight
+// (10 beams per 0.6 m). Ten such scans give 20 hits per metre: a bin of 5 cm is dense where its
+// window of 13 bins (+-6, 0.65 m) holds 10 bins inside [1, 3], i.e. from bin 23 to bin 56: [1.15, 2.85].
+// Five scans give 10 per metre, 6.5 hits at most in a window: nothing.
+TEST(GroundTruthMetrics, SightingsAccumulateOverScans)
+{
+  line_map_eval::GroundTruth truth;
+  truth.walls = {Segment2(Vec2(0, 0), Vec2(4, 0))};
+  const line_map_eval::VisibleWall glimpse{0, Segment2(Vec2(1, 0), Vec2(3, 0)), 4, {}};
+  truth.scans.resize(10);
+  for (auto& scan : truth.scans) scan.visible = {glimpse};
+  EXPECT_TRUE(line_map_eval::seenParts(truth, 0.6, 10)[0].empty());
+  const SeenParts ten = line_map_eval::accumulatedSeenParts(truth, 0.6, 10);
+  ASSERT_EQ(ten[0].size(), 1u);
+  EXPECT_NEAR(ten[0][0].first, 1.15, 0.051);
+  EXPECT_NEAR(ten[0][0].second, 2.85, 0.051);
+  truth.scans.resize(5);
+  EXPECT_TRUE(line_map_eval::accumulatedSeenParts(truth, 0.6, 10)[0].empty());
+  // The union keeps both kinds.
+  const SeenParts other{{{0.0, 0.5}}};
+  const SeenParts both = line_map_eval::unionOfSeenParts(other, ten);
+  ASSERT_EQ(both[0].size(), 2u);
+  EXPECT_DOUBLE_EQ(both[0][0].second, 0.5);
+}
+
+// Under a registration error, a face seen from 10 m is scored with 2 x hypot(0.03, 0.01 x 10) =
+// 0.2088 m of slack: a segment 0.15 m off it covers it then, and not without the error.
+TEST(GroundTruthMetrics, RegistrationErrorGivesSlackByRange)
+{
+  line_map_eval::GroundTruth truth;
+  truth.walls = {Segment2(Vec2(0, 0), Vec2(4, 0))};
+  truth.scans.resize(1);
+  truth.scans[0].pose = linemap::Pose2(2.0, 10.0, 0.0);
+  truth.scans[0].visible = {line_map_eval::VisibleWall{0, truth.walls[0], 40, {}}};
+  const std::vector<Segment2> map{Segment2(Vec2(0, 0.15), Vec2(4, 0.15))};
+  EXPECT_DOUBLE_EQ(line_map_eval::registrationSlack(truth, 2.0)[0], 0.0);
+  EXPECT_DOUBLE_EQ(evaluateAgainstGroundTruth(truth, map, defaults()).coverage, 0.0);
+  truth.registration_position = 0.03;
+  truth.registration_heading = 0.01;
+  EXPECT_NEAR(line_map_eval::registrationSlack(truth, 2.0)[0], 2.0 * std::hypot(0.03, 0.1), 1e-12);
+  EXPECT_DOUBLE_EQ(evaluateAgainstGroundTruth(truth, map, defaults()).coverage, 1.0);
+}
+
 TEST(GroundTruthMetrics, ASegmentAcrossAPartitionBelongsToBothFaces)
 {
   // Faces P (6 m) and Q (1.9 m) on the line y = 0, 10 cm apart where a partition meets the wall;

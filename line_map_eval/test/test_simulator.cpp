@@ -620,3 +620,88 @@ TEST(World, LoopFailsToCloseOnOdometry)
 }
 
 }  // namespace
+
+// The registration error is a first-order process along the path: over 10 km of straight path in
+// 0.1 m steps with a 5 m correlation length (2,000 independent stretches) its stds are the model's
+// within 5 %, and errors 5 m apart correlate by exp(-1) = 0.37. A zero model leaves the poses exact.
+TEST(Simulator, RegistrationErrorIsStationaryAndCorrelatedAlongThePath)
+{
+  std::vector<Pose2> truth;
+  for (int k = 0; k < 100000; ++k) truth.emplace_back(0.1 * k, 0.0, 0.0);
+  RegistrationModel model;
+  model.position = 0.04;
+  model.heading = 0.007;
+  model.correlation_length = 5.0;
+  Random rng(5, 3);
+  const std::vector<Pose2> registered = registrationErrors(truth, model, rng);
+  ASSERT_EQ(registered.size(), truth.size());
+  double sxx = 0.0, syy = 0.0, shh = 0.0, lagged = 0.0;
+  const std::size_t lag = 50;  // 5 m
+  for (std::size_t k = 0; k < truth.size(); ++k)
+  {
+    const double ex = registered[k].x - truth[k].x, ey = registered[k].y, eh = registered[k].theta;
+    sxx += ex * ex;
+    syy += ey * ey;
+    shh += eh * eh;
+    if (k >= lag) lagged += ex * (registered[k - lag].x - truth[k - lag].x);
+  }
+  const double n = static_cast<double>(truth.size());
+  EXPECT_NEAR(std::sqrt(sxx / n), 0.04, 0.002);
+  EXPECT_NEAR(std::sqrt(syy / n), 0.04, 0.002);
+  EXPECT_NEAR(std::sqrt(shh / n), 0.007, 0.00035);
+  EXPECT_NEAR(lagged / (n - lag) / (sxx / n), std::exp(-1.0), 0.05);
+
+  World world = loadWorld(std::string(LINEMAP_SOURCE_DIR) + "/config/worlds/square_room.yaml");
+  const SimulationResult exact = simulate(world);
+  for (std::size_t k = 0; k < exact.recording.keyframes.size(); ++k)
+  {
+    const Pose2 laser = exact.recording.keyframes[k].pose * world.laser.mounting;
+    EXPECT_NEAR(laser.x, exact.truth.scans[k].pose.x, 1e-12);
+    EXPECT_NEAR(laser.y, exact.truth.scans[k].pose.y, 1e-12);
+  }
+  SimulationOptions options;
+  options.registration = model;
+  const SimulationResult smeared = simulate(world, options);
+  // The scans and the ground truth are those of the exact run; only the keyframes' poses err.
+  ASSERT_EQ(smeared.recording.scans.size(), exact.recording.scans.size());
+  EXPECT_EQ(smeared.recording.scans[7].ranges, exact.recording.scans[7].ranges);
+  EXPECT_EQ(smeared.truth.scans[7].pose.x, exact.truth.scans[7].pose.x);
+  EXPECT_NE(smeared.recording.keyframes[7].pose.x, exact.recording.keyframes[7].pose.x);
+  EXPECT_DOUBLE_EQ(smeared.truth.registration_position, 0.04);
+  EXPECT_DOUBLE_EQ(smeared.truth.registration_heading, 0.007);
+}
+
+TEST(World, RegistrationBlockAndOption)
+{
+  const World w =
+      parseWorld(std::string("walls: [[0, 0, 4, 0]]\nregistration: {position: 0.03, heading_deg: 0.5, "
+                             "correlation_length: 8}\n") +
+                     kPath,
+                 "test.yaml");
+  EXPECT_DOUBLE_EQ(w.registration.position, 0.03);
+  EXPECT_NEAR(w.registration.heading, 0.5 * kPi / 180.0, 1e-15);
+  EXPECT_DOUBLE_EQ(w.registration.correlation_length, 8.0);
+  using line_map_eval::test_helpers::expectMentions;
+  expectMentions(worldError(std::string("walls: [[0, 0, 4, 0]]\nregistration: {position: -1}\n") + kPath),
+                 {"registration/position"});
+  expectMentions(worldError(std::string("walls: [[0, 0, 4, 0]]\nregistration: {heading: 1}\n") + kPath),
+                 {"registration/heading"});
+
+  const RegistrationModel m = parseRegistrationOption("--pose-noise", "0.04,0.4");
+  EXPECT_DOUBLE_EQ(m.position, 0.04);
+  EXPECT_NEAR(m.heading, 0.4 * kPi / 180.0, 1e-15);
+  EXPECT_DOUBLE_EQ(m.correlation_length, 10.0);
+  EXPECT_DOUBLE_EQ(parseRegistrationOption("--pose-noise", "0,0,3").correlation_length, 3.0);
+  for (const char* bad : {"0.04", "a,0.4", "0.04,-1", "0.1,0.2,0", "1,2,3,4", "0.1x,2"})
+  {
+    try
+    {
+      parseRegistrationOption("--pose-noise", bad);
+      ADD_FAILURE() << bad << " was accepted";
+    }
+    catch (const std::invalid_argument& e)
+    {
+      EXPECT_NE(std::string(e.what()).find("--pose-noise"), std::string::npos) << e.what();
+    }
+  }
+}

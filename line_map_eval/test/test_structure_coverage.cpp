@@ -196,6 +196,24 @@ TEST(StructureCoverage, SmearedWallIsStructureAndItsLineCoversIt)
             cloud.size() * 3 / 4);
 }
 
+// The two faces of a 10 cm partition, 6 m long, are two thin lines, not one smear: a segment on one face
+// covers its half of the structure and not the other face's (a smeared band between them would let one
+// segment in the middle cover both).
+TEST(StructureCoverage, PartitionFacesAreNotOneSmear)
+{
+  std::vector<Vec2> cloud;
+  Jitter j;
+  addLine(cloud, Vec2(0.0, 0.0), Vec2(6.0, 0.0), 0.01, 0.01, &j);
+  const std::size_t first = cloud.size();
+  addLine(cloud, Vec2(0.0, 0.1), Vec2(6.0, 0.1), 0.01, 0.01, &j);
+  const StructurePoints s = classifyStructure(cloud, kSigma, {});
+  EXPECT_EQ(s.indices.size(), cloud.size());
+  const std::vector<Segment2> one_face{{Vec2(0.0, 0.0), Vec2(6.0, 0.0)}};
+  const auto c = computeStructureCoverage(s, computePointCoverage(cloud, one_face, kSigma), one_face, kSigma);
+  EXPECT_NEAR(c.pointFraction(), static_cast<double>(first) / static_cast<double>(cloud.size()), 0.01);
+  EXPECT_NEAR(c.fraction(), 0.5, 0.05);
+}
+
 // A wall seen only from afar: 40 points at random along 6 m (one per 15 cm on average, 1 cm noise),
 // too sparse for the fine band's fill, straight at the smeared scale: structure. A filled 1 x 3 m
 // table top is not (RMS 29 cm).

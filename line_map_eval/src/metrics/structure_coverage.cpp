@@ -5,6 +5,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -209,9 +210,81 @@ double coreVariance(const std::vector<Voxel>& voxels, const std::vector<std::uin
   return n > 0.0 ? sum / n : 0.0;
 }
 
+/// Whether the band's points fall into two lines side by side with a gap between them (the two faces
+/// of a partition, two walls close together) rather than one smear: across the line, in bins of a
+/// twenty-fifth of the half-width g (1 cm), each voxel's points spread as a normal law about its mean
+/// (5 cm voxels would otherwise gather a smear into clusters a voxel apart), a run of at least two bins
+/// holding under 1 % of the points
+/// where an even spread over the occupied span would put five or more, between two sides holding a
+/// tenth of them or more each (a partition's face seen from a room holds far fewer points than its
+/// corridor side). A smeared wall spreads continuously across (a sparse one leaves gaps no larger than
+/// chance); one segment between two faces would cover both through their feet.
+bool twoLines(const std::vector<Voxel>& voxels, const std::vector<std::uint32_t>& band, const Vec2& point,
+              const Vec2& axis, double g)
+{
+  constexpr int kBins = 50, kValley = 2;
+  const Vec2 normal(-axis.y(), axis.x());
+  std::array<double, kBins> histogram{};
+  double total = 0.0;
+  const double bin = 2.0 * g / kBins;
+  for (const std::uint32_t k : band)
+  {
+    // A voxel's points, not its mean: 5 cm voxels would otherwise gather a smear into clusters a voxel
+    // apart. Each spreads as a normal law with its own mean and variance across the line.
+    const Voxel& v = voxels[k];
+    const double mean = normal.dot(v.mean - point) + g;
+    const double across = (normal.x() * normal.x() * v.sxx + 2.0 * normal.x() * normal.y() * v.sxy +
+                           normal.y() * normal.y() * v.syy) /
+                          v.n;
+    const double spread = std::sqrt(std::max(across, 1e-6)) * std::sqrt(2.0);
+    const int lo = std::max(0, static_cast<int>(std::floor((mean - 3.0 * spread) / bin)));
+    const int hi = std::min(kBins - 1, static_cast<int>(std::floor((mean + 3.0 * spread) / bin)));
+    for (int b = lo; b <= hi; ++b)
+      histogram[static_cast<std::size_t>(b)] +=
+          0.5 * v.n * (std::erf(((b + 1) * bin - mean) / spread) - std::erf((b * bin - mean) / spread));
+    total += v.n;
+  }
+  int first = 0, last = kBins - 1;
+  while (first < last && histogram[first] < 1e-3 * total) ++first;
+  while (last > first && histogram[last] < 1e-3 * total) --last;
+  const double span = last - first + 1, side = 0.1 * total;
+  double below = 0.0;
+  for (int b = first; b <= last;)
+  {
+    int e = b;
+    double in_run = 0.0;
+    while (e <= last && in_run + histogram[e] < 0.01 * total) in_run += histogram[e++];
+    if (e - b >= kValley && total * (e - b) / span >= 5.0 && below >= side && total - below - in_run >= side)
+      return true;
+    for (const int stop = std::max(e, b + 1); b < stop; ++b) below += histogram[b];
+  }
+  return false;
+}
+
+/// The mean direction of the fine lines among the band's voxels (doubled angles, weighted by points),
+/// turned like `axis`; `axis` itself without any. Two parallel faces tilt the band's own principal axis
+/// when they end at different places; their fine lines keep the walls' true direction.
+Vec2 fineDirection(const std::vector<VoxelLine>& fine_lines, const std::vector<Voxel>& voxels,
+                   const std::vector<std::uint32_t>& band, const Vec2& axis)
+{
+  double c = 0.0, s = 0.0;
+  for (const std::uint32_t k : band)
+  {
+    if (!fine_lines[k].structure) continue;
+    const double a = 2.0 * std::atan2(fine_lines[k].axis.y(), fine_lines[k].axis.x());
+    c += voxels[k].n * std::cos(a);
+    s += voxels[k].n * std::sin(a);
+  }
+  if (c == 0.0 && s == 0.0) return axis;
+  const double half = 0.5 * std::atan2(s, c);
+  const Vec2 d(std::cos(half), std::sin(half));
+  return d.dot(axis) < 0.0 ? Vec2(-d) : d;
+}
+
 /// The band test of `test` for every voxel (in parallel: each voxel's band is independent of the
 /// others').
-void classifyVoxels(const std::vector<Voxel>& voxels, const BandTest& test, std::vector<VoxelLine>& lines)
+void classifyVoxels(const std::vector<Voxel>& voxels, const BandTest& test, std::vector<VoxelLine>& lines,
+                    const std::vector<VoxelLine>* fine_lines = nullptr)
 {
   const VoxelGrid grid(voxels, test.radius);
   const double g = test.half_width;
@@ -248,6 +321,8 @@ void classifyVoxels(const std::vector<Voxel>& voxels, const BandTest& test, std:
           }
           if (band.empty()) continue;
           if (coreVariance(voxels, band, point, axis, test.smeared > 0.0 ? kSmearCore : 1.0) > test.max_minor)
+            continue;
+          if (fine_lines && twoLines(voxels, band, point, fineDirection(*fine_lines, voxels, band, axis), g))
             continue;
           if (static_cast<double>(band.size()) < test.min_share * static_cast<double>(near.size())) continue;
           double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -409,7 +484,7 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
                            params.smear_fill_bin,
                            static_cast<double>(params.smear_min_points),
                            1.0};
-    classifyVoxels(voxels, smeared, smeared_lines);
+    classifyVoxels(voxels, smeared, smeared_lines, &lines);
   }
 
   // The points of structure voxels within the band of their voxel's line, in index order.

@@ -19,6 +19,17 @@
 //    neighbourhood's voxels (a band through scattered clutter holds few of them);
 //  - a point of such a voxel is on structure when it lies within g of the line (so a segment on the
 //    line, covering within the point-coverage radius, g at the defaults, covers it).
+// The smeared scale: a wall whose registered points smear across by tens of centimetres (the keyframes
+// that saw it disagree) or that far scans sample sparsely fails the fine band, and is still a wall. Every
+// voxel also gets the same band test at a larger scale (smear_radius, smear_band), with two changes: the
+// RMS is taken over the 80 % of the band's points nearest its line (a wall with objects beside it is
+// thin at its core, clutter filling the band is not), and the fill is judged against the bins its n
+// points would fill spread evenly at random, B (1 - exp(-n / B)) of B (a sparse wall fills about that
+// many, a row of posts seen by many scans piles its points into few). A point is structure on either
+// scale; on a smeared line it is covered when a map segment passes within the band's own width
+// (sqrt(3) x its RMS, at most smear_band, at least the point-coverage radius) of its foot on that line.
+// Coverage is by length (StructureCoverage::fraction): a wall seen from afar by few points weighs
+// what a wall beside the path does, as in the ground truth's seen-face coverage.
 // Consequences at the defaults (sigma 5 cm: g 5 cm, RMS 2.5 cm; radius 0.5 m; min_length 0.4 m):
 // straight pieces from 0.4 m long are structure up to their free ends; an L corner is structure up to
 // its vertex (a point near the vertex lies within g of either arm's line); a uniformly filled band is
