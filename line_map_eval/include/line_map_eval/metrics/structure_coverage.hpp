@@ -25,7 +25,8 @@
 // RMS is taken over the 80 % of the band's points nearest its line (a wall with objects beside it is
 // thin at its core, clutter filling the band is not), and the fill is judged against the bins its n
 // points would fill spread evenly at random, B (1 - exp(-n / B)) of B (a sparse wall fills about that
-// many, a row of posts seen by many scans piles its points into few). A point is structure on either
+// many, a row of posts seen by many scans piles its points into few). A band whose points fall into two
+// lines with a gap between (the faces of a partition) is no smear. A point is structure on either
 // scale; on a smeared line it is covered when a map segment passes within the band's own width
 // (sqrt(3) x its RMS, at most smear_band, at least the point-coverage radius) of its foot on that line.
 // Coverage is by length (StructureCoverage::fraction): a wall seen from afar by few points weighs
