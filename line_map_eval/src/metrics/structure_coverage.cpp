@@ -30,7 +30,10 @@ constexpr double kAcrossShare = 0.25;
 // At the smeared scale the RMS is taken over this share of the band's points nearest its line: a wall
 // with a row of objects beside it within the band is still thin at its core; clutter filling the band
 // is not (a uniform band's core is 0.8 of its width).
-constexpr double kSmearCore = 0.8;  // across a line, cells of a quarter of the length cell
+constexpr double kSmearCore = 0.8;
+// The smeared band is sought once per cell of this share of its half-width (the heaviest voxel's band
+// serves the cell): a 2 m band barely moves over a few centimetres.
+constexpr double kSmearSeedShare = 1.0;  // across a line, cells of a quarter of the length cell
 
 void require(bool ok, const char* key, const std::string& what, double value)
 {
@@ -195,7 +198,8 @@ double coreVariance(const std::vector<Voxel>& voxels, const std::vector<std::uin
     by_offset.emplace_back(std::abs(normal.dot(voxels[k].mean - point)), k);
     total += voxels[k].n;
   }
-  if (core < 1.0) std::sort(by_offset.begin(), by_offset.end());
+  // The nearest `core` of the points: the voxels below the offset where their count reaches it.
+  std::sort(by_offset.begin(), by_offset.end());
   double n = 0.0, sum = 0.0;
   for (const auto& [offset, k] : by_offset)
   {
@@ -212,13 +216,12 @@ double coreVariance(const std::vector<Voxel>& voxels, const std::vector<std::uin
 
 /// Whether the band's points fall into two lines side by side with a gap between them (the two faces
 /// of a partition, two walls close together) rather than one smear: across the line, in bins of a
-/// twenty-fifth of the half-width g (1 cm), each voxel's points spread as a normal law about its mean
-/// (5 cm voxels would otherwise gather a smear into clusters a voxel apart), a run of at least two bins
-/// holding under 1 % of the points
-/// where an even spread over the occupied span would put five or more, between two sides holding a
-/// tenth of them or more each (a partition's face seen from a room holds far fewer points than its
-/// corridor side). A smeared wall spreads continuously across (a sparse one leaves gaps no larger than
-/// chance); one segment between two faces would cover both through their feet.
+/// twenty-fifth of the half-width g (1 cm), each voxel's points spread evenly about its mean with its
+/// variance (5 cm voxels would otherwise gather a smear into clusters a voxel apart), a run of at least two
+/// bins holding under 1 % of the points where an even spread over the occupied span would put five or more,
+/// between two sides holding a tenth of them or more each (a partition's face seen from a room holds far
+/// fewer points than its corridor side). A smeared wall spreads continuously across (a sparse one leaves gaps
+/// no larger than chance); one segment between two faces would cover both through their feet.
 bool twoLines(const std::vector<Voxel>& voxels, const std::vector<std::uint32_t>& band, const Vec2& point,
               const Vec2& axis, double g)
 {
@@ -236,12 +239,16 @@ bool twoLines(const std::vector<Voxel>& voxels, const std::vector<std::uint32_t>
     const double across = (normal.x() * normal.x() * v.sxx + 2.0 * normal.x() * normal.y() * v.sxy +
                            normal.y() * normal.y() * v.syy) /
                           v.n;
-    const double spread = std::sqrt(std::max(across, 1e-6)) * std::sqrt(2.0);
-    const int lo = std::max(0, static_cast<int>(std::floor((mean - 3.0 * spread) / bin)));
-    const int hi = std::min(kBins - 1, static_cast<int>(std::floor((mean + 3.0 * spread) / bin)));
+    // Spread evenly over +-sqrt(3) of its std (the uniform law of the same variance): cheaper than the
+    // normal law's error functions, and as good at filling the gaps between voxel means.
+    const double half = std::max(std::sqrt(3.0 * std::max(across, 0.0)), 1e-4);
+    const int lo = std::max(0, static_cast<int>(std::floor((mean - half) / bin)));
+    const int hi = std::min(kBins - 1, static_cast<int>(std::floor((mean + half) / bin)));
     for (int b = lo; b <= hi; ++b)
-      histogram[static_cast<std::size_t>(b)] +=
-          0.5 * v.n * (std::erf(((b + 1) * bin - mean) / spread) - std::erf((b * bin - mean) / spread));
+    {
+      const double overlap = std::min((b + 1) * bin, mean + half) - std::max(b * bin, mean - half);
+      if (overlap > 0.0) histogram[static_cast<std::size_t>(b)] += v.n * overlap / (2.0 * half);
+    }
     total += v.n;
   }
   int first = 0, last = kBins - 1;
@@ -284,18 +291,20 @@ Vec2 fineDirection(const std::vector<VoxelLine>& fine_lines, const std::vector<V
 /// The band test of `test` for every voxel (in parallel: each voxel's band is independent of the
 /// others').
 void classifyVoxels(const std::vector<Voxel>& voxels, const BandTest& test, std::vector<VoxelLine>& lines,
-                    const std::vector<VoxelLine>* fine_lines = nullptr)
+                    const std::vector<VoxelLine>* fine_lines = nullptr,
+                    const std::vector<std::uint32_t>* only = nullptr)
 {
   const VoxelGrid grid(voxels, test.radius);
   const double g = test.half_width;
   tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, voxels.size(), 256),
+      tbb::blocked_range<std::size_t>(0, only ? only->size() : voxels.size(), 64),
       [&](const tbb::blocked_range<std::size_t>& range)
       {
         std::vector<std::uint32_t> near, band, next;
         std::vector<std::int64_t> bins;
-        for (std::size_t i = range.begin(); i != range.end(); ++i)
+        for (std::size_t r = range.begin(); r != range.end(); ++r)
         {
+          const std::size_t i = only ? (*only)[r] : r;
           const Vec2& o = voxels[i].mean;
           grid.near(o, near);
           Fit fit = fitVoxels(voxels, near, o);
@@ -319,11 +328,8 @@ void classifyVoxels(const std::vector<Voxel>& voxels, const BandTest& test, std:
             band.swap(next);
             if (settled) break;
           }
+          // The cheap tests first.
           if (band.empty()) continue;
-          if (coreVariance(voxels, band, point, axis, test.smeared > 0.0 ? kSmearCore : 1.0) > test.max_minor)
-            continue;
-          if (fine_lines && twoLines(voxels, band, point, fineDirection(*fine_lines, voxels, band, axis), g))
-            continue;
           if (static_cast<double>(band.size()) < test.min_share * static_cast<double>(near.size())) continue;
           double lo = std::numeric_limits<double>::infinity(), hi = -lo;
           for (const std::uint32_t k : band)
@@ -352,6 +358,11 @@ void classifyVoxels(const std::vector<Voxel>& voxels, const BandTest& test, std:
             expected = bin_count * (1.0 - std::exp(-n / bin_count));
           }
           if (static_cast<double>(filled) < test.min_fill * expected) continue;
+          if (test.smeared > 0.0 ? coreVariance(voxels, band, point, axis, kSmearCore) > test.max_minor
+                                 : fit.minor > test.max_minor)
+            continue;
+          if (fine_lines && twoLines(voxels, band, point, fineDirection(*fine_lines, voxels, band, axis), g))
+            continue;
           double heading = std::atan2(axis.y(), axis.x());
           if (heading < 0.0) heading += kPi;
           // A smeared band's points lie about its line like a uniform band sqrt(3) RMS wide each way.
@@ -484,7 +495,26 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
                            params.smear_fill_bin,
                            static_cast<double>(params.smear_min_points),
                            1.0};
-    classifyVoxels(voxels, smeared, smeared_lines, &lines);
+    // Sought for the heaviest voxel of each seed cell, it serves every voxel of that cell.
+    const double seed_cell = kSmearSeedShare * params.smear_band;
+    std::vector<std::pair<std::int64_t, std::uint32_t>> cell_of(voxels.size());
+    for (std::size_t i = 0; i < voxels.size(); ++i)
+      cell_of[i] = {
+          cellKey(floorIndex(voxels[i].mean.x(), seed_cell), floorIndex(voxels[i].mean.y(), seed_cell)),
+          static_cast<std::uint32_t>(i)};
+    tbb::parallel_sort(cell_of.begin(), cell_of.end());
+    std::vector<std::uint32_t> seeds, seed_of(voxels.size());
+    for (std::size_t b = 0; b < cell_of.size();)
+    {
+      std::size_t e = b, heaviest = b;
+      for (; e < cell_of.size() && cell_of[e].first == cell_of[b].first; ++e)
+        if (voxels[cell_of[e].second].n > voxels[cell_of[heaviest].second].n) heaviest = e;
+      for (std::size_t k = b; k < e; ++k) seed_of[cell_of[k].second] = cell_of[heaviest].second;
+      seeds.push_back(cell_of[heaviest].second);
+      b = e;
+    }
+    classifyVoxels(voxels, smeared, smeared_lines, &lines, &seeds);
+    for (std::size_t i = 0; i < voxels.size(); ++i) smeared_lines[i] = smeared_lines[seed_of[i]];
   }
 
   // The points of structure voxels within the band of their voxel's line, in index order.
