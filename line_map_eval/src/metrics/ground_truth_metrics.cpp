@@ -30,6 +30,28 @@ double headingDifference(const Segment2& a, const Segment2& b, bool directed)
 /// Whether map segment m lies along the face: headings within the angle, an overlap of positive
 /// length along the face, and within association_distance of the face's line over that overlap.
 /// (Not by the midpoint alone: a segment running on over two collinear faces belongs to both.)
+/// The runs of a visible piece of scan `k` as intervals [from, to] along its face (metres from the
+/// face's start, within the face); throws std::invalid_argument for a face the truth does not have.
+std::vector<std::pair<double, double>> runIntervals(const GroundTruth& truth, std::size_t k,
+                                                    const VisibleWall& v)
+{
+  if (v.wall >= truth.walls.size())
+    throw std::invalid_argument("ground truth: scans[" + std::to_string(k) + "] sees wall " +
+                                std::to_string(v.wall) + " of " + std::to_string(truth.walls.size()));
+  const Segment2& face = truth.walls[v.wall];
+  const double length = face.length();
+  const Vec2 u = (face.end - face.start) / length;
+  std::vector<std::pair<double, double>> out;
+  for (const Segment2& run : v.runs.empty() ? std::vector<Segment2>{v.segment} : v.runs)
+  {
+    double a = std::clamp(u.dot(run.start - face.start), 0.0, length);
+    double b = std::clamp(u.dot(run.end - face.start), 0.0, length);
+    if (a > b) std::swap(a, b);
+    out.emplace_back(a, b);
+  }
+  return out;
+}
+
 /// Sorts intervals and joins those that overlap or touch.
 void mergeIntervals(std::vector<std::pair<double, double>>& parts)
 {
@@ -162,19 +184,7 @@ SeenParts seenParts(const GroundTruth& truth, double min_piece_length, std::size
     intervals.assign(visible.size(), {});
     for (std::size_t i = 0; i < visible.size(); ++i)
     {
-      const VisibleWall& v = visible[i];
-      if (v.wall >= truth.walls.size())
-        throw std::invalid_argument("ground truth: scans[" + std::to_string(k) + "] sees wall " +
-                                    std::to_string(v.wall) + " of " + std::to_string(truth.walls.size()));
-      const Segment2& face = truth.walls[v.wall];
-      const double length = face.length();
-      const Vec2 u = (face.end - face.start) / length;
-      for (const Segment2& run : v.runs.empty() ? std::vector<Segment2>{v.segment} : v.runs)
-      {
-        double a = u.dot(run.start - face.start), b = u.dot(run.end - face.start);
-        if (a > b) std::swap(a, b);
-        intervals[i].emplace_back(std::clamp(a, 0.0, length), std::clamp(b, 0.0, length));
-      }
+      intervals[i] = runIntervals(truth, k, visible[i]);
     }
     // A sight (a piece, or the pieces of a curve seen together) is long and dense enough as a whole;
     // its length is what its runs saw, not the parts hidden between them.
@@ -208,22 +218,9 @@ SeenParts accumulatedSeenParts(const GroundTruth& truth, double min_length, std:
   for (std::size_t k = 0; k < truth.scans.size(); ++k)
     for (const VisibleWall& v : truth.scans[k].visible)
     {
-      if (v.wall >= truth.walls.size())
-        throw std::invalid_argument("ground truth: scans[" + std::to_string(k) + "] sees wall " +
-                                    std::to_string(v.wall) + " of " + std::to_string(truth.walls.size()));
-      const Segment2& face = truth.walls[v.wall];
-      const double length = face.length();
-      const Vec2 u = (face.end - face.start) / length;
-      std::vector<std::pair<double, double>> runs;
+      const std::vector<std::pair<double, double>> runs = runIntervals(truth, k, v);
       double seen_length = 0.0;
-      for (const Segment2& run : v.runs.empty() ? std::vector<Segment2>{v.segment} : v.runs)
-      {
-        double a = std::clamp(u.dot(run.start - face.start), 0.0, length);
-        double b = std::clamp(u.dot(run.end - face.start), 0.0, length);
-        if (a > b) std::swap(a, b);
-        runs.emplace_back(a, b);
-        seen_length += b - a;
-      }
+      for (const auto& [a, b] : runs) seen_length += b - a;
       std::vector<double>& h = hits[v.wall];
       if (!(seen_length > 0.0))
       {
