@@ -121,7 +121,7 @@ struct BandTest
   double min_fill;
   double fill_bin;    ///< [m]
   double min_points;  ///< in the band (the smeared scale)
-  double smeared;     ///< 1: the smeared scale (feet covered within the band's own width)
+  bool smeared;       ///< the smeared scale (feet covered within the band's own width)
 };
 
 /// The voxel means in a grid of cells of half a radius (compressed rows): the 5 x 5 cells around a
@@ -348,7 +348,7 @@ void classifyVoxels(const std::vector<Voxel>& voxels, const BandTest& test, std:
           const auto filled = std::unique(bins.begin(), bins.end()) - bins.begin();
           const double bin_count = std::floor((hi - lo) / test.fill_bin + 1.0);
           double expected = bin_count;
-          if (test.smeared > 0.0)
+          if (test.smeared)
           {
             // The bins n points spread evenly at random along the line would fill: a wall seen sparsely
             // from afar fills about that many; posts seen by many scans pile their points into few.
@@ -358,15 +358,15 @@ void classifyVoxels(const std::vector<Voxel>& voxels, const BandTest& test, std:
             expected = bin_count * (1.0 - std::exp(-n / bin_count));
           }
           if (static_cast<double>(filled) < test.min_fill * expected) continue;
-          if (test.smeared > 0.0 ? coreVariance(voxels, band, point, axis, kSmearCore) > test.max_minor
-                                 : fit.minor > test.max_minor)
+          if (test.smeared ? coreVariance(voxels, band, point, axis, kSmearCore) > test.max_minor
+                           : fit.minor > test.max_minor)
             continue;
           if (fine_lines && twoLines(voxels, band, point, fineDirection(*fine_lines, voxels, band, axis), g))
             continue;
           double heading = std::atan2(axis.y(), axis.x());
           if (heading < 0.0) heading += kPi;
           // A smeared band's points lie about its line like a uniform band sqrt(3) RMS wide each way.
-          const double reach = test.smeared > 0.0 ? std::min(g, std::sqrt(3.0 * fit.minor)) : 0.0;
+          const double reach = test.smeared ? std::min(g, std::sqrt(3.0 * fit.minor)) : 0.0;
           lines[i] = {true, point, axis, heading < kPi ? heading : 0.0, g, reach};
         }
       });
@@ -481,7 +481,7 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
                       params.min_fill,
                       h,
                       0.0,
-                      0.0};
+                      false};
   classifyVoxels(voxels, fine, lines);
   std::vector<VoxelLine> smeared_lines(voxels.size());
   if (params.smear_band > 0.0)
@@ -494,7 +494,7 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
                            params.smear_min_fill,
                            params.smear_fill_bin,
                            static_cast<double>(params.smear_min_points),
-                           1.0};
+                           true};
     // Sought for the heaviest voxel of each seed cell, it serves every voxel of that cell.
     const double seed_cell = kSmearSeedShare * params.smear_band;
     std::vector<std::pair<std::int64_t, std::uint32_t>> cell_of(voxels.size());
