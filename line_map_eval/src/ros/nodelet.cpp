@@ -6,6 +6,8 @@
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
+#include <tbb/info.h>
+#include <tbb/task_arena.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
@@ -78,6 +80,10 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     diagnostics_ = std::make_unique<linemap_ros::WallDiagnostics>(nh, pnh, "evaluator", this,
                                                                   &LineMapEvalNodelet::diagnose);
     // A map that arrived within min_period of the last evaluation is published by this timer.
+    // The evaluation's parallel loops (structure classification) run on at most `threads` cores, so that
+    // the extractor and the merger keep one on a small machine.
+    const int threads = pnh.param("threads", 1);
+    arena_ = std::make_unique<tbb::task_arena>(threads > 0 ? threads : tbb::info::default_concurrency());
     publish_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.05, pnh.param("min_period", 1.0))),
                                         [this](const ros::WallTimerEvent&) { publish(); });
   }
@@ -178,7 +184,8 @@ class LineMapEvalNodelet : public nodelet::Nodelet
         req.use_given_map ? linemap_ros::toSegments(req.map) : core_->map();
     try
     {
-      res.quality = toMessage(core_->evaluate(map), map_frame_,
+      const MapMetrics metrics = arena_->execute([&] { return core_->evaluate(map); });
+      res.quality = toMessage(metrics, map_frame_,
                               req.use_given_map ? req.map.header.stamp : ros::Time(core_->mapStamp()));
     }
     catch (const std::exception& e)
@@ -203,7 +210,8 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   /// The metrics when due (lock held).
   void publish(bool force)
   {
-    const auto metrics = core_->evaluateIfDue(ros::WallTime::now().toSec(), force);
+    const auto metrics =
+        arena_->execute([&] { return core_->evaluateIfDue(ros::WallTime::now().toSec(), force); });
     if (!metrics) return;
     quality_pub_.publish(toMessage(*metrics, map_frame_, ros::Time(core_->mapStamp())));
     const LookupTable& table = core_->evaluator().table();
@@ -219,6 +227,7 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     for (const auto& [key, value] : core_->diagnostics()) status.add(key, value);
   }
 
+  std::unique_ptr<tbb::task_arena> arena_;
   std::mutex mutex_;  // guards core_
   std::unique_ptr<OnlineEvaluator> core_;
   std::string map_frame_, base_frame_, odom_frame_, laser_frame_;
