@@ -24,6 +24,12 @@ inline double millis(Clock::time_point a, Clock::time_point b)
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+/// Milliseconds since `start`.
+inline double millisSince(Clock::time_point start)
+{
+  return millis(start, Clock::now());
+}
+
 /// The keyframe of one scan at `laser_pose`, its segments from `extractor`.
 inline line_map_merging::Keyframe extractKeyframe(line_extraction::LineExtractor& extractor,
                                                   const std::vector<float>& ranges, const ScanGeometry& g,

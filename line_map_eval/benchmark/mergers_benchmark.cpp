@@ -2,9 +2,9 @@
 // (every scan a keyframe at its TRUE laser pose) and on the Intel corrected keyframes (GMapping
 // poses), segments extracted with the default extractor (srg). One row per dataset and method: map
 // segments, shortest/longest/mean segment length, total runtime (all addKeyframe calls + map()) and,
-// for the online methods, the per-keyframe addKeyframe time (median, 99th percentile and maximum). Median over --runs
-// runs. Prints a table and writes JSON. Targets: every method <= 1 s on Intel, online ones <= 20 ms
-// per keyframe.
+// for the online methods, the per-keyframe addKeyframe time (median, 99th percentile and maximum). Median
+// over --runs runs. Prints a table and writes JSON. Targets: every method <= 1 s on Intel, online ones <= 20
+// ms per keyframe.
 //
 //   rosrun line_map_eval mergers_benchmark [--intel PATH] [--worlds DIR] [--json PATH] [--runs N]
 #include <algorithm>

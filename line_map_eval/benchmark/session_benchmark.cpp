@@ -15,14 +15,8 @@
 #include "line_map_merging/slam/session_file.hpp"
 #include "linemap/small_helpers.hpp"
 
-namespace
-{
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t)
-{
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
-}  // namespace
+using line_map_eval::benchmark::Clock;
+using line_map_eval::benchmark::millisSince;
 
 int main(int argc, char** argv)
 {
@@ -44,16 +38,16 @@ int main(int argc, char** argv)
   {
     const auto start = Clock::now();
     const line_map_merging::Session session = line_map_merging::readSessionFile(path);
-    read_ms.push_back(msSince(start));
+    read_ms.push_back(millisSince(start));
     auto t = Clock::now();
     line_map_merging::LaserSlam slam;
     slam.restore(session.slam);
-    restore_ms.push_back(msSince(t));
+    restore_ms.push_back(millisSince(t));
     t = Clock::now();
     line_map_merging::CaeRlsm merger;
     if (!session.line_map.empty()) merger.loadText(session.line_map, path);
-    map_ms.push_back(msSince(t));
-    total_ms.push_back(msSince(start));
+    map_ms.push_back(millisSince(t));
+    total_ms.push_back(millisSince(start));
     keyframes = slam.keyframes().size();
     segments = merger.segmentCount();
   }

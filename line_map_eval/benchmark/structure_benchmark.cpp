@@ -16,14 +16,8 @@
 #include "line_map_eval/metrics/structure_coverage.hpp"
 #include "linemap/small_helpers.hpp"
 
-namespace
-{
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t)
-{
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
-}  // namespace
+using line_map_eval::benchmark::Clock;
+using line_map_eval::benchmark::millisSince;
 
 int main(int argc, char** argv)
 {
@@ -56,10 +50,10 @@ int main(int argc, char** argv)
     {
       auto t = Clock::now();
       fine_length = line_map_eval::classifyStructure(points, sigma, fine_only).length;
-      fine_ms.push_back(msSince(t));
+      fine_ms.push_back(millisSince(t));
       t = Clock::now();
       full_length = line_map_eval::classifyStructure(points, sigma, {}).length;
-      full_ms.push_back(msSince(t));
+      full_ms.push_back(millisSince(t));
     }
     std::printf("%-28s %9zu %8.1f / %6.1f (%5.0f) %8.1f / %6.1f (%5.0f)\n", linemap::fileStem(log).c_str(),
                 points.size(), linemap::median(fine_ms), *std::max_element(fine_ms.begin(), fine_ms.end()),

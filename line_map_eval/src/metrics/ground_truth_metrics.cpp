@@ -52,6 +52,70 @@ std::vector<std::pair<double, double>> runIntervals(const GroundTruth& truth, st
   return out;
 }
 
+/// Per face of `truth`, the hits of all scans per bin of `bin` metres along it (each visible piece's
+/// beams spread evenly over its runs).
+std::vector<std::vector<double>> hitsPerBin(const GroundTruth& truth, double bin)
+{
+  std::vector<std::vector<double>> hits(truth.walls.size());
+  for (std::size_t w = 0; w < truth.walls.size(); ++w)
+    hits[w].assign(static_cast<std::size_t>(std::ceil(truth.walls[w].length() / bin)) + 1, 0.0);
+  for (std::size_t k = 0; k < truth.scans.size(); ++k)
+    for (const VisibleWall& v : truth.scans[k].visible)
+    {
+      const std::vector<std::pair<double, double>> runs = runIntervals(truth, k, v);
+      double seen_length = 0.0;
+      for (const auto& [a, b] : runs) seen_length += b - a;
+      std::vector<double>& h = hits[v.wall];
+      if (!(seen_length > 0.0))
+      {
+        h[static_cast<std::size_t>(runs.front().first / bin)] += static_cast<double>(v.beams);
+        continue;
+      }
+      const double density = static_cast<double>(v.beams) / seen_length;
+      for (const auto& [a, b] : runs)
+        for (auto i = static_cast<std::size_t>(a / bin); i < h.size() && static_cast<double>(i) * bin < b;
+             ++i)
+        {
+          const double overlap =
+              std::min(b, (static_cast<double>(i) + 1.0) * bin) - std::max(a, static_cast<double>(i) * bin);
+          if (overlap > 0.0) h[i] += density * overlap;
+        }
+    }
+  return hits;
+}
+
+/// The stretches of a face (`length` m, hits per bin `h`) whose bins are hit and hold `min_hits` in the
+/// window of min_length centred on them, kept when at least min_length long.
+std::vector<std::pair<double, double>> denseStretches(const std::vector<double>& h, double bin, double length,
+                                                      double min_length, double min_hits)
+{
+  std::vector<std::pair<double, double>> out;
+  const auto half = static_cast<std::ptrdiff_t>(std::lround(0.5 * min_length / bin));
+  const auto n = static_cast<std::ptrdiff_t>(h.size());
+  std::vector<double> prefix(h.size() + 1, 0.0);
+  for (std::size_t i = 0; i < h.size(); ++i) prefix[i + 1] = prefix[i] + h[i];
+  std::ptrdiff_t start = -1;
+  for (std::ptrdiff_t i = 0; i <= n; ++i)
+  {
+    bool dense = false;
+    if (i < n)
+    {
+      const std::ptrdiff_t lo = std::max<std::ptrdiff_t>(0, i - half), hi = std::min(n, i + half + 1);
+      dense = h[static_cast<std::size_t>(i)] > 0.0 &&
+              prefix[static_cast<std::size_t>(hi)] - prefix[static_cast<std::size_t>(lo)] >= min_hits;
+    }
+    if (dense && start < 0) start = i;
+    if (!dense && start >= 0)
+    {
+      const double from = static_cast<double>(start) * bin,
+                   to = std::min(length, static_cast<double>(i) * bin);
+      if (to - from >= min_length) out.emplace_back(from, to);
+      start = -1;
+    }
+  }
+  return out;
+}
+
 /// Sorts intervals and joins those that overlap or touch.
 void mergeIntervals(std::vector<std::pair<double, double>>& parts)
 {
@@ -211,63 +275,11 @@ SeenParts accumulatedSeenParts(const GroundTruth& truth, double min_length, std:
 {
   if (!(bin > 0.0) || !(min_length >= 0.0))
     throw std::invalid_argument("accumulated seen parts: the bin must be positive, the length >= 0");
-  // Per face, the hits per bin of all scans.
-  std::vector<std::vector<double>> hits(truth.walls.size());
-  for (std::size_t w = 0; w < truth.walls.size(); ++w)
-    hits[w].assign(static_cast<std::size_t>(std::ceil(truth.walls[w].length() / bin)) + 1, 0.0);
-  for (std::size_t k = 0; k < truth.scans.size(); ++k)
-    for (const VisibleWall& v : truth.scans[k].visible)
-    {
-      const std::vector<std::pair<double, double>> runs = runIntervals(truth, k, v);
-      double seen_length = 0.0;
-      for (const auto& [a, b] : runs) seen_length += b - a;
-      std::vector<double>& h = hits[v.wall];
-      if (!(seen_length > 0.0))
-      {
-        h[static_cast<std::size_t>(runs.front().first / bin)] += static_cast<double>(v.beams);
-        continue;
-      }
-      const double density = static_cast<double>(v.beams) / seen_length;
-      for (const auto& [a, b] : runs)
-        for (auto i = static_cast<std::size_t>(a / bin); i < h.size() && static_cast<double>(i) * bin < b;
-             ++i)
-        {
-          const double overlap =
-              std::min(b, (static_cast<double>(i) + 1.0) * bin) - std::max(a, static_cast<double>(i) * bin);
-          if (overlap > 0.0) h[i] += density * overlap;
-        }
-    }
+  const std::vector<std::vector<double>> hits = hitsPerBin(truth, bin);
   SeenParts seen(truth.walls.size());
-  const auto half = static_cast<std::ptrdiff_t>(std::lround(0.5 * min_length / bin));
   for (std::size_t w = 0; w < truth.walls.size(); ++w)
-  {
-    const std::vector<double>& h = hits[w];
-    const auto n = static_cast<std::ptrdiff_t>(h.size());
-    // Prefix sums: the hits of the window of min_length centred on each bin.
-    std::vector<double> prefix(h.size() + 1, 0.0);
-    for (std::size_t i = 0; i < h.size(); ++i) prefix[i + 1] = prefix[i] + h[i];
-    const double length = truth.walls[w].length();
-    std::ptrdiff_t start = -1;
-    for (std::ptrdiff_t i = 0; i <= n; ++i)
-    {
-      bool dense = false;
-      if (i < n)
-      {
-        const std::ptrdiff_t lo = std::max<std::ptrdiff_t>(0, i - half), hi = std::min(n, i + half + 1);
-        dense = h[static_cast<std::size_t>(i)] > 0.0 &&
-                prefix[static_cast<std::size_t>(hi)] - prefix[static_cast<std::size_t>(lo)] >=
-                    static_cast<double>(min_beams);
-      }
-      if (dense && start < 0) start = i;
-      if (!dense && start >= 0)
-      {
-        const double from = static_cast<double>(start) * bin,
-                     to = std::min(length, static_cast<double>(i) * bin);
-        if (to - from >= min_length) seen[w].emplace_back(from, to);
-        start = -1;
-      }
-    }
-  }
+    seen[w] =
+        denseStretches(hits[w], bin, truth.walls[w].length(), min_length, static_cast<double>(min_beams));
   return seen;
 }
 

@@ -108,6 +108,10 @@ struct VoxelLine
   double heading = 0.0;     ///< of the axis, in [0, pi)
   double half_width = 0.0;  ///< [m] the band's: its points within this of the line are structure
   double reach = 0.0;       ///< [m] 0: fine; else a map segment this close to a foot covers it
+
+  /// Signed distance of `p` from the line, and its foot on it.
+  double offset(const Vec2& p) const { return Vec2(-axis.y(), axis.x()).dot(p - point); }
+  Vec2 foot(const Vec2& p) const { return p - offset(p) * Vec2(-axis.y(), axis.x()); }
 };
 
 /// One scale of the band test (see the header).
@@ -288,88 +292,178 @@ Vec2 fineDirection(const std::vector<VoxelLine>& fine_lines, const std::vector<V
   return d.dot(axis) < 0.0 ? Vec2(-d) : d;
 }
 
-/// The band test of `test` for every voxel (in parallel: each voxel's band is independent of the
-/// others').
+/// The band of the voxel at `o` among the voxels `near` it: the voxels within g of a line, refitted to
+/// them and taken again until it settles (a mean shift onto the densest line nearby). Empty when the
+/// line loses every voxel.
+Fit settleBand(const std::vector<Voxel>& voxels, const std::vector<std::uint32_t>& near, const Vec2& o,
+               double g, std::vector<std::uint32_t>& band, std::vector<std::uint32_t>& next)
+{
+  Fit fit = fitVoxels(voxels, near, o);
+  fit.mean = o;
+  band.clear();
+  for (int it = 0; it < kMaxIterations; ++it)
+  {
+    const Vec2 normal(-fit.axis.y(), fit.axis.x());
+    next.clear();
+    for (const std::uint32_t k : near)
+      if (std::abs(normal.dot(voxels[k].mean - fit.mean)) <= g) next.push_back(k);
+    if (next.empty())
+    {
+      band.clear();
+      break;
+    }
+    fit = fitVoxels(voxels, next, o);
+    const bool settled = next == band;
+    band.swap(next);
+    if (settled) break;
+  }
+  return fit;
+}
+
+/// Whether a settled band (line through fit.mean along fit.axis) passes `test` (see the header): the
+/// cheap tests first.
+bool bandPasses(const std::vector<Voxel>& voxels, const std::vector<std::uint32_t>& band, std::size_t near,
+                const Fit& fit, const BandTest& test, const std::vector<VoxelLine>* fine_lines,
+                std::vector<std::int64_t>& bins)
+{
+  if (band.empty()) return false;
+  if (static_cast<double>(band.size()) < test.min_share * static_cast<double>(near)) return false;
+  const Vec2 &point = fit.mean, &axis = fit.axis;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const std::uint32_t k : band)
+  {
+    const double t = axis.dot(voxels[k].mean - point);
+    lo = std::min(lo, t);
+    hi = std::max(hi, t);
+  }
+  if (hi - lo < test.min_length) return false;
+  // Continuity: a wall fills its line, a row of chair legs does not.
+  bins.clear();
+  for (const std::uint32_t k : band)
+    bins.push_back(
+        static_cast<std::int64_t>(std::floor((axis.dot(voxels[k].mean - point) - lo) / test.fill_bin)));
+  std::sort(bins.begin(), bins.end());
+  const auto filled = std::unique(bins.begin(), bins.end()) - bins.begin();
+  const double bin_count = std::floor((hi - lo) / test.fill_bin + 1.0);
+  double expected = bin_count;
+  if (test.smeared)
+  {
+    // The bins n points spread evenly at random along the line would fill: a wall seen sparsely from
+    // afar fills about that many; posts seen by many scans pile their points into few.
+    double n = 0.0;
+    for (const std::uint32_t k : band) n += voxels[k].n;
+    if (n < test.min_points) return false;
+    expected = bin_count * (1.0 - std::exp(-n / bin_count));
+  }
+  if (static_cast<double>(filled) < test.min_fill * expected) return false;
+  if (test.smeared ? coreVariance(voxels, band, point, axis, kSmearCore) > test.max_minor
+                   : fit.minor > test.max_minor)
+    return false;
+  return !(fine_lines &&
+           twoLines(voxels, band, point, fineDirection(*fine_lines, voxels, band, axis), test.half_width));
+}
+
+/// The band test of `test` for every voxel, or for the voxels `only` (in parallel: each voxel's band
+/// is independent of the others'); `fine_lines` at the smeared scale.
 void classifyVoxels(const std::vector<Voxel>& voxels, const BandTest& test, std::vector<VoxelLine>& lines,
                     const std::vector<VoxelLine>* fine_lines = nullptr,
                     const std::vector<std::uint32_t>* only = nullptr)
 {
   const VoxelGrid grid(voxels, test.radius);
   const double g = test.half_width;
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, only ? only->size() : voxels.size(), 64),
-      [&](const tbb::blocked_range<std::size_t>& range)
-      {
-        std::vector<std::uint32_t> near, band, next;
-        std::vector<std::int64_t> bins;
-        for (std::size_t r = range.begin(); r != range.end(); ++r)
-        {
-          const std::size_t i = only ? (*only)[r] : r;
-          const Vec2& o = voxels[i].mean;
-          grid.near(o, near);
-          Fit fit = fitVoxels(voxels, near, o);
-          Vec2 point = o, axis = fit.axis;
-          band.clear();
-          for (int it = 0; it < kMaxIterations; ++it)
-          {
-            const Vec2 normal(-axis.y(), axis.x());
-            next.clear();
-            for (const std::uint32_t k : near)
-              if (std::abs(normal.dot(voxels[k].mean - point)) <= g) next.push_back(k);
-            if (next.empty())
-            {
-              band.clear();
-              break;
-            }
-            fit = fitVoxels(voxels, next, o);
-            point = fit.mean;
-            axis = fit.axis;
-            const bool settled = next == band;
-            band.swap(next);
-            if (settled) break;
-          }
-          // The cheap tests first.
-          if (band.empty()) continue;
-          if (static_cast<double>(band.size()) < test.min_share * static_cast<double>(near.size())) continue;
-          double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-          for (const std::uint32_t k : band)
-          {
-            const double t = axis.dot(voxels[k].mean - point);
-            lo = std::min(lo, t);
-            hi = std::max(hi, t);
-          }
-          if (hi - lo < test.min_length) continue;
-          // Continuity: a wall fills its line, a row of chair legs does not.
-          bins.clear();
-          for (const std::uint32_t k : band)
-            bins.push_back(static_cast<std::int64_t>(
-                std::floor((axis.dot(voxels[k].mean - point) - lo) / test.fill_bin)));
-          std::sort(bins.begin(), bins.end());
-          const auto filled = std::unique(bins.begin(), bins.end()) - bins.begin();
-          const double bin_count = std::floor((hi - lo) / test.fill_bin + 1.0);
-          double expected = bin_count;
-          if (test.smeared)
-          {
-            // The bins n points spread evenly at random along the line would fill: a wall seen sparsely
-            // from afar fills about that many; posts seen by many scans pile their points into few.
-            double n = 0.0;
-            for (const std::uint32_t k : band) n += voxels[k].n;
-            if (n < test.min_points) continue;
-            expected = bin_count * (1.0 - std::exp(-n / bin_count));
-          }
-          if (static_cast<double>(filled) < test.min_fill * expected) continue;
-          if (test.smeared ? coreVariance(voxels, band, point, axis, kSmearCore) > test.max_minor
-                           : fit.minor > test.max_minor)
-            continue;
-          if (fine_lines && twoLines(voxels, band, point, fineDirection(*fine_lines, voxels, band, axis), g))
-            continue;
-          double heading = std::atan2(axis.y(), axis.x());
-          if (heading < 0.0) heading += kPi;
-          // A smeared band's points lie about its line like a uniform band sqrt(3) RMS wide each way.
-          const double reach = test.smeared ? std::min(g, std::sqrt(3.0 * fit.minor)) : 0.0;
-          lines[i] = {true, point, axis, heading < kPi ? heading : 0.0, g, reach};
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, only ? only->size() : voxels.size(), 64),
+                    [&](const tbb::blocked_range<std::size_t>& range)
+                    {
+                      std::vector<std::uint32_t> near, band, next;
+                      std::vector<std::int64_t> bins;
+                      for (std::size_t r = range.begin(); r != range.end(); ++r)
+                      {
+                        const std::size_t i = only ? (*only)[r] : r;
+                        grid.near(voxels[i].mean, near);
+                        const Fit fit = settleBand(voxels, near, voxels[i].mean, g, band, next);
+                        if (!bandPasses(voxels, band, near.size(), fit, test, fine_lines, bins)) continue;
+                        double heading = std::atan2(fit.axis.y(), fit.axis.x());
+                        if (heading < 0.0) heading += kPi;
+                        // A smeared band's points lie about its line like a uniform band sqrt(3) RMS
+                        // wide each way.
+                        const double reach = test.smeared ? std::min(g, std::sqrt(3.0 * fit.minor)) : 0.0;
+                        lines[i] = {true, fit.mean, fit.axis, heading < kPi ? heading : 0.0, g, reach};
+                      }
+                    });
+}
+
+/// The points' voxels (cells of `size`): `order` gets the points' (voxel key, index) sorted, each
+/// voxel a run [begin, end) of it. Throws std::invalid_argument naming a non-finite point.
+std::vector<Voxel> buildVoxels(const std::vector<Vec2>& points, double size,
+                               std::vector<std::pair<std::int64_t, std::size_t>>& order)
+{
+  order.resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+  {
+    const Vec2& p = points[i];
+    if (!p.allFinite())
+      throw std::invalid_argument("structure coverage: scan point " + std::to_string(i) + " is not finite");
+    order[i] = {cellKey(floorIndex(p.x(), size), floorIndex(p.y(), size)), i};
+  }
+  tbb::parallel_sort(order.begin(), order.end());
+  std::vector<Voxel> voxels;
+  for (std::size_t b = 0; b < order.size();)
+  {
+    std::size_t e = b;
+    Voxel v;
+    v.begin = b;
+    for (; e < order.size() && order[e].first == order[b].first; ++e) v.mean += points[order[e].second];
+    v.end = e;
+    v.n = static_cast<double>(e - b);
+    v.mean /= v.n;
+    for (std::size_t k = b; k < e; ++k)
+    {
+      const Vec2 d = points[order[k].second] - v.mean;
+      v.sxx += d.x() * d.x();
+      v.sxy += d.x() * d.y();
+      v.syy += d.y() * d.y();
+    }
+    voxels.push_back(v);
+    b = e;
+  }
+  return voxels;
+}
+
+/// Every voxel's line at the smeared scale (`fine_lines`: the fine scale's). The band is sought for the
+/// heaviest voxel of each seed cell and serves every voxel of that cell.
+std::vector<VoxelLine> smearedLines(const std::vector<Voxel>& voxels, const StructureParams& params,
+                                    const std::vector<VoxelLine>& fine_lines)
+{
+  const BandTest smeared{params.smear_radius,
+                         params.smear_band,
+                         params.smear_max_rms * params.smear_max_rms,
+                         params.smear_min_share,
+                         params.smear_min_length,
+                         params.smear_min_fill,
+                         params.smear_fill_bin,
+                         static_cast<double>(params.smear_min_points),
+                         true};
+  const double seed_cell = kSmearSeedShare * params.smear_band;
+  std::vector<std::pair<std::int64_t, std::uint32_t>> cell_of(voxels.size());
+  for (std::size_t i = 0; i < voxels.size(); ++i)
+    cell_of[i] = {
+        cellKey(floorIndex(voxels[i].mean.x(), seed_cell), floorIndex(voxels[i].mean.y(), seed_cell)),
+        static_cast<std::uint32_t>(i)};
+  tbb::parallel_sort(cell_of.begin(), cell_of.end());
+  std::vector<std::uint32_t> seeds, seed_of(voxels.size());
+  for (std::size_t b = 0; b < cell_of.size();)
+  {
+    std::size_t e = b, heaviest = b;
+    for (; e < cell_of.size() && cell_of[e].first == cell_of[b].first; ++e)
+      if (voxels[cell_of[e].second].n > voxels[cell_of[heaviest].second].n) heaviest = e;
+    for (std::size_t k = b; k < e; ++k) seed_of[cell_of[k].second] = cell_of[heaviest].second;
+    seeds.push_back(cell_of[heaviest].second);
+    b = e;
+  }
+  std::vector<VoxelLine> lines(voxels.size());
+  classifyVoxels(voxels, smeared, lines, &fine_lines, &seeds);
+  for (std::size_t i = 0; i < voxels.size(); ++i) lines[i] = lines[seed_of[i]];
+  return lines;
 }
 
 }  // namespace
@@ -438,40 +532,9 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
   out.points = points.size();
   if (points.empty()) return out;
 
-  // Voxels: the points sorted by voxel key, one run per voxel.
-  const double h = params.voxel;
-  std::vector<std::pair<std::int64_t, std::size_t>> order(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i)
-  {
-    const Vec2& p = points[i];
-    if (!p.allFinite())
-      throw std::invalid_argument("structure coverage: scan point " + std::to_string(i) + " is not finite");
-    order[i] = {cellKey(floorIndex(p.x(), h), floorIndex(p.y(), h)), i};
-  }
-  tbb::parallel_sort(order.begin(), order.end());
-  std::vector<Voxel> voxels;
-  for (std::size_t b = 0; b < order.size();)
-  {
-    std::size_t e = b;
-    Voxel v;
-    v.begin = b;
-    for (; e < order.size() && order[e].first == order[b].first; ++e) v.mean += points[order[e].second];
-    v.end = e;
-    v.n = static_cast<double>(e - b);
-    v.mean /= v.n;
-    for (std::size_t k = b; k < e; ++k)
-    {
-      const Vec2 d = points[order[k].second] - v.mean;
-      v.sxx += d.x() * d.x();
-      v.sxy += d.x() * d.y();
-      v.syy += d.y() * d.y();
-    }
-    voxels.push_back(v);
-    b = e;
-  }
-
-  // Each voxel's band (see the header): independent of the others, so in parallel. The fine test
-  // first; the voxels it refuses get the smeared one, at its larger scale.
+  std::vector<std::pair<std::int64_t, std::size_t>> order;
+  const std::vector<Voxel> voxels = buildVoxels(points, params.voxel, order);
+  // Each voxel's band (see the header): independent of the others, so in parallel.
   std::vector<VoxelLine> lines(voxels.size());
   const BandTest fine{params.radius,
                       params.band_sigmas * sigma,
@@ -479,49 +542,15 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
                       params.min_share,
                       params.min_length,
                       params.min_fill,
-                      h,
+                      params.voxel,
                       0.0,
                       false};
   classifyVoxels(voxels, fine, lines);
-  std::vector<VoxelLine> smeared_lines(voxels.size());
-  if (params.smear_band > 0.0)
-  {
-    const BandTest smeared{params.smear_radius,
-                           params.smear_band,
-                           params.smear_max_rms * params.smear_max_rms,
-                           params.smear_min_share,
-                           params.smear_min_length,
-                           params.smear_min_fill,
-                           params.smear_fill_bin,
-                           static_cast<double>(params.smear_min_points),
-                           true};
-    // Sought for the heaviest voxel of each seed cell, it serves every voxel of that cell.
-    const double seed_cell = kSmearSeedShare * params.smear_band;
-    std::vector<std::pair<std::int64_t, std::uint32_t>> cell_of(voxels.size());
-    for (std::size_t i = 0; i < voxels.size(); ++i)
-      cell_of[i] = {
-          cellKey(floorIndex(voxels[i].mean.x(), seed_cell), floorIndex(voxels[i].mean.y(), seed_cell)),
-          static_cast<std::uint32_t>(i)};
-    tbb::parallel_sort(cell_of.begin(), cell_of.end());
-    std::vector<std::uint32_t> seeds, seed_of(voxels.size());
-    for (std::size_t b = 0; b < cell_of.size();)
-    {
-      std::size_t e = b, heaviest = b;
-      for (; e < cell_of.size() && cell_of[e].first == cell_of[b].first; ++e)
-        if (voxels[cell_of[e].second].n > voxels[cell_of[heaviest].second].n) heaviest = e;
-      for (std::size_t k = b; k < e; ++k) seed_of[cell_of[k].second] = cell_of[heaviest].second;
-      seeds.push_back(cell_of[heaviest].second);
-      b = e;
-    }
-    classifyVoxels(voxels, smeared, smeared_lines, &lines, &seeds);
-    for (std::size_t i = 0; i < voxels.size(); ++i) smeared_lines[i] = smeared_lines[seed_of[i]];
-  }
+  const std::vector<VoxelLine> smeared_lines =
+      params.smear_band > 0.0 ? smearedLines(voxels, params, lines) : std::vector<VoxelLine>(voxels.size());
 
   // The points of structure voxels within the band of their voxel's line, in index order.
   std::vector<std::uint32_t> voxel_of(points.size());
-  out.indices.reserve(points.size());
-  out.feet.reserve(points.size());
-  out.headings.reserve(points.size());
   for (std::size_t i = 0; i < voxels.size(); ++i)
     for (std::size_t k = voxels[i].begin; k < voxels[i].end; ++k)
       voxel_of[order[k].second] = static_cast<std::uint32_t>(i);
@@ -531,29 +560,17 @@ StructurePoints classifyStructure(const std::vector<Vec2>& points, double sigma,
     // line (when there is one) also tells whether a map segment covers the point.
     const VoxelLine& fine_line = lines[voxel_of[i]];
     const VoxelLine& smeared_line = smeared_lines[voxel_of[i]];
-    const auto offset = [&](const VoxelLine& l)
-    { return Vec2(-l.axis.y(), l.axis.x()).dot(points[i] - l.point); };
-    const bool on_fine = fine_line.structure && std::abs(offset(fine_line)) <= fine_line.half_width;
+    const bool on_fine = fine_line.structure && std::abs(fine_line.offset(points[i])) <= fine_line.half_width;
     const bool on_smeared =
-        smeared_line.structure && std::abs(offset(smeared_line)) <= smeared_line.half_width;
+        smeared_line.structure && std::abs(smeared_line.offset(points[i])) <= smeared_line.half_width;
     if (!on_fine && !on_smeared) continue;
     const VoxelLine& l = on_fine ? fine_line : smeared_line;
-    const Vec2 normal(-l.axis.y(), l.axis.x());
     out.indices.push_back(i);
-    out.feet.push_back(points[i] - offset(l) * normal);
+    out.feet.push_back(l.foot(points[i]));
     out.headings.push_back(l.heading);
     out.fine.push_back(on_fine ? 1 : 0);
-    if (on_smeared)
-    {
-      const Vec2 smeared_normal(-smeared_line.axis.y(), smeared_line.axis.x());
-      out.smeared_feet.push_back(points[i] - offset(smeared_line) * smeared_normal);
-      out.reach.push_back(static_cast<float>(smeared_line.reach));
-    }
-    else
-    {
-      out.smeared_feet.push_back(points[i]);
-      out.reach.push_back(0.0F);
-    }
+    out.smeared_feet.push_back(on_smeared ? smeared_line.foot(points[i]) : points[i]);
+    out.reach.push_back(on_smeared ? static_cast<float>(smeared_line.reach) : 0.0F);
   }
   out.runs = structureRuns(out.feet, out.headings, params.length_cell);
   out.length = out.runs.length();
