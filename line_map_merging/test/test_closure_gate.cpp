@@ -214,3 +214,41 @@ TEST(ClosureGate, NeighbouringClosuresAreOneVote)
   EXPECT_EQ(counters.loops_by_consensus, 0u);
   EXPECT_EQ(counters.loops_inconsistent, 3u);
 }
+
+// A match that slid along a direction it barely determines (a corridor's axis, weight 0.01: 0.5 m along
+// it): its edge keeps the estimate there (heldToEstimate), so the edge alone agrees with the chain. The gate
+// judges the match as found: slid 3 m against a chain known to about 0.06 m, it is refused (6 of its own
+// standard deviations along the axis, beyond the 4 of the gate); slid 0.2 m it goes in, held.
+TEST(ClosureGate, JudgesTheMatchAsFoundNotAsHeldToTheEstimate)
+{
+  const LaserSlamParams p;
+  line_map_merging::TranslationShape corridor;
+  corridor.weights << 0.01, 0.0, 0.0, 1.0;
+  corridor.degenerate = true;
+  const Pose2 estimate(kLast, 0.0, 0.0);
+  const auto slid = [&](double along)
+  {
+    LoopMatch m = closure(Pose2(kLast - along, 0.0, 0.0), p);
+    m.shape = corridor;
+    m.edge.translation_weights = corridor.weights;
+    m.edge.measurement = line_map_merging::heldToEstimate(m.match->pose, estimate, corridor);
+    return m;
+  };
+  {
+    PoseGraph g = chain(p);
+    ClosureGate gate(p);
+    SlamCounters counters;
+    const LoopMatch far = slid(3.0);
+    EXPECT_NEAR(far.edge.measurement.x, kLast - 0.03, 1e-12);
+    EXPECT_FALSE(gate.consider(far, g, counters).accepted);
+    EXPECT_EQ(counters.loops_inconsistent, 1u);
+    EXPECT_EQ(g.edges().size(), kLast);
+  }
+  PoseGraph g = chain(p);
+  ClosureGate gate(p);
+  SlamCounters counters;
+  EXPECT_TRUE(gate.consider(slid(0.2), g, counters).accepted);
+  ASSERT_EQ(g.edges().size(), kLast + 1);
+  EXPECT_NEAR(g.edges().back().measurement.x, kLast - 0.002, 1e-12);
+  EXPECT_NEAR(g.node(kLast).x, kLast, 0.01);
+}

@@ -150,3 +150,35 @@ TEST(ConstraintBuilder, ASuspectEdgeWidensTheWindowUntilAClosureSpansIt)
   builder.closureAccepted(r.keyframes[7].path, r.graph);
   EXPECT_TRUE(builder.search(r.keyframes, r.graph, 7).candidates.empty());
 }
+
+// A closure's translation counts only where its match determines it: along a direction of weight w the
+// edge's measurement moves from the estimate by w times the match's offset (w = 1: the match's, w -> 0:
+// the estimate's); the heading is the match's.
+TEST(ConstraintBuilder, ClosureKeepsTheEstimateAlongDirectionsItsMatchLeavesOpen)
+{
+  const Pose2 estimate{1.0, 2.0, 0.1};
+  const Pose2 match{1.8, 2.3, 0.15};  // slid 0.8 m along x, 0.3 m across
+  // Determined in y alone, in x with weight 0.01: x 1.0 + 0.01 * 0.8, y the match's.
+  line_map_merging::TranslationShape corridor;
+  corridor.weights << 0.01, 0.0, 0.0, 1.0;
+  corridor.degenerate = true;
+  const Pose2 held = line_map_merging::heldToEstimate(match, estimate, corridor);
+  EXPECT_NEAR(held.x, 1.008, 1e-12);
+  EXPECT_NEAR(held.y, 2.3, 1e-12);
+  EXPECT_NEAR(held.theta, 0.15, 1e-12);
+  // The same corridor along the diagonal (x = y).
+  const double h = std::sqrt(0.5);
+  const Eigen::Vector2d along(h, h), across(-h, h);
+  line_map_merging::TranslationShape diagonal;
+  diagonal.weights = 0.01 * along * along.transpose() + across * across.transpose();
+  diagonal.degenerate = true;
+  const Pose2 tilted = line_map_merging::heldToEstimate(match, estimate, diagonal);
+  // Along: (0.8 + 0.3) / sqrt(2) -> 0.01 of it; across: (0.3 - 0.8) / sqrt(2), kept.
+  const double a = 0.01 * 1.1 * h, c = -0.5 * h;
+  EXPECT_NEAR(tilted.x, 1.0 + a * h - c * h, 1e-12);
+  EXPECT_NEAR(tilted.y, 2.0 + a * h + c * h, 1e-12);
+  // A match that determines every direction is taken as it is.
+  const Pose2 full = line_map_merging::heldToEstimate(match, estimate, line_map_merging::TranslationShape{});
+  EXPECT_DOUBLE_EQ(full.x, match.x);
+  EXPECT_DOUBLE_EQ(full.y, match.y);
+}

@@ -50,7 +50,10 @@ ClosureVerdict ClosureGate::consider(const LoopMatch& match, PoseGraph& graph, S
   attempts_.push_back({j, k, ClosureOutcome::kRejectedScore, found.score});
   if (!passesScreening(match, attempt, counters)) return {};
   const PoseGraphEdge& e = match.edge;
-  if (!consistentWithGraph(graph, e))
+  // Judged as matched: the edge keeps the estimate where the match is weak, which would hide a slide there.
+  PoseGraphEdge as_matched = e;
+  as_matched.measurement = found.pose;
+  if (!consistentWithGraph(graph, as_matched))
   {
     ++counters.loops_inconsistent;
     ++counters.inconsistent_in_a_row;

@@ -28,6 +28,13 @@ PoseGraphEdge loopEdge(std::size_t j, std::size_t k, const Pose2& measurement, c
 }
 }  // namespace
 
+Pose2 heldToEstimate(const Pose2& match, const Pose2& estimate, const TranslationShape& shape)
+{
+  if (!shape.degenerate) return match;
+  const Vec2 t = estimate.translation() + shape.weights * (match.translation() - estimate.translation());
+  return {t.x(), t.y(), match.theta};
+}
+
 LoopSearch ConstraintBuilder::search(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
                                      std::size_t k) const
 {
@@ -88,7 +95,7 @@ LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, c
   m.match = found->first;
   m.ambiguity = found->second;
   m.shape = matchShape(found->first, params_);
-  m.edge = loopEdge(j, k, found->first.pose, m.shape, params_);
+  m.edge = loopEdge(j, k, heldToEstimate(found->first.pose, guess, m.shape), m.shape, params_);
   return m;
 }
 

@@ -40,8 +40,18 @@ struct LoopMatch
   std::optional<MatchResult> match;
   double ambiguity = 0.0;  ///< best coarse score away from the peak / the peak's (0: not checked)
   TranslationShape shape;  ///< of the match (matchShape)
-  PoseGraphEdge edge;      ///< the closure edge from -> to it measures, its information so shaped
+  /// The closure edge from -> to, its information so shaped; its measurement is the match's pose held to
+  /// the estimate along the directions the match leaves open (heldToEstimate). The loop gate judges the
+  /// match as found (`match->pose`): a slide shows there as a disagreement with the graph.
+  PoseGraphEdge edge;
 };
+
+/// A loop match's pose where its `shape` determines the translation, the graph's `estimate` elsewhere (in
+/// proportion to each direction's weight), as the front end keeps the odometry's. Along a corridor's axis
+/// a match slides between look-alike stretches (seen from the other end, a door's far jamb where the near
+/// one was), and the weak pulls of a few slid closures add up to a slide of the whole pass.
+linemap::Pose2 heldToEstimate(const linemap::Pose2& match, const linemap::Pose2& estimate,
+                              const TranslationShape& shape);
 
 class ConstraintBuilder
 {
