@@ -28,13 +28,6 @@ PoseGraphEdge loopEdge(std::size_t j, std::size_t k, const Pose2& measurement, c
 }
 }  // namespace
 
-Pose2 heldToEstimate(const Pose2& match, const Pose2& estimate, const TranslationShape& shape)
-{
-  if (!shape.degenerate) return match;
-  const Vec2 t = estimate.translation() + shape.weights * (match.translation() - estimate.translation());
-  return {t.x(), t.y(), match.theta};
-}
-
 LoopSearch ConstraintBuilder::search(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
                                      std::size_t k) const
 {

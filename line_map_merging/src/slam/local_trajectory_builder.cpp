@@ -165,16 +165,8 @@ Pose2 LocalTrajectoryBuilder::heldToOdometry(const MatchResult& match, const Pos
   // The match's translation where it determines one, the odometry's elsewhere.
   const TranslationShape shape = matchShape(match, params_);
   weights = shape.weights;
-  Pose2 pose = match.pose;
-  if (shape.degenerate)
-  {
-    const Vec2 t =
-        predicted.translation() + shape.weights * (match.pose.translation() - predicted.translation());
-    pose.x = t.x();
-    pose.y = t.y();
-    ++counters.degenerate_matches;
-  }
-  return pose;
+  if (shape.degenerate) ++counters.degenerate_matches;
+  return heldToEstimate(match.pose, predicted, shape);
 }
 
 void LocalTrajectoryBuilder::countOutcome(SlamOutcome outcome, SlamCounters& counters)

@@ -238,6 +238,14 @@ MatchResult refineMatch(const LikelihoodGrid& grid, const std::vector<linemap::V
   return result;
 }
 
+linemap::Pose2 heldToEstimate(const linemap::Pose2& match, const linemap::Pose2& prior,
+                              const TranslationShape& shape)
+{
+  if (!shape.degenerate) return match;
+  const linemap::Vec2 t = prior.translation() + shape.weights * (match.translation() - prior.translation());
+  return {t.x(), t.y(), match.theta};
+}
+
 TranslationShape translationShape(const Eigen::Matrix3d& curvature, double isotropic_ratio, double floor)
 {
   TranslationShape shape;

@@ -46,13 +46,6 @@ struct LoopMatch
   PoseGraphEdge edge;
 };
 
-/// A loop match's pose where its `shape` determines the translation, the graph's `estimate` elsewhere (in
-/// proportion to each direction's weight), as the front end keeps the odometry's. Along a corridor's axis
-/// a match slides between look-alike stretches (seen from the other end, a door's far jamb where the near
-/// one was), and the weak pulls of a few slid closures add up to a slide of the whole pass.
-linemap::Pose2 heldToEstimate(const linemap::Pose2& match, const linemap::Pose2& estimate,
-                              const TranslationShape& shape);
-
 class ConstraintBuilder
 {
  public:

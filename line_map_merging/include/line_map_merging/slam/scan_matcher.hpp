@@ -72,6 +72,13 @@ struct TranslationShape
   double norm(const linemap::Vec2& v) const { return std::sqrt(std::max(0.0, v.dot(weights * v))); }
 };
 TranslationShape translationShape(const Eigen::Matrix3d& curvature, double isotropic_ratio, double floor);
+/// A match's pose where its `shape` determines the translation, a `prior` pose elsewhere (in proportion to
+/// each direction's weight); the match's heading. The front end keeps the odometry's prediction so; a loop
+/// closure the graph's estimate: along a corridor's axis a match slides between look-alike stretches (seen
+/// from the other end, a door's far jamb where the near one was), and the weak pulls of a few slid closures
+/// add up to a slide of the whole pass.
+linemap::Pose2 heldToEstimate(const linemap::Pose2& match, const linemap::Pose2& prior,
+                              const TranslationShape& shape);
 
 /// Mean nearest-cell field value of `points` (in the frame whose pose is sought) at `pose`.
 double matchScore(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
