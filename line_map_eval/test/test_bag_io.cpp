@@ -242,3 +242,33 @@ TEST(BagIo, ErrorsNameTheFile)
     EXPECT_NE(std::string(e.what()).find("missing.bag"), std::string::npos) << e.what();
   }
 }
+
+// A bag of scans alone (no /tf at all), as a user records with `rosbag record scan`: it is read with no
+// odometry (every scan's at the identity, odometry false) and the laser at base_link, not refused.
+TEST(BagIo, ScansAloneAreReadWithoutOdometry)
+{
+  TempDir dir;
+  const std::string path = dir.file("scans.bag");
+  {
+    rosbag::Bag bag(path, rosbag::bagmode::Write);
+    for (int i = 0; i < 3; ++i)
+    {
+      sensor_msgs::LaserScan scan;
+      scan.header.stamp = ros::Time(100.0 + 0.2 * i);
+      scan.header.frame_id = "laser";
+      scan.angle_min = -1.0f;
+      scan.angle_increment = 0.5f;
+      scan.angle_max = 1.0f;
+      scan.range_min = 0.1f;
+      scan.range_max = 10.0f;
+      scan.ranges = {1.0f, 2.0f, 3.0f, 4.0f, 5.0f};
+      bag.write("/scan", scan.header.stamp, scan);
+    }
+  }
+  const BagContents bag = readBag(path);
+  EXPECT_FALSE(bag.odometry);
+  ASSERT_EQ(bag.recording.scans.size(), 3u);
+  for (const auto& scan : bag.recording.scans) expectPoseNear(scan.odom, Pose2(), 0.0, "odometry");
+  expectPoseNear(bag.recording.base_to_laser, Pose2(), 0.0, "mounting");
+  EXPECT_NEAR(bag.recording.scans[2].stamp, 100.4, 1e-9);
+}

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +22,7 @@
 #include "line_map_eval/datasets/carmen_recording.hpp"
 #include "line_map_eval/datasets/relations.hpp"
 #include "line_map_eval/datasets/slam_recording.hpp"
+#include "line_map_eval/datasets/slam_sessions.hpp"
 #include "line_map_eval/datasets/world.hpp"
 #include "line_map_eval/online/bag_replay.hpp"
 #include "line_map_eval/simulation/ground_truth.hpp"
@@ -40,6 +42,7 @@ const char* const kConfigFiles[] = {"line_extraction.yaml", "line_map_merging.ya
 void usage(std::ostream& out)
 {
   out << "usage: linemap_batch DATASET [--corrected LOG | --slam [--relations FILE] [--save-session F]]\n"
+         "       linemap_batch RUN... --slam [--session F] [--save-session F]\n"
          "                     [--extractor NAME] [--merger NAME]...\n"
          "                     [--param key=value]... [--config FILE]... [--config-dir DIR] [--out DIR]\n"
          "                     [--every N] [--sensor FILE] [--pose-noise P,H[,L]] [--no-progress] "
@@ -59,6 +62,11 @@ void usage(std::ostream& out)
          "                    relations above 0.3 m)\n"
          "  --save-session F  with --slam: write the session file F (the SLAM's keyframes, graph and scans,\n"
          "                    and the cae map with its provenance: line_map_merging/README.md)\n"
+         "  RUN...            with --slam: several raw CARMEN logs or rosbags (scan + odom tf, or scans\n"
+         "                    alone) mapped into one graph and one map, in order: each later run is\n"
+         "                    placed by global localization in the map of those before it\n"
+         "  --session F       with --slam: the runs continue the saved session F (placed in its map by\n"
+         "                    global localization; the graph and, with --merger cae, its map go on)\n"
          "  --extractor NAME  extraction algorithm (default: parameter 'algorithm')\n"
          "  --merger NAME     merger to run; repeatable (default: all of ";
   for (std::size_t i = 0; i < line_map_merging::mergerNames().size(); ++i)
@@ -121,7 +129,8 @@ struct Arguments
   std::string dataset, corrected, config_dir, out_dir = "linemap_batch_out";
   std::vector<std::string> configs, overrides;
   bool replay = false, slam = false;
-  std::string relations, sensor, save_session;
+  std::string relations, sensor, save_session, session;
+  std::vector<std::string> more_runs;  ///< with --slam: the runs after the first
   std::optional<line_map_eval::RegistrationModel> pose_noise;
   BatchOptions options;
 };
@@ -156,6 +165,7 @@ bool parseArguments(int argc, char** argv, Arguments& a)
                         : arg == "--sensor"       ? &a.sensor
                         : arg == "--relations"    ? &a.relations
                         : arg == "--save-session" ? &a.save_session
+                        : arg == "--session"      ? &a.session
                                                   : nullptr;
     std::vector<std::string>* list = arg == "--merger"   ? &a.options.mergers
                                      : arg == "--param"  ? &a.overrides
@@ -184,9 +194,16 @@ bool parseArguments(int argc, char** argv, Arguments& a)
     else if (a.dataset.empty())
       a.dataset = arg;
     else
-      throw std::invalid_argument("more than one dataset: " + a.dataset + ", " + arg);
+      a.more_runs.push_back(arg);
   }
   if (a.dataset.empty()) throw std::invalid_argument("no dataset given");
+  if (!a.more_runs.empty() && !a.slam)
+    throw std::invalid_argument("more than one dataset (" + a.dataset + ", " + a.more_runs.front() +
+                                "): several runs go with --slam, which maps them into one graph");
+  if (!a.session.empty() && !a.slam)
+    throw std::invalid_argument("--session goes with --slam (the runs continue the session's graph)");
+  if (!a.relations.empty() && (!a.more_runs.empty() || !a.session.empty()))
+    throw std::invalid_argument("--relations goes with one run and no --session");
   if (!a.save_session.empty() && !a.slam)
     throw std::invalid_argument(
         "--save-session goes with --slam (a session is the SLAM's graph and its map)");
@@ -195,7 +212,7 @@ bool parseArguments(int argc, char** argv, Arguments& a)
 
 /// The parameter files (config dir, then --config) and the --param overrides; the SLAM's apart (its
 /// frame names are the nodelet's, not the merger's).
-void loadParameters(Arguments& a, linemap::ParamSet& slam_params)
+void loadParameters(Arguments& a, linemap::ParamSet& slam_params, linemap::ParamSet& localization_params)
 {
   const fs::path dir = findConfigDir(a.config_dir);
   std::vector<std::string> files;
@@ -212,12 +229,19 @@ void loadParameters(Arguments& a, linemap::ParamSet& slam_params)
   a.options.params = loadParameterFiles(files);
   if (a.slam && !dir.empty() && fs::exists(dir / "slam.yaml"))
     slam_params = loadParameterFiles({(dir / "slam.yaml").string()});
+  if (a.slam && !dir.empty() && fs::exists(dir / "localization.yaml"))
+    localization_params = loadParameterFiles({(dir / "localization.yaml").string()});
   for (const auto& o : a.overrides)
   {
     const std::string key = o.substr(0, o.find('='));
     if (slam_params.has(key))
     {
       applyOverride(slam_params, o);
+      continue;
+    }
+    if (localization_params.has(key) && !a.options.params.has(key))
+    {
+      applyOverride(localization_params, o);
       continue;
     }
     if (!a.options.params.has(key))
@@ -243,19 +267,33 @@ int runReplay(const Arguments& a)
   return 0;
 }
 
-/// A raw CARMEN log with the trajectory of our laser SLAM as the loop closure; the SLAM's part of the
-/// session into `session`.
+/// A run for the SLAM: a raw CARMEN log, or a rosbag's scans with their odometry (`odometry` false: the bag
+/// has none).
+Recording readRun(const std::string& path, bool& odometry)
+{
+  odometry = true;
+  if (isWorldFile(path))
+    throw std::invalid_argument("--slam takes raw CARMEN logs and rosbags, not the world file " + path);
+  if (fs::path(path).extension() != ".bag") return fromCarmen(readCarmenLog(path), nullptr);
+  BagContents bag = readBag(path);
+  bag.recording.keyframes.clear();  // the SLAM makes the trajectory
+  odometry = bag.odometry;
+  if (!odometry) std::cout << path << ": scans without odometry (no odom -> base_link on /tf): laser only\n";
+  return std::move(bag.recording);
+}
+
+/// A raw CARMEN log or a rosbag with the trajectory of our laser SLAM as the loop closure; the SLAM's part
+/// of the session into `session`.
 BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_params,
                          line_map_merging::SlamSession& session)
 {
-  if (!a.corrected.empty() || isWorldFile(a.dataset) || fs::path(a.dataset).extension() == ".bag")
-    throw std::invalid_argument("--slam goes with a raw CARMEN log alone, not with --corrected or " +
-                                a.dataset);
-  const CarmenLog raw = readCarmenLog(a.dataset);
-  Recording recording = fromCarmen(raw, nullptr);
+  if (!a.corrected.empty())
+    throw std::invalid_argument("--slam makes the trajectory: it does not go with --corrected");
+  bool odometry = true;
+  Recording recording = readRun(a.dataset, odometry);
+  const bool use_odometry = odometry && slam_params.getBool("use_odometry", true);
   const SlamRecordingResult run =
-      runSlam(recording, line_map_merging::LaserSlamParams::fromParams(slam_params),
-              slam_params.getBool("use_odometry", true));
+      runSlam(recording, line_map_merging::LaserSlamParams::fromParams(slam_params), use_odometry);
   const auto& c = run.counters;
   std::cout << std::fixed << std::setprecision(1) << "laser SLAM: " << recording.scans.size() << " scans in "
             << run.cpu_seconds << " s CPU, " << c.keyframes << " keyframes, "
@@ -264,8 +302,8 @@ BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_param
   if (!a.relations.empty())
   {
     std::vector<std::pair<double, Pose2>> poses;
-    for (std::size_t i = 0; i < run.scan_poses.size() && i < raw.scans.size(); ++i)
-      poses.push_back({raw.scans[i].timestamp, run.scan_poses[i]});
+    for (std::size_t i = 0; i < run.scan_poses.size(); ++i)
+      poses.push_back({recording.scans[i].stamp, run.scan_poses[i]});
     const auto relations = readRelations(a.relations);
     const RelationsError e = relationsError(relations, poses);
     residuals = relationResiduals(relations, poses);
@@ -277,8 +315,8 @@ BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_param
   if (a.options.figure_formats != 0)
   {
     fs::create_directories(a.out_dir);
-    const std::string caption = linemap::fileStem(a.dataset) + " - laser SLAM" +
-                                (slam_params.getBool("use_odometry", true) ? "" : ", no odometry");
+    const std::string caption =
+        linemap::fileStem(a.dataset) + " - laser SLAM" + (use_odometry ? "" : ", no odometry");
     const auto files = drawSlamRun(recording, run, residuals ? &*residuals : nullptr, caption,
                                    (fs::path(a.out_dir) / "slam").string());
     std::cout << "wrote the SLAM figure " << files.back() << "\n";
@@ -286,6 +324,74 @@ BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_param
   session = run.session;
   return datasetFromRecording(withSlamKeyframes(std::move(recording), run), linemap::fileStem(a.dataset),
                               "carmen+slam");
+}
+
+/// Several runs (or runs after a saved session) mapped into one graph by the SLAM, then merged as one
+/// recording; the joined graph into `session`.
+BatchDataset sessionsDataset(const Arguments& a, const linemap::ParamSet& slam_params,
+                             const linemap::ParamSet& localization_params,
+                             line_map_merging::SlamSession& session)
+{
+  if (!a.corrected.empty())
+    throw std::invalid_argument("--slam makes the trajectory: it does not go with --corrected");
+  std::vector<std::string> paths{a.dataset};
+  paths.insert(paths.end(), a.more_runs.begin(), a.more_runs.end());
+  std::vector<Recording> runs;
+  bool use_odometry = slam_params.getBool("use_odometry", true);
+  for (const auto& path : paths)
+  {
+    bool odometry = true;
+    runs.push_back(readRun(path, odometry));
+    use_odometry = use_odometry && odometry;
+  }
+  std::optional<line_map_merging::Session> loaded;
+  std::optional<line_map_merging::SlamSession> saved;
+  if (!a.session.empty())
+  {
+    loaded = line_map_merging::readSessionFile(a.session);
+    saved = loaded->slam;
+  }
+  const std::vector<double> shifts =
+      followInTime(runs, saved && !saved->scans.empty() ? saved->scans.back().stamp
+                                                        : -std::numeric_limits<double>::infinity());
+  const SessionsRun joined =
+      runSessions(runs, saved, line_map_merging::LaserSlamParams::fromParams(slam_params),
+                  line_map_merging::LocalizerParams::fromParams(localization_params), use_odometry);
+  std::cout << std::fixed << std::setprecision(1) << "laser SLAM, " << runs.size()
+            << (runs.size() == 1 ? " run" : " runs")
+            << (saved ? " after the session " + a.session : std::string())
+            << (use_odometry ? "" : ", no odometry") << ": " << joined.session.keyframes.size()
+            << " keyframes in one graph, " << joined.cpu_seconds << " s CPU\n";
+  std::size_t placed = 0;
+  for (std::size_t r = 0; r < runs.size(); ++r)
+  {
+    std::cout << "  run " << r + 1 << " " << paths[r] << ": " << runs[r].scans.size() << " scans, ";
+    if (!joined.localized_at[r])
+    {
+      std::cout << "NOT placed: global localization found no pose in the map so far within its first 400 "
+                   "scans; left out\n";
+      continue;
+    }
+    ++placed;
+    std::cout << joined.keyframes[r].size() << " keyframes, "
+              << line_map_merging::closureSummary(joined.counters[r]);
+    if (saved || r > 0)
+      std::cout << "; placed at scan " << *joined.localized_at[r] << ", " << joined.closures_to_earlier[r]
+                << " closures to earlier runs";
+    std::cout << "\n";
+  }
+  if (placed == 0) throw std::runtime_error("no run could be placed in the session " + a.session);
+  for (std::size_t r = 0; r < shifts.size(); ++r)
+    if (shifts[r] != 0.0)
+      std::cout << "  run " << r + 1 << ": stamps shifted by " << shifts[r]
+                << " s to follow the run before it in time\n";
+  Recording recording = joinedRecording(runs, joined, use_odometry);
+  session = joined.session;
+  std::string name = linemap::fileStem(a.dataset);
+  for (const auto& path : a.more_runs) name += "+" + linemap::fileStem(path);
+  BatchDataset dataset = datasetFromRecording(std::move(recording), name, "runs+slam");
+  if (loaded) dataset.saved_map = continuedMap(*loaded, joined.session, a.session + " (record LMAP)");
+  return dataset;
 }
 
 /// A rosbag: its scans and, when it has them, its trajectories; the ground truth beside a simulated one.
@@ -304,8 +410,10 @@ BatchDataset bagDataset(const std::string& path)
 }
 
 BatchDataset loadDataset(const Arguments& a, const linemap::ParamSet& slam_params,
-                         line_map_merging::SlamSession& session)
+                         const linemap::ParamSet& localization_params, line_map_merging::SlamSession& session)
 {
+  if (a.slam && (!a.more_runs.empty() || !a.session.empty()))
+    return sessionsDataset(a, slam_params, localization_params, session);
   if (a.slam) return slamDataset(a, slam_params, session);
   const bool bag = fs::path(a.dataset).extension() == ".bag";
   if (!a.corrected.empty())
@@ -364,8 +472,8 @@ void saveSession(const BatchResult& result, const std::string& path, line_map_me
 /// Everything after the command line: the dataset, the mergers, the reports.
 int run(Arguments& a)
 {
-  linemap::ParamSet slam_params;
-  loadParameters(a, slam_params);
+  linemap::ParamSet slam_params, localization_params;
+  loadParameters(a, slam_params, localization_params);
   a.options.out_dir = a.out_dir;
   if (!a.sensor.empty() && !isWorldFile(a.dataset))
     throw std::invalid_argument("--sensor goes with a world file (config/worlds/*.yaml), not " + a.dataset);
@@ -374,7 +482,8 @@ int run(Arguments& a)
                                 a.dataset);
   if (a.replay) return runReplay(a);
   line_map_merging::Session session;
-  const BatchResult result = runBatch(loadDataset(a, slam_params, session.slam), a.options);
+  const BatchResult result =
+      runBatch(loadDataset(a, slam_params, localization_params, session.slam), a.options);
   printResult(result);
   writeReports(result, a.out_dir);
   if (!a.save_session.empty()) saveSession(result, a.save_session, session);

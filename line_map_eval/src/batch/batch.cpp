@@ -251,6 +251,14 @@ struct BatchSetup
     schedule = d.schedule       ? *d.schedule
                : d.loop_closure ? loopClosureSchedule(d.recording, o.adjust_every)
                                 : fixedPoseSchedule(d.recording);
+    // A continued map's keyframes are nodes of the same graph: every trajectory places them too. The new
+    // keyframes are the graph's nodes from the start, as a fresh run's become at its first trajectory
+    // (there the gate's keyframes before it are made again from the nodes; here they would stay).
+    if (d.saved_map) mapper.keyframe_source = line_map_merging::KeyframeSource::kTrajectory;
+    if (d.saved_map)
+      for (auto& emission : schedule.trajectories)
+        emission.poses.insert(emission.poses.begin(), d.saved_map->keyframe_poses.begin(),
+                              d.saved_map->keyframe_poses.end());
   }
   const Recording& rec() const { return dataset.recording; }
   line_map_eval::SegmentSource segmentSource() const
@@ -354,6 +362,9 @@ SharedEvaluation shareEvaluation(const BatchSetup& setup, BatchResult& result)
   result.originals = lengthStatistics(shared.originals);
   const auto table_start = Clock::now();
   shared.scan_points = registeredScanPoints(registered);
+  if (setup.dataset.saved_map)
+    shared.scan_points.insert(shared.scan_points.end(), setup.dataset.saved_map->points.begin(),
+                              setup.dataset.saved_map->points.end());
   shared.table = LookupTable::build(shared.scan_points, setup.table);
   result.table_ms = linemap::millisecondsSince(table_start);
   result.scan_points = shared.scan_points.size();
@@ -381,6 +392,9 @@ MergerHolder runOnline(const BatchSetup& setup, const SharedEvaluation& shared, 
   const TimedMerger& timed = *owned;
   MergerHolder holder;
   holder.mapper = std::make_unique<line_map_merging::OnlineMapper>(std::move(owned), setup.mapper);
+  if (setup.dataset.saved_map)
+    holder.mapper->loadText(setup.dataset.saved_map->text, setup.dataset.saved_map->origin);
+  const std::size_t loaded = holder.mapper->keyframeStamps().size();
   const Recording& rec = setup.rec();
   ProgressBar bar("merge " + run.name, rec.scans.size(), setup.options.progress);
   OnlineDriveHooks hooks;
@@ -409,9 +423,9 @@ MergerHolder runOnline(const BatchSetup& setup, const SharedEvaluation& shared, 
   for (const double ms : timed.addTimes()) run.keyframe_ms += ms;
   run.step_ms = timed.stepTimes();
   const auto& stamps = holder.mapper->keyframeStamps();
-  bool same = stamps.size() == setup.frames.size();
-  for (std::size_t k = 0; same && k < stamps.size(); ++k)
-    same = stamps[k] == rec.scans[setup.frames[k].scan].stamp;
+  bool same = stamps.size() == loaded + setup.frames.size();
+  for (std::size_t k = 0; same && k < setup.frames.size(); ++k)
+    same = stamps[loaded + k] == rec.scans[setup.frames[k].scan].stamp;
   if (!same) throw std::logic_error(run.name + ": the online path chose other keyframes than for the others");
   return holder;
 }
@@ -589,7 +603,14 @@ BatchResult runBatch(const BatchDataset& dataset, const BatchOptions& options)
   result.extractor = setup.extractor.params().algorithm;
   const std::vector<std::string> names =
       options.mergers.empty() ? line_map_merging::mergerNames() : options.mergers;
-  for (const auto& name : names) line_map_merging::makeMerger(name, result.parameters);  // unknown names
+  for (const auto& name : names)
+  {
+    const auto probe = line_map_merging::makeMerger(name, result.parameters);  // unknown names
+    if (dataset.saved_map && !probe->isOnline())
+      throw std::runtime_error("merger " + name + " cannot continue the saved map of " +
+                               dataset.saved_map->origin + ": it merges every keyframe at once");
+    if (dataset.saved_map) probe->loadText(dataset.saved_map->text, dataset.saved_map->origin);  // can it?
+  }
   const Recording& rec = dataset.recording;
   for (const auto& kf : rec.keyframes)
     if (kf.scan_index >= rec.scans.size())

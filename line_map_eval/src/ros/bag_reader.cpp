@@ -200,7 +200,8 @@ BagContents readBag(const std::string& path, const BagWriterOptions& options)
   std::stable_sort(out.map_to_odom.begin(), out.map_to_odom.end(), by_time);
 
   const auto mount = base_to.find(out.scan_frame);
-  if (out.scan_frame == frames.base)
+  out.odometry = !out.odom_to_base.empty();
+  if (out.scan_frame == frames.base || (!out.odometry && out.static_transforms == 0 && base_to.empty()))
     rec.base_to_laser = Pose2();
   else if (mount != base_to.end())
     rec.base_to_laser = mount->second;
@@ -208,7 +209,7 @@ BagContents readBag(const std::string& path, const BagWriterOptions& options)
     throw std::runtime_error(path + ": no transform " + frames.base + " -> " + out.scan_frame +
                              " on /tf_static or /tf");
 
-  stampOdometry(path, frames, out);
+  if (out.odometry) stampOdometry(path, frames, out);
   if (!out.trajectory.empty()) matchKeyframes(path, out);
   return out;
 }

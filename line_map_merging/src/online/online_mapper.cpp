@@ -258,6 +258,17 @@ void OnlineMapper::reset()
 void OnlineMapper::load(const std::string& path)
 {
   merger_->load(path);
+  adoptLoadedMap();
+}
+
+void OnlineMapper::loadText(const std::string& text, const std::string& origin)
+{
+  merger_->loadText(text, origin);
+  adoptLoadedMap();
+}
+
+void OnlineMapper::adoptLoadedMap()
+{
   gate_.reset();
   history_.clear();
   continuous_.clear();

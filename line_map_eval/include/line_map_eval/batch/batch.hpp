@@ -10,6 +10,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "line_map_eval/datasets/recording.hpp"
@@ -41,6 +42,17 @@ struct BatchDataset
   /// made from the keyframe poses (loopClosureSchedule every BatchOptions::adjust_every keyframes, or
   /// fixedPoseSchedule without loop closure).
   std::optional<BackEndSchedule> schedule;
+  /// A saved map the recording continues (linemap_batch --session): the online mergers that can load a map
+  /// start from it, the saved keyframes' poses in the joined graph join every trajectory (so MP-GMA re-fuses
+  /// the whole map), and their scan points join the evaluation's.
+  struct SavedMap
+  {
+    std::string text;                                      ///< the map file's text (CAE-RLSM's)
+    std::string origin;                                    ///< names it in errors
+    std::vector<std::pair<double, Pose2>> keyframe_poses;  ///< (stamp, base pose in the joined map frame)
+    std::vector<linemap::Vec2> points;                     ///< the saved keyframes' scan points, map frame
+  };
+  std::optional<SavedMap> saved_map;
 };
 
 /// A raw CARMEN log with its corrected keyframe log (Recording::keyframes pair them).

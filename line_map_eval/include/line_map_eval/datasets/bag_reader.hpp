@@ -23,12 +23,15 @@ struct BagContents
   std::vector<std::pair<double, Pose2>> odom_to_base;  ///< every odom->base_link sample on /tf
   std::size_t static_transforms = 0;                   ///< transforms seen on /tf_static
   std::string scan_frame;                              ///< frame_id of the scans
+  /// False for a bag of scans alone (no odom -> base_link on /tf): every scan's odometry is then the
+  /// identity, and without any transform at all the laser is taken to sit at base_link.
+  bool odometry = true;
 };
 
 /// Topics and frame names are those of BagWriterOptions (the writer's defaults unless changed).
 /// A scan whose geometry differs from the first one's keeps its own; the odometry at a scan stamp
 /// is the odom->base_link sample with that exact stamp, or the interpolation of the two around it.
-/// Throws std::runtime_error naming the file on failure (missing topic, missing tf, ...).
+/// Throws std::runtime_error naming the file on failure (missing topic, a gap in the tf, ...).
 BagContents readBag(const std::string& path, const BagWriterOptions& options = {});
 
 }  // namespace line_map_eval

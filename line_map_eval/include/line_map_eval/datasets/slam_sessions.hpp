@@ -1,15 +1,21 @@
-// Mapping in two sessions (ROS-free), the measurement of `linemap_relations --two-sessions`: the recording
-// cut at a scan; the SLAM maps the first part and saves its session; the second part, its odometry starting
-// again at zero as after a restart, is first localized in the saved session (global localization on the
-// saved keyframes' surfaces, no start pose given), then continues the session from there.
+// Mapping in several sessions (ROS-free): runs of a robot (or of several robots with the same laser
+// mounting) mapped one after another into one pose graph, each later run first localized in the map of
+// those before it (global localization on the saved keyframes' surfaces, unless its start is given) and
+// then continuing that session (LaserSlam::continueFrom), optionally after a session loaded from a file.
+// `linemap_batch RUN1 RUN2 ... --slam [--session F]` and `linemap_relations --two-sessions` (the recording
+// cut at a scan, the second part's odometry starting again at zero as after a restart) drive it.
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <optional>
+#include <string>
 #include <vector>
 
+#include "line_map_eval/batch/batch.hpp"
 #include "line_map_eval/datasets/slam_recording.hpp"
 #include "line_map_merging/localization/line_map_localizer.hpp"
+#include "line_map_merging/slam/session_file.hpp"
 
 namespace line_map_eval
 {
@@ -18,6 +24,62 @@ Recording recordingPart(const Recording& recording, std::size_t first, std::size
 
 /// The saved keyframes' surfaces (scan_surfaces) in the session's map frame: a line map to localize in.
 std::vector<linemap::Segment2> sessionSurfaces(const line_map_merging::SlamSession& session);
+
+/// Several runs in one graph (runSessions).
+struct SessionsRun
+{
+  /// Per run: every scan's base pose in the common map frame as the final, joined graph left it; none for
+  /// the scans of a run that was never localized, scans the SLAM rejected, and scans before a run's first
+  /// keyframe.
+  std::vector<std::vector<std::optional<Pose2>>> scan_poses;
+  /// Per run: its keyframes (index into the run's scans) at their final base poses.
+  std::vector<std::vector<CorrectedKeyframe>> keyframes;
+  /// Per run: the scan at which it was placed in the map (0: the first run of a new map, or a given start);
+  /// none: global localization never accepted a pose in the run's first `localize_scans` scans, and the
+  /// run is left out of the graph.
+  std::vector<std::optional<std::size_t>> localized_at;
+  /// The saved session's scans (if one was continued), in its order, as the joined graph left them.
+  std::vector<Pose2> saved_scan_poses;
+  /// Per run: the loop edges joining one of its keyframes to a keyframe of an earlier run or of the saved
+  /// session.
+  std::vector<std::size_t> closures_to_earlier;
+  std::vector<line_map_merging::SlamCounters> counters;  ///< per run (zero for a run left out)
+  line_map_merging::SlamSession session;                 ///< the joined graph: what --save-session writes
+  double cpu_seconds = 0.0;                              ///< every SLAM run and localization
+};
+
+/// Maps `runs` into one graph, in order: the first starts a new map (or continues `saved`), each later one
+/// is localized in the session so far and continues it. `starts[r]`, where given, is run r's first base
+/// pose in the map frame (as from an initial pose) in place of the localization; either is taken as known
+/// to 0.1 m and 0.05 rad. The localization looks for a run's start in its first `localize_scans` scans.
+SessionsRun runSessions(const std::vector<Recording>& runs,
+                        const std::optional<line_map_merging::SlamSession>& saved,
+                        const line_map_merging::LaserSlamParams& slam_params,
+                        const line_map_merging::LocalizerParams& localizer_params, bool use_odometry,
+                        const std::vector<std::optional<Pose2>>& starts = {},
+                        std::size_t localize_scans = 400);
+
+/// Shifts the stamps of runs that do not follow the one before them in time (the first: `not_before`, e.g.
+/// a saved session's last stamp) to start 1 s after it, so that the runs make one time line (the mapper
+/// takes a stamp going back for a replay). Returns each run's shift [s], added to its stamps.
+std::vector<double> followInTime(std::vector<Recording>& runs,
+                                 double not_before = -std::numeric_limits<double>::infinity());
+
+/// The runs as one recording for the merging and the evaluation (linemap_batch): the scans of every placed
+/// run in order, with the joined graph's keyframes as its corrected keyframes. Each run's odometry is moved
+/// into the map frame where the graph put its first posed scan, so the odometry goes on across runs as
+/// map -> odom would. Without `odometry` (the SLAM ran on the laser alone) each scan's odometry is its SLAM
+/// pose (the last posed scan's for one without). Throws std::invalid_argument naming the run when the laser
+/// mountings differ.
+Recording joinedRecording(const std::vector<Recording>& runs, const SessionsRun& run, bool odometry);
+
+/// The line map of a loaded session for its continuation to go on from (BatchDataset::saved_map): the map
+/// file's text, the saved keyframes (the first of `joined`'s) at their poses in the joined graph, and the
+/// scan points of those the map holds, all moved by `to_world` (the batch's map frame from the SLAM's).
+/// Throws std::runtime_error naming `origin` when the session holds no line map, MapFileError for a bad one.
+BatchDataset::SavedMap continuedMap(const line_map_merging::Session& loaded,
+                                    const line_map_merging::SlamSession& joined, const std::string& origin,
+                                    const Pose2& to_world = Pose2());
 
 struct TwoSessionRun
 {

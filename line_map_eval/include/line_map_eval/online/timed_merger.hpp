@@ -58,6 +58,10 @@ class TimedMerger : public line_map_merging::Merger
   std::unique_ptr<line_map_merging::Merger> clone() const override { return inner_->clone(); }
   void save(const std::string& path) const override { inner_->save(path); }
   void load(const std::string& path) override { inner_->load(path); }
+  void loadText(const std::string& text, const std::string& origin) override
+  {
+    inner_->loadText(text, origin);
+  }
   void timeSteps(bool on) override { inner_->timeSteps(on); }
   std::vector<line_map_merging::StepTime> stepTimes() const override { return inner_->stepTimes(); }
 

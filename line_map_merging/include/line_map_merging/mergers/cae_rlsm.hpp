@@ -107,8 +107,7 @@ class CaeRlsm : public Merger
   void load(const std::string& path) override;
   /// What save() writes: the map file's text (a session file carries it).
   std::string mapText() const;
-  /// load() from the text of a map file; `origin` names it in errors (a file, a session's record).
-  void loadText(const std::string& text, const std::string& origin);
+  void loadText(const std::string& text, const std::string& origin) override;
 
   const CaeParams& params() const { return params_; }
   std::uint64_t nextId() const { return next_id_; }

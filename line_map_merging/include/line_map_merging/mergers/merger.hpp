@@ -126,6 +126,11 @@ class Merger
   {
     throw MapFileError(std::string(name()) + ": loading is not supported");
   }
+  /// load() from the text of a map file; `origin` names it in errors (a file, a session's record).
+  virtual void loadText(const std::string& /*text*/, const std::string& /*origin*/)
+  {
+    throw MapFileError(std::string(name()) + ": loading is not supported");
+  }
 
   /// Turns the timing of the merger's own steps on or off; a merger without named steps ignores it.
   virtual void timeSteps(bool /*on*/) {}

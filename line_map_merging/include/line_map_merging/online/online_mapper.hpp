@@ -117,6 +117,8 @@ class OnlineMapper
   /// Replaces the map by the file's (throws MapFileError and keeps everything on failure). The
   /// odometry of the loaded keyframes is unknown: their map poses stand in for it.
   void load(const std::string& path);
+  /// The same from the text of a map file (a session's map); `origin` names it in errors.
+  void loadText(const std::string& text, const std::string& origin);
 
   /// The autosave policy: true when autosave is on, the map changed since the last save and the
   /// period has passed since the last save (`now` in seconds, e.g. wall time).
@@ -186,6 +188,9 @@ class OnlineMapper
              const linemap::Pose2& mount, const std::vector<linemap::Segment2>& segments);
   bool mergeNodes(std::vector<NodeKeyframes<HeldScan>::Ready> ready);
   double newestKeyframeStamp() const;
+  /// After the merger loaded a map: its keyframes become the mapper's, their map poses standing in for the
+  /// odometry.
+  void adoptLoadedMap();
   /// Empties the map and the keyframe records (not the scan history, nor the held scans).
   void clearKeyframes();
   /// Moves every keyframe to the trajectory (anchored on the nodes); whether the map changed.
