@@ -9,6 +9,9 @@
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
+#include <vector>
+
+#include "line_map_eval/datasets/recording.hpp"
 
 namespace line_map_eval::test_helpers
 {
@@ -48,4 +51,21 @@ inline void expectMentions(const std::string& message, std::initializer_list<con
   for (const char* part : parts)
     EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' in: " << message;
 }
+/// The first keyframe past the middle of a drive where the robot is back in a place it saw (within 1 m of a
+/// true position at least 5 m of path before): where a saved session can be continued and found. 0: none.
+inline std::size_t revisitPastTheMiddle(const std::vector<CorrectedKeyframe>& truth, std::size_t scans)
+{
+  for (std::size_t k = 0; k < truth.size(); ++k)
+  {
+    if (truth[k].scan_index < scans / 2) continue;
+    double path = 0.0;
+    for (std::size_t j = k; j-- > 0;)
+    {
+      path += (truth[j + 1].pose.translation() - truth[j].pose.translation()).norm();
+      if (path >= 5.0 && (truth[j].pose.translation() - truth[k].pose.translation()).norm() <= 1.0) return k;
+    }
+  }
+  return 0;
+}
+
 }  // namespace line_map_eval::test_helpers

@@ -10,6 +10,7 @@
 #include <map>
 #include <string>
 
+#include "eval_test_helpers.hpp"
 #include "line_map_eval/batch/batch.hpp"
 #include "line_map_eval/batch/slam_robustness.hpp"
 #include "line_map_eval/datasets/relations.hpp"
@@ -22,27 +23,10 @@
 #include "linemap/atomic_file.hpp"
 
 using namespace line_map_eval;
+using line_map_eval::test_helpers::revisitPastTheMiddle;
 
 namespace
 {
-/// The first keyframe past the middle of the drive where the robot is back in a place the first part saw
-/// (within 1 m of a true position at least 5 m of path before): a session is continued where it can be
-/// found. 0: none.
-std::size_t revisitPastTheMiddle(const std::vector<CorrectedKeyframe>& truth, std::size_t scans)
-{
-  for (std::size_t k = 0; k < truth.size(); ++k)
-  {
-    if (truth[k].scan_index < scans / 2) continue;
-    double path = 0.0;
-    for (std::size_t j = k; j-- > 0;)
-    {
-      path += (truth[j + 1].pose.translation() - truth[j].pose.translation()).norm();
-      if (path >= 5.0 && (truth[j].pose.translation() - truth[k].pose.translation()).norm() <= 1.0) return k;
-    }
-  }
-  return 0;
-}
-
 RelationsError errorOf(const std::vector<Relation>& relations, const Recording& recording,
                        const std::vector<std::optional<Pose2>>& poses)
 {

@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "line_map_eval/datasets/localization_recording.hpp"
+#include "line_map_merging/localization/session_continuation.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
 
 namespace line_map_eval
@@ -25,15 +26,6 @@ Recording recordingPart(const Recording& recording, std::size_t first, std::size
     for (auto& s : part.scans) s.odom = zero * s.odom;
   }
   return part;
-}
-
-std::vector<linemap::Segment2> sessionSurfaces(const line_map_merging::SlamSession& session)
-{
-  std::vector<linemap::Segment2> out;
-  for (std::size_t k = 0; k < session.keyframes.size() && k < session.nodes.size(); ++k)
-    for (const auto& s : session.keyframes[k].joins)
-      out.emplace_back(session.nodes[k].apply(s.start), session.nodes[k].apply(s.end));
-  return out;
 }
 
 namespace
@@ -65,7 +57,7 @@ std::optional<Pose2> findStart(const Recording& run, const line_map_merging::Sla
     return given;
   }
   const LocalizationRunResult found =
-      runLocalization(run, sessionSurfaces(session), localizer_params, std::nullopt, 0,
+      runLocalization(run, line_map_merging::sessionSurfaces(session), localizer_params, std::nullopt, 0,
                       std::min(localize_scans, run.scans.size()));
   cpu_seconds += found.cpu_seconds;
   if (!found.recovered_at || found.scan_poses.empty()) return std::nullopt;

@@ -4,6 +4,9 @@
 // `optimized_trajectory` (nav_msgs/Path, each pose stamped with its scan's stamp) and diagnostics.
 // Services ~save_session and ~load_session write and read a session file (slam/session_file.hpp): the
 // SLAM's graph with the merging nodelet's map (its save_map/load_map services, parameter `merger`).
+// ~session names a session to continue from an unknown start (localization/session_continuation.hpp): the
+// scans search the saved map until the robot is found, then the SLAM maps on in it and the merger gets its
+// map.
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <line_map_msgs/LoadMap.h>
 #include <line_map_msgs/SaveMap.h>
@@ -22,7 +25,9 @@
 #include <mutex>
 #include <optional>
 #include <pluginlib/class_list_macros.hpp>
+#include <thread>
 
+#include "line_map_merging/localization/session_continuation.hpp"
 #include "line_map_merging/slam/laser_slam.hpp"
 #include "line_map_merging/slam/session_file.hpp"
 #include "linemap/atomic_file.hpp"
@@ -41,6 +46,7 @@ class SlamNodelet : public nodelet::Nodelet
   {
     listener_.reset();  // its thread calls into the wait
     waiting_.reset();
+    if (merger_loader_.joinable()) merger_loader_.join();
   }
 
  private:
@@ -80,6 +86,63 @@ class SlamNodelet : public nodelet::Nodelet
     merger_ = pnh.param<std::string>("merger", "line_map_merging");
     save_srv_ = pnh.advertiseService("save_session", &SlamNodelet::onSaveSession, this);
     load_srv_ = pnh.advertiseService("load_session", &SlamNodelet::onLoadSession, this);
+    continueSession(pnh);
+  }
+
+  /// ~session: the scans look for the robot in that session's map before the SLAM maps on in it.
+  void continueSession(ros::NodeHandle& pnh)
+  {
+    session_path_ = pnh.param<std::string>("session", "");
+    if (session_path_.empty()) return;
+    try
+    {
+      Session session = readSessionFile(session_path_);
+      std::optional<linemap::Pose2> start;
+      std::vector<double> given;
+      if (pnh.getParam("session_start", given))
+      {
+        if (given.size() != 3)
+          throw std::invalid_argument("~session_start must be [x, y, theta], got " +
+                                      std::to_string(given.size()) + " numbers");
+        start = linemap::Pose2(given[0], given[1], given[2]);
+      }
+      const int search = pnh.param("session_search_scans", 400);
+      if (search < 1) throw std::invalid_argument("~session_search_scans must be >= 1");
+      const auto localizer =
+          LocalizerParams::fromParams(linemap_ros::loadParamSet(ros::NodeHandle(pnh, "localization")));
+      session_map_ = std::move(session.line_map);
+      continuation_ = std::make_unique<SessionContinuation>(std::move(session.slam), localizer,
+                                                            static_cast<std::size_t>(search), start);
+      NODELET_INFO("slam: continuing the session %s: %s", session_path_.c_str(),
+                   continuation_->summary().c_str());
+    }
+    catch (const std::exception& e)
+    {
+      NODELET_ERROR("slam: cannot continue the session (%s); mapping a new map", e.what());
+      continuation_.reset();
+    }
+  }
+
+  /// While the robot is looked for in the saved session: true when the SLAM is to take the scan.
+  bool placedInSession(const SlamScan& scan, const linemap::Pose2& mount)
+  {
+    if (!continuation_ || continuation_->state() != SessionContinuation::State::kSearching) return true;
+    const auto state = continuation_->addScan(scan, mount.translation(), *slam_);
+    if (state == SessionContinuation::State::kSearching) return false;
+    if (state == SessionContinuation::State::kPlaced)
+    {
+      NODELET_INFO("slam: %s", continuation_->summary().c_str());
+      if (!session_map_.empty())  // the service call waits for the merger: not in the scan callback
+        merger_loader_ = std::thread(
+            [this, text = std::move(session_map_)]
+            {
+              const std::string note = loadMergerMap(session_path_, text);  // "; what happened"
+              NODELET_INFO("slam: %s", note.substr(2).c_str());
+            });
+    }
+    else
+      NODELET_WARN("slam: %s", continuation_->summary().c_str());
+    return true;
   }
 
   /// The merging nodelet's map through a file beside `path`: its text (empty: no merger answered).
@@ -210,6 +273,7 @@ class SlamNodelet : public nodelet::Nodelet
       const double a = msg->angle_min + static_cast<double>(i) * msg->angle_increment;
       scan.points.push_back(mount->apply({r * std::cos(a), r * std::sin(a)}));
     }
+    if (!placedInSession(scan, *mount)) return;
     if (slam_->addScan(scan) == SlamOutcome::kRejected) return;
     publishTf(stamp, scan.odom);
     if (slam_->graphOptimized() || (slam_->keyframeAdded() && publish_period_ > 0.0 &&
@@ -269,9 +333,12 @@ class SlamNodelet : public nodelet::Nodelet
     const std::string trouble = slam_->trouble();
     if (!trouble.empty())
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, trouble);
+    else if (continuation_ && continuation_->state() == SessionContinuation::State::kGaveUp)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, continuation_->summary());
     else
       stat.summary(dropped ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
                    dropped ? "scans dropped (no base -> laser tf)" : "ok");
+    if (continuation_) stat.add("session " + session_path_, continuation_->summary());
     for (const auto& [key, value] : slam_->diagnostics()) stat.add(key, value);
   }
 
@@ -284,6 +351,9 @@ class SlamNodelet : public nodelet::Nodelet
   ros::Publisher path_pub_;
   ros::ServiceServer save_srv_, load_srv_;
   std::string merger_;
+  std::unique_ptr<SessionContinuation> continuation_;  ///< ~session: null without one
+  std::string session_path_, session_map_;
+  std::thread merger_loader_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
   std::string map_frame_, odom_frame_, base_frame_;
   bool use_odometry_ = true;

@@ -22,9 +22,6 @@ namespace line_map_eval
 /// Scans [first, last) of `recording`; `rezero`: their odometry starts again at zero (a restarted robot).
 Recording recordingPart(const Recording& recording, std::size_t first, std::size_t last, bool rezero);
 
-/// The saved keyframes' surfaces (scan_surfaces) in the session's map frame: a line map to localize in.
-std::vector<linemap::Segment2> sessionSurfaces(const line_map_merging::SlamSession& session);
-
 /// Several runs in one graph (runSessions).
 struct SessionsRun
 {

@@ -1,0 +1,168 @@
+// Continuing a saved session from an unknown start as the SLAM nodelet does it (~session:
+// line_map_merging/localization/session_continuation.hpp), scan by scan. On Intel (the raw log cut at its
+// middle scan, the corrected log as the truth) the second half, its odometry starting again at zero, searches
+// the first half's saved map until global localization accepts a pose, then the SLAM continues the session
+// from that scan. On the simulated loop world (ground truth; symmetric, so no search there) a start given up
+// front places the first scan, and a session the robot cannot be found in is given up after the set number of
+// scans, the SLAM mapping a new map from the next scan on.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <map>
+
+#include "eval_test_helpers.hpp"
+#include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_recording.hpp"
+#include "line_map_eval/datasets/localization_recording.hpp"
+#include "line_map_eval/datasets/slam_sessions.hpp"
+#include "line_map_eval/datasets/world.hpp"
+#include "line_map_eval/simulation/simulator.hpp"
+#include "line_map_merging/localization/session_continuation.hpp"
+
+using namespace line_map_eval;
+using line_map_eval::test_helpers::revisitPastTheMiddle;
+using line_map_merging::SessionContinuation;
+
+namespace
+{
+struct Drive
+{
+  Recording first, second;
+  Pose2 second_start;  ///< the second part's first base pose in the first part's map frame (truth)
+  std::vector<Pose2> second_truth;  ///< every scan's of the second part, the same frame
+  line_map_merging::LaserSlamParams slam;
+  line_map_merging::LocalizerParams localizer;
+  line_map_merging::SlamSession saved;
+};
+
+const Drive& drive()
+{
+  static const Drive d = []
+  {
+    Drive out;
+    Recording all = simulate(loadWorld(LINEMAP_SOURCE_DIR "/config/worlds/loop.yaml")).recording;
+    const std::vector<CorrectedKeyframe> truth = all.keyframes;
+    all.keyframes.clear();
+    const std::size_t cut = truth.at(revisitPastTheMiddle(truth, all.scans.size())).scan_index;
+    out.first = recordingPart(all, 0, cut, false);
+    out.second = recordingPart(all, cut, all.scans.size(), true);
+    // Every scan is a keyframe of the simulation's truth.
+    for (const auto& kf : truth)
+      if (kf.scan_index >= cut) out.second_truth.push_back(truth.front().pose.inverse() * kf.pose);
+    out.second_start = out.second_truth.front();
+    out.slam = line_map_merging::LaserSlamParams::fromParams(
+        loadParameterFiles({LINEMAP_SOURCE_DIR "/config/slam.yaml"}));
+    out.localizer = line_map_merging::LocalizerParams::fromParams(
+        loadParameterFiles({LINEMAP_SOURCE_DIR "/config/localization.yaml"}));
+    out.saved = runSlam(out.first, out.slam).session;
+    return out;
+  }();
+  return d;
+}
+
+line_map_merging::SlamScan slamScan(const Recording& recording, std::size_t i)
+{
+  const line_map_merging::LocalizerScan in = localizerScan(recording, i);
+  line_map_merging::SlamScan scan;
+  scan.stamp = in.stamp;
+  scan.points = in.points;
+  scan.odom = in.odom;
+  return scan;
+}
+
+double distance(const Pose2& a, const Pose2& b)
+{
+  return (a.translation() - b.translation()).norm();
+}
+}  // namespace
+
+TEST(SessionContinuation, AGivenStartPlacesTheFirstScan)
+{
+  const Drive& d = drive();
+  line_map_merging::LaserSlam slam(d.slam);
+  SessionContinuation continuation(d.saved, d.localizer, 400, d.second_start);
+  const auto scan = slamScan(d.second, 0);
+  ASSERT_EQ(continuation.addScan(scan, d.second.base_to_laser.translation(), slam),
+            SessionContinuation::State::kPlaced);
+  slam.addScan(scan);
+  ASSERT_EQ(slam.keyframes().size(), d.saved.keyframes.size() + 1);
+  // Tied to the nearest saved keyframe and to the start (known to 0.1 m): within that of the truth.
+  EXPECT_LT(distance(slam.graph().node(d.saved.keyframes.size()), d.second_start), 0.1);
+  EXPECT_EQ(continuation.searched(), 1u);
+}
+
+// Searching scan by scan on Intel: the SLAM gets no scan until the pose is found, the pose found is the
+// corrected log's (moved into the first half's map frame by their keyframes around the cut: within 0.3 m and
+// 0.05 rad), and the SLAM then maps on in the saved graph, closing loops to the saved keyframes.
+TEST(SessionContinuation, TheRobotIsFoundInTheSavedMapThenTheSlamMapsOn)
+{
+  const std::string raw_path = LINEMAP_SOURCE_DIR "/../shared/datasets/intel.clf.bz2",
+                    corrected_path = LINEMAP_SOURCE_DIR "/../shared/datasets/intel-corrected.log.gz";
+  ASSERT_EQ(access(raw_path.c_str(), R_OK), 0) << "dataset file missing: " << raw_path;
+  const CarmenLog corrected = readCarmenLog(corrected_path);
+  Recording all = fromCarmen(readCarmenLog(raw_path), &corrected);
+  std::map<std::size_t, Pose2> truth;  // corrected base poses by scan index
+  for (const auto& k : all.keyframes) truth[k.scan_index] = k.pose;
+  all.keyframes.clear();
+  const std::size_t cut = all.scans.size() / 2;
+  const Recording first = recordingPart(all, 0, cut, false),
+                  second = recordingPart(all, cut, all.scans.size(), true);
+  const auto slam_params = line_map_merging::LaserSlamParams::fromParams(
+      loadParameterFiles({LINEMAP_SOURCE_DIR "/config/slam.yaml"}));
+  const SlamRecordingResult saved = runSlam(first, slam_params);
+  // The corrected frame in the SLAM's: from the last saved keyframe that the corrected log has too.
+  std::optional<Pose2> to_slam;
+  for (auto k = saved.keyframes.rbegin(); k != saved.keyframes.rend() && !to_slam; ++k)
+    if (truth.count(k->scan_index)) to_slam = k->pose * truth[k->scan_index].inverse();
+  ASSERT_TRUE(to_slam.has_value());
+
+  line_map_merging::LaserSlam slam(slam_params);
+  SessionContinuation continuation(saved.session, drive().localizer, 400);
+  std::size_t i = 0;
+  for (; i < second.scans.size(); ++i)
+  {
+    const auto state = continuation.addScan(slamScan(second, i), second.base_to_laser.translation(), slam);
+    if (state != SessionContinuation::State::kSearching) break;
+    EXPECT_TRUE(slam.keyframes().empty()) << "the SLAM took scan " << i;
+  }
+  ASSERT_EQ(continuation.state(), SessionContinuation::State::kPlaced) << continuation.summary();
+  // The nearest scan the corrected log has, carried to scan i by the odometry.
+  std::size_t j = cut + i;
+  while (!truth.count(j) && j > cut) --j;
+  ASSERT_TRUE(truth.count(j));
+  const Pose2 expected = *to_slam * truth[j] * (all.scans[j].odom.inverse() * all.scans[cut + i].odom);
+  const double off = distance(*continuation.start(), expected),
+               turn = std::abs(linemap::normalizeAngle(continuation.start()->theta - expected.theta));
+  std::printf("placed at scan %zu of the second half, %.3f m and %.4f rad from the corrected log\n", i, off,
+              turn);
+  EXPECT_LT(off, 0.3);
+  EXPECT_LT(turn, 0.05);
+  for (std::size_t n = 0; n < 600 && i < second.scans.size(); ++n, ++i) slam.addScan(slamScan(second, i));
+  const std::size_t saved_keyframes = saved.session.keyframes.size();
+  EXPECT_GT(slam.keyframes().size(), saved_keyframes + 20);
+  std::size_t between = 0;
+  for (const auto& e : slam.graph().edges())
+    between +=
+        e.loop && std::min(e.from, e.to) < saved_keyframes && std::max(e.from, e.to) >= saved_keyframes;
+  EXPECT_GE(between, 5u) << "the new keyframes close loops to the saved ones";
+}
+
+// A session the robot is not in (here: an empty one) is given up after the set number of scans; from the next
+// scan the SLAM maps a new map in its own frame, its first keyframe at the origin.
+TEST(SessionContinuation, ARobotNotFoundMapsANewMapAfterTheSearch)
+{
+  const Drive& d = drive();
+  line_map_merging::LaserSlam slam(d.slam);
+  SessionContinuation continuation(line_map_merging::SlamSession(), d.localizer, 5);
+  for (std::size_t i = 0; i < 5; ++i)
+  {
+    const auto state = continuation.addScan(slamScan(d.second, i), Eigen::Vector2d::Zero(), slam);
+    EXPECT_EQ(state, i < 4 ? SessionContinuation::State::kSearching : SessionContinuation::State::kGaveUp);
+  }
+  EXPECT_NE(continuation.summary().find("not found"), std::string::npos) << continuation.summary();
+  slam.addScan(slamScan(d.second, 5));
+  ASSERT_EQ(slam.keyframes().size(), 1u);
+  EXPECT_LT(distance(slam.graph().node(0), Pose2()), 1e-9);
+}

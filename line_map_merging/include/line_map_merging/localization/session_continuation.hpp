@@ -1,0 +1,65 @@
+// Continuing a saved session from an unknown start (ROS-free; the SLAM nodelet's ~session parameter, and
+// line_map_eval's runSessions offline): the robot is first found in the saved keyframes' surfaces by global
+// localization, scan after scan; at the first pose the localizer accepts, the SLAM continues the session from
+// that scan (LaserSlam::continueFrom) and maps on. A start given up front (an initial pose) skips the search.
+// When no pose is accepted within a number of scans the session is given up: the SLAM maps a new map in its
+// own frame from the next scan, and the state says so (joining the two by a later closure is not done).
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "line_map_merging/localization/line_map_localizer.hpp"
+#include "line_map_merging/slam/laser_slam.hpp"
+
+namespace line_map_merging
+{
+/// The saved keyframes' surfaces (scan_surfaces) in the session's map frame: a line map to localize in.
+std::vector<linemap::Segment2> sessionSurfaces(const SlamSession& session);
+
+class SessionContinuation
+{
+ public:
+  enum class State
+  {
+    kSearching,  ///< global localization in the saved map under way: the SLAM gets no scans yet
+    kPlaced,     ///< the SLAM continues the session
+    kGaveUp,     ///< not found in time: the SLAM maps a new map in its own frame
+  };
+
+  /// `search_scans`: scans to search before giving up (>= 1). `start`: the first scan's base pose in the
+  /// session's map frame, when known (no search). Either is taken as known to `sigma_xy`, `sigma_theta`.
+  SessionContinuation(SlamSession session, const LocalizerParams& localizer, std::size_t search_scans,
+                      const std::optional<linemap::Pose2>& start = std::nullopt, double sigma_xy = 0.1,
+                      double sigma_theta = 0.05);
+
+  /// One scan, before the SLAM sees it: while searching it is localized (and the SLAM must not get it:
+  /// kSearching); at the accepted pose, or with a given start at the first scan, `slam` continues the
+  /// session from this scan (kPlaced: give it the scan). Afterwards nothing happens and the state is
+  /// returned. `sensor`: the laser's position in the base frame.
+  State addScan(const SlamScan& scan, const linemap::Vec2& sensor, LaserSlam& slam);
+
+  State state() const { return state_; }
+  /// Scans searched so far (the one placed at included).
+  std::size_t searched() const { return searched_; }
+  /// The pose the SLAM continued from (kPlaced).
+  const std::optional<linemap::Pose2>& start() const { return placed_at_; }
+  const SlamSession& session() const { return session_; }
+  /// A sentence for the diagnostics.
+  std::string summary() const;
+
+ private:
+  SlamSession session_;
+  std::unique_ptr<LineMapLocalizer> localizer_;  ///< null with a given start
+  std::size_t search_scans_;
+  std::optional<linemap::Pose2> given_start_, placed_at_;
+  double sigma_xy_, sigma_theta_;
+  State state_ = State::kSearching;
+  std::size_t searched_ = 0;
+};
+
+}  // namespace line_map_merging

@@ -1,0 +1,84 @@
+#include "line_map_merging/localization/session_continuation.hpp"
+
+#include <sstream>
+#include <stdexcept>
+
+namespace line_map_merging
+{
+std::vector<linemap::Segment2> sessionSurfaces(const SlamSession& session)
+{
+  std::vector<linemap::Segment2> out;
+  for (std::size_t k = 0; k < session.keyframes.size() && k < session.nodes.size(); ++k)
+    for (const auto& s : session.keyframes[k].joins)
+      out.emplace_back(session.nodes[k].apply(s.start), session.nodes[k].apply(s.end));
+  return out;
+}
+
+SessionContinuation::SessionContinuation(SlamSession session, const LocalizerParams& localizer,
+                                         std::size_t search_scans, const std::optional<linemap::Pose2>& start,
+                                         double sigma_xy, double sigma_theta)
+    : session_(std::move(session)),
+      search_scans_(search_scans),
+      given_start_(start),
+      sigma_xy_(sigma_xy),
+      sigma_theta_(sigma_theta)
+{
+  if (search_scans_ == 0) throw std::invalid_argument("session continuation: search_scans must be >= 1");
+  if (!(sigma_xy_ > 0.0) || !(sigma_theta_ > 0.0))
+    throw std::invalid_argument("session continuation: the start's sigmas must be positive");
+  if (!given_start_) localizer_ = std::make_unique<LineMapLocalizer>(sessionSurfaces(session_), localizer);
+}
+
+SessionContinuation::State SessionContinuation::addScan(const SlamScan& scan, const linemap::Vec2& sensor,
+                                                        LaserSlam& slam)
+{
+  if (state_ != State::kSearching) return state_;
+  ++searched_;
+  std::optional<linemap::Pose2> found = given_start_;
+  if (!found)
+  {
+    LocalizerScan in;
+    in.stamp = scan.stamp;
+    in.points = scan.points;
+    in.odom = scan.odom;
+    in.sensor = sensor;
+    const LocalizerResult result = localizer_->addScan(in);
+    if (result.outcome == LocalizerOutcome::kRecovered) found = result.pose;
+  }
+  if (found)
+  {
+    slam.continueFrom(session_, *found, sigma_xy_, sigma_theta_);
+    placed_at_ = found;
+    state_ = State::kPlaced;
+    localizer_.reset();
+    session_ = SlamSession();  // the SLAM holds it now
+  }
+  else if (searched_ >= search_scans_)
+  {
+    state_ = State::kGaveUp;
+    localizer_.reset();
+  }
+  return state_;
+}
+
+std::string SessionContinuation::summary() const
+{
+  std::ostringstream out;
+  switch (state_)
+  {
+    case State::kSearching:
+      out << "looking for the robot in the saved map: scan " << searched_ << " of at most " << search_scans_;
+      break;
+    case State::kPlaced:
+      out << "continuing the saved session from scan " << searched_ << " at (" << placed_at_->x << ", "
+          << placed_at_->y << ", " << placed_at_->theta << ")";
+      break;
+    case State::kGaveUp:
+      out << "the robot was not found in the saved map within " << search_scans_
+          << " scans: mapping a new map in its own frame (the saved one is not joined)";
+      break;
+  }
+  return out.str();
+}
+
+}  // namespace line_map_merging
