@@ -1,15 +1,23 @@
 // session_benchmark: how long loading a session file takes (linemap_batch LOG --slam --save-session F):
 // reading and checking the file, restoring the SLAM from it, and loading its line map into CAE-RLSM;
-// the median and slowest of RUNS loads.
+// the median and slowest of RUNS loads. With --continue LOG: what mapping LOG costs per scan when it
+// continues the session (found by global localization first, as linemap_batch LOG --slam --session F) and
+// when it is mapped alone, in CPU time of the SLAM (the search for the start apart).
 //
-//   rosrun line_map_eval session_benchmark SESSION_FILE [--runs N]
+//   rosrun line_map_eval session_benchmark SESSION_FILE [--runs N] [--continue LOG]   (from the repository
+//   root)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
 #include "benchmark_common.hpp"
+#include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/datasets/carmen_log.hpp"
+#include "line_map_eval/datasets/carmen_recording.hpp"
+#include "line_map_eval/datasets/slam_sessions.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
 #include "line_map_merging/slam/laser_slam.hpp"
 #include "line_map_merging/slam/session_file.hpp"
@@ -18,9 +26,40 @@
 using line_map_eval::benchmark::Clock;
 using line_map_eval::benchmark::millisSince;
 
+namespace
+{
+/// Per scan, the SLAM's CPU time mapping `log` alone and continuing the session `path` with it.
+void continuationCost(const std::string& path, const std::string& log)
+{
+  using namespace line_map_eval;
+  const Recording run = fromCarmen(readCarmenLog(log), nullptr);
+  // The shipped parameters: under $LINEMAP_ROOT, else the working directory (the repository's root).
+  const char* root = std::getenv("LINEMAP_ROOT");
+  const auto config = [root](const char* name)
+  { return std::vector<std::string>{std::string(root ? root : ".") + "/config/" + name}; };
+  const auto slam = line_map_merging::LaserSlamParams::fromParams(loadParameterFiles(config("slam.yaml")));
+  const auto localizer =
+      line_map_merging::LocalizerParams::fromParams(loadParameterFiles(config("localization.yaml")));
+  const SlamRecordingResult alone = runSlam(run, slam);
+  const SessionsRun continued =
+      runSessions({run}, line_map_merging::readSessionFile(path).slam, slam, localizer, true);
+  const double scans = static_cast<double>(run.scans.size());
+  std::printf("mapping %s (%zu scans), SLAM CPU per scan:\n  alone                              %8.2f ms\n",
+              log.c_str(), run.scans.size(), 1e3 * alone.cpu_seconds / scans);
+  if (!continued.localized_at[0])
+  {
+    std::printf("  continuing the session: the start was not found\n");
+    return;
+  }
+  std::printf("  continuing the session             %8.2f ms (%.2fx; found at scan %zu, search %.1f s CPU)\n",
+              1e3 * continued.slam_cpu_seconds[0] / scans, continued.slam_cpu_seconds[0] / alone.cpu_seconds,
+              *continued.localized_at[0], continued.cpu_seconds - continued.slam_cpu_seconds[0]);
+}
+}  // namespace
+
 int main(int argc, char** argv)
 {
-  const char* usage = "usage: session_benchmark SESSION_FILE [--runs N]";
+  const char* usage = "usage: session_benchmark SESSION_FILE [--runs N] [--continue LOG]";
   if (argc < 2 || argv[1][0] == '-')
   {
     std::fprintf(stderr, "%s\n", usage);
@@ -28,9 +67,11 @@ int main(int argc, char** argv)
   }
   const std::string path = argv[1];
   std::size_t runs = 5;
+  std::string log;
   if (const auto stop = line_map_eval::benchmark::parseOptions(
           argc - 1, argv + 1, "session_benchmark", usage,
-          {{"--runs", [&](const std::string& v) { runs = std::max<std::size_t>(1, std::stoul(v)); }}}))
+          {{"--runs", [&](const std::string& v) { runs = std::max<std::size_t>(1, std::stoul(v)); }},
+           {"--continue", [&](const std::string& v) { log = v; }}}))
     return *stop;
   std::vector<double> read_ms, restore_ms, map_ms, total_ms;
   std::size_t keyframes = 0, segments = 0;
@@ -62,5 +103,6 @@ int main(int argc, char** argv)
   line("restore the SLAM", restore_ms);
   line("load the line map (CAE-RLSM)", map_ms);
   line("total", total_ms);
+  if (!log.empty()) continuationCost(path, log);
   return 0;
 }

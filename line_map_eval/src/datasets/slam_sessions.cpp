@@ -79,6 +79,7 @@ SessionsRun runSessions(const std::vector<Recording>& runs,
   out.localized_at.assign(n, std::nullopt);
   out.closures_to_earlier.assign(n, 0);
   out.counters.assign(n, {});
+  out.slam_cpu_seconds.assign(n, 0.0);
   std::optional<line_map_merging::SlamSession> current = saved;
   std::vector<ScanOwner> owners(saved ? saved->scans.size() : 0);
   std::vector<std::size_t> keyframe_run(saved ? saved->keyframes.size() : 0, static_cast<std::size_t>(-1));
@@ -105,6 +106,7 @@ SessionsRun runSessions(const std::vector<Recording>& runs,
     const SlamRecordingResult result =
         runSlam(run, slam_params, use_odometry, std::nullopt, continuation ? &*continuation : nullptr);
     out.counters[r] = result.counters;
+    out.slam_cpu_seconds[r] = result.cpu_seconds;
     out.cpu_seconds += result.cpu_seconds;
     // The run's accepted scans follow the saved ones in the session, in order and with their stamps.
     std::size_t i = 0;
