@@ -15,7 +15,7 @@
 #include "line_map_eval/batch/batch.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_eval/datasets/carmen_recording.hpp"
-#include "line_map_eval/datasets/localization_recording.hpp"
+#include "line_map_eval/datasets/slam_recording.hpp"
 #include "line_map_eval/datasets/slam_sessions.hpp"
 #include "line_map_eval/datasets/world.hpp"
 #include "line_map_eval/simulation/simulator.hpp"
@@ -62,16 +62,6 @@ const Drive& drive()
   return d;
 }
 
-line_map_merging::SlamScan slamScan(const Recording& recording, std::size_t i)
-{
-  const line_map_merging::LocalizerScan in = localizerScan(recording, i);
-  line_map_merging::SlamScan scan;
-  scan.stamp = in.stamp;
-  scan.points = in.points;
-  scan.odom = in.odom;
-  return scan;
-}
-
 double distance(const Pose2& a, const Pose2& b)
 {
   return (a.translation() - b.translation()).norm();
@@ -86,6 +76,7 @@ TEST(SessionContinuation, AGivenStartPlacesTheFirstScan)
   const auto scan = slamScan(d.second, 0);
   ASSERT_EQ(continuation.addScan(scan, d.second.base_to_laser.translation(), slam),
             SessionContinuation::State::kPlaced);
+  EXPECT_TRUE(continuation.takeHeld().empty());
   slam.addScan(scan);
   ASSERT_EQ(slam.keyframes().size(), d.saved.keyframes.size() + 1);
   // Tied to the nearest saved keyframe and to the start (known to 0.1 m): within that of the truth.
@@ -133,13 +124,19 @@ TEST(SessionContinuation, TheRobotIsFoundInTheSavedMapThenTheSlamMapsOn)
   while (!truth.count(j) && j > cut) --j;
   ASSERT_TRUE(truth.count(j));
   const Pose2 expected = *to_slam * truth[j] * (all.scans[j].odom.inverse() * all.scans[cut + i].odom);
-  const double off = distance(*continuation.start(), expected),
-               turn = std::abs(linemap::normalizeAngle(continuation.start()->theta - expected.theta));
+  const double off = distance(*continuation.found(), expected),
+               turn = std::abs(linemap::normalizeAngle(continuation.found()->theta - expected.theta));
   std::printf("placed at scan %zu of the second half, %.3f m and %.4f rad from the corrected log\n", i, off,
               turn);
   EXPECT_LT(off, 0.3);
   EXPECT_LT(turn, 0.05);
+  // The SLAM starts at the first scan searched, its pose carried back by the odometry: it takes them all.
+  const auto held = continuation.takeHeld();
+  ASSERT_EQ(held.size(), i);
+  EXPECT_DOUBLE_EQ(held.front().stamp, second.scans.front().stamp);
+  for (const auto& scan : held) slam.addScan(scan);
   for (std::size_t n = 0; n < 600 && i < second.scans.size(); ++n, ++i) slam.addScan(slamScan(second, i));
+  EXPECT_EQ(slam.scanPoses().size(), saved.session.scans.size() + i);
   const std::size_t saved_keyframes = saved.session.keyframes.size();
   EXPECT_GT(slam.keyframes().size(), saved_keyframes + 20);
   std::size_t between = 0;
@@ -149,8 +146,9 @@ TEST(SessionContinuation, TheRobotIsFoundInTheSavedMapThenTheSlamMapsOn)
   EXPECT_GE(between, 5u) << "the new keyframes close loops to the saved ones";
 }
 
-// A session the robot is not in (here: an empty one) is given up after the set number of scans; from the next
-// scan the SLAM maps a new map in its own frame, its first keyframe at the origin.
+// A session the robot is not in (here: an empty one) is given up after the set number of scans; the SLAM then
+// maps a new map in its own frame from the first scan searched on (none is lost), its first keyframe at the
+// origin.
 TEST(SessionContinuation, ARobotNotFoundMapsANewMapAfterTheSearch)
 {
   const Drive& d = drive();
@@ -162,7 +160,12 @@ TEST(SessionContinuation, ARobotNotFoundMapsANewMapAfterTheSearch)
     EXPECT_EQ(state, i < 4 ? SessionContinuation::State::kSearching : SessionContinuation::State::kGaveUp);
   }
   EXPECT_NE(continuation.summary().find("not found"), std::string::npos) << continuation.summary();
-  slam.addScan(slamScan(d.second, 5));
-  ASSERT_EQ(slam.keyframes().size(), 1u);
+  const auto held = continuation.takeHeld();
+  ASSERT_EQ(held.size(), 4u);
+  for (const auto& scan : held) slam.addScan(scan);
+  slam.addScan(slamScan(d.second, 4));
+  EXPECT_EQ(slam.scanPoses().size(), 5u);
+  ASSERT_GE(slam.keyframes().size(), 1u);
+  EXPECT_DOUBLE_EQ(slam.keyframes().front().stamp, d.second.scans.front().stamp);
   EXPECT_LT(distance(slam.graph().node(0), Pose2()), 1e-9);
 }

@@ -5,8 +5,28 @@
 #include <chrono>
 #include <cmath>
 
+#include "line_map_merging/localization/session_continuation.hpp"
+
 namespace line_map_eval
 {
+line_map_merging::SlamScan slamScan(const Recording& recording, std::size_t index, bool use_odometry)
+{
+  const RecordedScan& s = recording.scans[index];
+  const ScanGeometry& g = recording.geometryOf(s);  // a scan's own where the sensor changes it
+  line_map_merging::SlamScan scan;
+  scan.stamp = s.stamp;
+  if (use_odometry) scan.odom = s.odom;
+  scan.points.reserve(s.ranges.size());
+  for (std::size_t b = 0; b < s.ranges.size(); ++b)
+  {
+    const double r = s.ranges[b];
+    if (!(r >= g.range_min && r <= g.range_max) || r <= 0.0) continue;
+    const double a = g.angle_min + static_cast<double>(b) * g.angle_increment;
+    scan.points.push_back(recording.base_to_laser.apply({r * std::cos(a), r * std::sin(a)}));
+  }
+  return scan;
+}
+
 SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::LaserSlamParams& params,
                             bool use_odometry, const std::optional<FrontEndSlip>& slip,
                             const SlamContinuation* continuation)
@@ -21,28 +41,41 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
   };
   const double cpu_start = cpu();
   line_map_merging::LaserSlam slam(params);
+  std::optional<line_map_merging::SessionContinuation> search;
   if (continuation)
-    slam.continueFrom(continuation->session, continuation->start, continuation->sigma_xy,
-                      continuation->sigma_theta);
+    search.emplace(continuation->session, continuation->localizer, continuation->search_scans,
+                   continuation->start, continuation->sigma_xy, continuation->sigma_theta);
   const std::size_t saved_scans = continuation ? continuation->session.scans.size() : 0;
   std::vector<std::size_t> accepted;  // recording index of each scan the SLAM accepted
+  std::vector<std::size_t> held;      // recording index of each scan held by the search
+  const auto add = [&](const line_map_merging::SlamScan& scan, std::size_t i)
+  {
+    if (slam.addScan(scan) != line_map_merging::SlamOutcome::kRejected) accepted.push_back(i);
+  };
   for (std::size_t i = 0; i < recording.scans.size(); ++i)
   {
-    const RecordedScan& s = recording.scans[i];
     if (slip && slip->scan == i) slam.injectFrontEndSlip(slip->slip);
-    const ScanGeometry& g = recording.geometryOf(s);  // a scan's own where the sensor changes it
-    line_map_merging::SlamScan scan;
-    scan.stamp = s.stamp;
-    if (use_odometry) scan.odom = s.odom;
-    scan.points.reserve(s.ranges.size());
-    for (std::size_t b = 0; b < s.ranges.size(); ++b)
+    const line_map_merging::SlamScan scan = slamScan(recording, i, use_odometry);
+    if (search && search->state() == line_map_merging::SessionContinuation::State::kSearching)
     {
-      const double r = s.ranges[b];
-      if (!(r >= g.range_min && r <= g.range_max) || r <= 0.0) continue;
-      const double a = g.angle_min + static_cast<double>(b) * g.angle_increment;
-      scan.points.push_back(recording.base_to_laser.apply({r * std::cos(a), r * std::sin(a)}));
+      const double search_start = cpu();
+      const auto state = search->addScan(scan, recording.base_to_laser.translation(), slam);
+      result.search_cpu_seconds += cpu() - search_start;
+      if (state == line_map_merging::SessionContinuation::State::kSearching)
+      {
+        held.push_back(i);
+        continue;
+      }
+      if (state == line_map_merging::SessionContinuation::State::kGaveUp)
+      {
+        result.placed_at = std::nullopt;  // offline the run is left out, not mapped apart
+        break;
+      }
+      result.placed_at = i;
+      const auto replay = search->takeHeld();  // all the held scans, or none
+      for (std::size_t k = 0; k < replay.size(); ++k) add(replay[k], held[held.size() - replay.size() + k]);
     }
-    if (slam.addScan(scan) != line_map_merging::SlamOutcome::kRejected) accepted.push_back(i);
+    add(scan, i);
   }
   result.cpu_seconds = cpu() - cpu_start;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -6,8 +6,6 @@
 #include <stdexcept>
 #include <unordered_set>
 
-#include "line_map_eval/datasets/localization_recording.hpp"
-#include "line_map_merging/localization/session_continuation.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
 
 namespace line_map_eval
@@ -43,27 +41,6 @@ struct ScanOwner
   std::size_t scan = 0;
 };
 
-/// Where run `r` starts in `session`'s map frame: given, or found by global localization (carried back to
-/// the run's first scan by the odometry). Fills `localized_at`.
-std::optional<Pose2> findStart(const Recording& run, const line_map_merging::SlamSession& session,
-                               const std::optional<Pose2>& given,
-                               const line_map_merging::LocalizerParams& localizer_params,
-                               std::size_t localize_scans, std::optional<std::size_t>& localized_at,
-                               double& cpu_seconds)
-{
-  if (given)
-  {
-    localized_at = 0;
-    return given;
-  }
-  const LocalizationRunResult found =
-      runLocalization(run, line_map_merging::sessionSurfaces(session), localizer_params, std::nullopt, 0,
-                      std::min(localize_scans, run.scans.size()));
-  cpu_seconds += found.cpu_seconds;
-  if (!found.recovered_at || found.scan_poses.empty()) return std::nullopt;
-  localized_at = found.recovered_at;
-  return found.scan_poses.front();
-}
 }  // namespace
 
 SessionsRun runSessions(const std::vector<Recording>& runs,
@@ -89,25 +66,20 @@ SessionsRun runSessions(const std::vector<Recording>& runs,
   {
     const Recording& run = runs[r];
     out.scan_poses[r].assign(run.scans.size(), std::nullopt);
-    const std::optional<Pose2> given = r < starts.size() ? starts[r] : std::nullopt;
     std::optional<SlamContinuation> continuation;
     if (current)
-    {
-      const auto start = findStart(run, *current, given, localizer_params, localize_scans,
-                                   out.localized_at[r], out.cpu_seconds);
-      if (!start) continue;
-      continuation = SlamContinuation{*current, *start, 0.1, 0.05};
-    }
+      continuation = SlamContinuation{
+          *current,      r < starts.size() ? starts[r] : std::nullopt, 0.1, 0.05, localizer_params,
+          localize_scans};
     else
-    {
-      out.localized_at[r] = 0;
       fresh_run = r;
-    }
     const SlamRecordingResult result =
         runSlam(run, slam_params, use_odometry, std::nullopt, continuation ? &*continuation : nullptr);
-    out.counters[r] = result.counters;
-    out.slam_cpu_seconds[r] = result.cpu_seconds;
     out.cpu_seconds += result.cpu_seconds;
+    out.localized_at[r] = result.placed_at;
+    if (!result.placed_at) continue;  // never found: left out
+    out.counters[r] = result.counters;
+    out.slam_cpu_seconds[r] = result.cpu_seconds - result.search_cpu_seconds;
     // The run's accepted scans follow the saved ones in the session, in order and with their stamps.
     std::size_t i = 0;
     for (std::size_t k = owners.size(); k < result.session.scans.size(); ++k)

@@ -114,7 +114,7 @@ class CheckSessionContinue(unittest.TestCase):
             limit = lt.work_limit(bag_seconds, RATE)
 
             def found():
-                m = re.search(r"from scan (\d+)", slam.get(key, ""))
+                m = re.search(r"found at scan (\d+)", slam.get(key, ""))
                 return int(m.group(1)) if m else None
 
             # The scans before the robot was found only search; every later one goes to the SLAM; the merger
@@ -136,7 +136,7 @@ class CheckSessionContinue(unittest.TestCase):
                 pipeline.wait(30)
             except subprocess.TimeoutExpired:
                 pipeline.kill()
-        found = int(re.search(r"from scan (\d+)", slam[key]).group(1))
+        found = int(re.search(r"found at scan (\d+)", slam[key]).group(1))
         last = paths[-1].poses
         moved = max(math.hypot(p.pose.position.x - x, p.pose.position.y - y)
                     for p, (_, x, y) in zip(last, saved))

@@ -1,5 +1,6 @@
 #include "line_map_merging/localization/session_continuation.hpp"
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -34,8 +35,8 @@ SessionContinuation::State SessionContinuation::addScan(const SlamScan& scan, co
 {
   if (state_ != State::kSearching) return state_;
   ++searched_;
-  std::optional<linemap::Pose2> found = given_start_;
-  if (!found)
+  found_ = given_start_;
+  if (!found_)
   {
     LocalizerScan in;
     in.stamp = scan.stamp;
@@ -43,12 +44,19 @@ SessionContinuation::State SessionContinuation::addScan(const SlamScan& scan, co
     in.odom = scan.odom;
     in.sensor = sensor;
     const LocalizerResult result = localizer_->addScan(in);
-    if (result.outcome == LocalizerOutcome::kRecovered) found = result.pose;
+    if (result.outcome == LocalizerOutcome::kRecovered) found_ = result.pose;
   }
-  if (found)
+  if (found_)
   {
-    slam.continueFrom(session_, *found, sigma_xy_, sigma_theta_);
-    placed_at_ = found;
+    // The first held scan's pose by the odometry between; without it on every scan, only this one's.
+    placed_at_ = found_;
+    const bool odometry = scan.odom && std::all_of(held_.begin(), held_.end(),
+                                                   [](const SlamScan& s) { return s.odom.has_value(); });
+    if (odometry && !held_.empty())
+      placed_at_ = *found_ * (scan.odom->inverse() * *held_.front().odom);
+    else
+      held_.clear();
+    slam.continueFrom(session_, *placed_at_, sigma_xy_, sigma_theta_);
     state_ = State::kPlaced;
     localizer_.reset();
     session_ = SlamSession();  // the SLAM holds it now
@@ -58,7 +66,16 @@ SessionContinuation::State SessionContinuation::addScan(const SlamScan& scan, co
     state_ = State::kGaveUp;
     localizer_.reset();
   }
+  else
+    held_.push_back(scan);
   return state_;
+}
+
+std::vector<SlamScan> SessionContinuation::takeHeld()
+{
+  std::vector<SlamScan> out;
+  out.swap(held_);
+  return out;
 }
 
 std::string SessionContinuation::summary() const
@@ -70,8 +87,8 @@ std::string SessionContinuation::summary() const
       out << "looking for the robot in the saved map: scan " << searched_ << " of at most " << search_scans_;
       break;
     case State::kPlaced:
-      out << "continuing the saved session from scan " << searched_ << " at (" << placed_at_->x << ", "
-          << placed_at_->y << ", " << placed_at_->theta << ")";
+      out << "continuing the saved session: found at scan " << searched_ << " at (" << found_->x << ", "
+          << found_->y << ", " << found_->theta << ")";
       break;
     case State::kGaveUp:
       out << "the robot was not found in the saved map within " << search_scans_

@@ -129,6 +129,7 @@ class SlamNodelet : public nodelet::Nodelet
     if (!continuation_ || continuation_->state() != SessionContinuation::State::kSearching) return true;
     const auto state = continuation_->addScan(scan, mount.translation(), *slam_);
     if (state == SessionContinuation::State::kSearching) return false;
+    for (const SlamScan& held : continuation_->takeHeld()) slam_->addScan(held);  // from the search's start
     if (state == SessionContinuation::State::kPlaced)
     {
       NODELET_INFO("slam: %s", continuation_->summary().c_str());

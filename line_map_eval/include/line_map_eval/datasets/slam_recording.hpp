@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "line_map_eval/datasets/recording.hpp"
+#include "line_map_merging/localization/line_map_localizer.hpp"
 #include "line_map_merging/slam/laser_slam.hpp"
 
 namespace line_map_eval
@@ -28,17 +29,26 @@ struct SlamRecordingResult
   line_map_merging::SlamSession session;
   /// Continuing a session: the saved scans' poses in the joined graph, in the session's scan order.
   std::vector<Pose2> continued_scan_poses;
-  double seconds = 0.0;      ///< front and back end, the whole recording (wall time)
-  double cpu_seconds = 0.0;  ///< the same in CPU time of this thread
+  /// Continuing a session: the scan at which the robot was found (0 with a given start); none: it was not
+  /// found, and nothing was mapped (a new run: 0).
+  std::optional<std::size_t> placed_at = 0;
+  double seconds = 0.0;  ///< front and back end, the whole recording (wall time)
+  double cpu_seconds =
+      0.0;  ///< the same in CPU time of this thread, the search for a continuation's start included
+  double search_cpu_seconds = 0.0;  ///< of which the search
 };
 
-/// A saved session the run goes on from (LaserSlam::continueFrom): the recording's first scan is at `start`
-/// in the session's map frame, known to the sigmas.
+/// A saved session the run goes on from, as the SLAM nodelet's ~session (SessionContinuation): the
+/// recording's first scan is at `start` in the session's map frame, or, without one, the robot is first found
+/// by global localization in the first `search_scans` scans (then the run starts at its first scan, carried
+/// back by the odometry); known to the sigmas.
 struct SlamContinuation
 {
   line_map_merging::SlamSession session;
-  Pose2 start;
+  std::optional<Pose2> start;
   double sigma_xy = 0.1, sigma_theta = 0.05;
+  line_map_merging::LocalizerParams localizer;
+  std::size_t search_scans = 400;
 };
 
 /// A front-end slip injected before one scan (LaserSlam::injectFrontEndSlip).
@@ -54,6 +64,10 @@ struct FrontEndSlip
 SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::LaserSlamParams& params,
                             bool use_odometry = true, const std::optional<FrontEndSlip>& slip = std::nullopt,
                             const SlamContinuation* continuation = nullptr);
+
+/// Scan `index` as the SLAM takes it: its valid beams (under its own geometry) in the base frame by the
+/// recording's mounting, with its odometry when `use_odometry`.
+line_map_merging::SlamScan slamScan(const Recording& recording, std::size_t index, bool use_odometry = true);
 
 /// The recording with the SLAM keyframes as its corrected keyframes (a loop-closure dataset).
 Recording withSlamKeyframes(Recording recording, const SlamRecordingResult& slam);

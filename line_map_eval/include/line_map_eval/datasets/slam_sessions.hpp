@@ -41,9 +41,10 @@ struct SessionsRun
   /// session.
   std::vector<std::size_t> closures_to_earlier;
   std::vector<line_map_merging::SlamCounters> counters;  ///< per run (zero for a run left out)
-  std::vector<double> slam_cpu_seconds;  ///< per run: its SLAM alone (CPU time), the search for its start apart
-  line_map_merging::SlamSession session;                 ///< the joined graph: what --save-session writes
-  double cpu_seconds = 0.0;                              ///< every SLAM run and localization
+  std::vector<double>
+      slam_cpu_seconds;  ///< per run: its SLAM alone (CPU time), the search for its start apart
+  line_map_merging::SlamSession session;  ///< the joined graph: what --save-session writes
+  double cpu_seconds = 0.0;               ///< every SLAM run and localization
 };
 
 /// Maps `runs` into one graph, in order: the first starts a new map (or continues `saved`), each later one
