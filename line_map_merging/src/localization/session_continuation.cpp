@@ -1,6 +1,5 @@
 #include "line_map_merging/localization/session_continuation.hpp"
 
-#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -48,15 +47,10 @@ SessionContinuation::State SessionContinuation::addScan(const SlamScan& scan, co
   }
   if (found_)
   {
-    // The first held scan's pose by the odometry between; without it on every scan, only this one's.
-    placed_at_ = found_;
-    const bool odometry = scan.odom && std::all_of(held_.begin(), held_.end(),
-                                                   [](const SlamScan& s) { return s.odom.has_value(); });
-    if (odometry && !held_.empty())
-      placed_at_ = *found_ * (scan.odom->inverse() * *held_.front().odom);
-    else
-      held_.clear();
-    slam.continueFrom(session_, *placed_at_, sigma_xy_, sigma_theta_);
+    // From this scan on: carried back to the held ones by the odometry, the start would take on the
+    // odometry's drift over the whole search (metres on a long one), more than the start's sigmas allow.
+    held_.clear();
+    slam.continueFrom(session_, *found_, sigma_xy_, sigma_theta_);
     state_ = State::kPlaced;
     localizer_.reset();
     session_ = SlamSession();  // the SLAM holds it now

@@ -40,8 +40,8 @@ struct SlamRecordingResult
 
 /// A saved session the run goes on from, as the SLAM nodelet's ~session (SessionContinuation): the
 /// recording's first scan is at `start` in the session's map frame, or, without one, the robot is first found
-/// by global localization in the first `search_scans` scans (then the run starts at its first scan, carried
-/// back by the odometry); known to the sigmas.
+/// by global localization in the first `search_scans` scans (then the run starts at the scan it was found at);
+/// known to the sigmas.
 struct SlamContinuation
 {
   line_map_merging::SlamSession session;

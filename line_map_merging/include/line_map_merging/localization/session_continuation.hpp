@@ -1,12 +1,12 @@
 // Continuing a saved session from an unknown start (ROS-free; the SLAM nodelet's ~session parameter, and
 // line_map_eval's runSlam / runSessions offline, so both make the same map): the robot is first found in the
 // saved keyframes' surfaces by global localization, scan after scan, the scans held meanwhile. At the first
-// pose the localizer accepts, the SLAM continues the session (LaserSlam::continueFrom) from the first held
-// scan, its pose carried back from the accepted one by the odometry (without odometry: from the accepted
-// scan, the held ones dropped), and the caller gives it the held scans, then the current one. A start given
-// up front (an initial pose) skips the search. When no pose is accepted within a number of scans the session
-// is given up: the SLAM maps a new map in its own frame from the held scans on, and the state says so
-// (joining the two by a later closure is not done).
+// pose the localizer accepts, the SLAM continues the session (LaserSlam::continueFrom) from that scan; the
+// scans searched before it are not mapped (carried back to them by the odometry, the start would take on the
+// odometry's drift over the whole search). A start given up front (an initial pose) skips the search. When no
+// pose is accepted within a number of scans the session is given up: the SLAM maps a new map in its own frame
+// from the held scans on (none is lost), and the state says so (joining the two by a later closure is not
+// done).
 #pragma once
 
 #include <cstddef>
@@ -46,17 +46,15 @@ class SessionContinuation
   /// `slam` takeHeld() and this scan. Afterwards nothing happens and the state is returned. `sensor`: the
   /// laser's position in the base frame.
   State addScan(const SlamScan& scan, const linemap::Vec2& sensor, LaserSlam& slam);
-  /// The scans held during the search that the SLAM is to take before the current one (empty when the
-  /// start could not be carried back to them: no odometry); emptied.
+  /// The scans held during the search that the SLAM is to take before the current one: after kGaveUp every
+  /// scan searched, after kPlaced none; emptied.
   std::vector<SlamScan> takeHeld();
 
   State state() const { return state_; }
   /// Scans searched so far (the one placed at included).
   std::size_t searched() const { return searched_; }
-  /// The accepted pose: of the scan placed at, searched() - 1 (kPlaced).
+  /// The accepted pose, of the scan placed at (searched() - 1), which the SLAM continued from (kPlaced).
   const std::optional<linemap::Pose2>& found() const { return found_; }
-  /// The pose the SLAM continued from: of the first scan it takes (kPlaced).
-  const std::optional<linemap::Pose2>& start() const { return placed_at_; }
   const SlamSession& session() const { return session_; }
   /// A sentence for the diagnostics.
   std::string summary() const;
@@ -65,7 +63,7 @@ class SessionContinuation
   SlamSession session_;
   std::unique_ptr<LineMapLocalizer> localizer_;  ///< null with a given start
   std::size_t search_scans_;
-  std::optional<linemap::Pose2> given_start_, found_, placed_at_;
+  std::optional<linemap::Pose2> given_start_, found_;
   std::vector<SlamScan> held_;
   double sigma_xy_, sigma_theta_;
   State state_ = State::kSearching;
