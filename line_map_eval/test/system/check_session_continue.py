@@ -10,7 +10,6 @@ import bz2
 import math
 import os
 import re
-import signal
 import struct
 import subprocess
 import sys
@@ -19,7 +18,6 @@ import unittest
 
 import rospy
 import rostest
-from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Path
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
@@ -87,18 +85,8 @@ class CheckSessionContinue(unittest.TestCase):
         self.assertEqual(rc, 0, log)
         _, _, bag_seconds = lt.bag_scans(bag)
 
-        slam, merging, paths = {}, {}, []
-
-        def diag(msg):
-            for s in msg.status:
-                values = {kv.key: kv.value for kv in s.values}
-                if s.name.endswith("laser slam"):
-                    slam.update(values)
-                    slam["summary"] = s.message
-                elif s.name.endswith("line map merging"):
-                    merging.update(values)
-
-        rospy.Subscriber("/diagnostics", DiagnosticArray, diag, queue_size=50)
+        diagnostics = lt.component_diagnostics(slam="laser slam", merging="line map merging")
+        slam, merging, paths = diagnostics["slam"], diagnostics["merging"], []
         rospy.Subscriber("/optimized_trajectory", Path, lambda m: paths.append(m), queue_size=100)
         launch_log = open(os.path.join(lt.artifact_dir(), "session_continue_roslaunch.log"), "w")
         pipeline = subprocess.Popen(["roslaunch", os.path.join(lt.repo_root(), "launch", "linemap.launch"),
@@ -113,13 +101,13 @@ class CheckSessionContinue(unittest.TestCase):
             lt.play(bag, RATE)
             limit = lt.work_limit(bag_seconds, RATE)
 
-            def found():
+            def found_at():
                 m = re.search(r"found at scan (\d+)", slam.get(key, ""))
                 return int(m.group(1)) if m else None
 
             # The scans before the robot was found only search; every later one goes to the SLAM; the merger
             # merges new keyframes into the saved map (how many of the scans it had to drop is not asserted).
-            lt.wait_until(lambda: found() is not None and int(slam.get("scans", "0")) + found() >= SECOND
+            lt.wait_until(lambda: found_at() is not None and int(slam.get("scans", "0")) + found_at() >= SECOND
                           and paths and len(paths[-1].poses) > len(saved) + 20
                           and int(merging.get("adjustments", "0")) >= 1
                           and int(merging.get("keyframes", "0")) > saved_map_keyframes,
@@ -131,12 +119,8 @@ class CheckSessionContinue(unittest.TestCase):
                                               merging.get("adjustments")),
                           limit, gone=lt.gone_nodes("/tf"))
         finally:
-            pipeline.send_signal(signal.SIGINT)
-            try:
-                pipeline.wait(30)
-            except subprocess.TimeoutExpired:
-                pipeline.kill()
-        found = int(re.search(r"found at scan (\d+)", slam[key]).group(1))
+            lt.stop(pipeline, 30)
+        found = found_at()
         last = paths[-1].poses
         moved = max(math.hypot(p.pose.position.x - x, p.pose.position.y - y)
                     for p, (_, x, y) in zip(last, saved))

@@ -15,7 +15,6 @@ import unittest
 import rospy
 import rostest
 import tf2_ros
-from diagnostic_msgs.msg import DiagnosticArray
 from line_map_msgs.srv import LoadMap, SaveMap
 from nav_msgs.msg import Path
 
@@ -40,17 +39,8 @@ class CheckSlamPipeline(unittest.TestCase):
             stamps = sorted(m.header.stamp.to_sec() for _, m, _ in b.read_messages(topics=["/scan", "scan"]))
         self.assertEqual(len(stamps), SCANS)
 
-        slam, merging, paths = {}, {}, []
-
-        def diag(msg):
-            for s in msg.status:
-                values = {kv.key: kv.value for kv in s.values}
-                if s.name.endswith("laser slam"):
-                    slam.update(values)
-                elif s.name.endswith("line map merging"):
-                    merging.update(values)
-
-        rospy.Subscriber("/diagnostics", DiagnosticArray, diag, queue_size=50)
+        diagnostics = lt.component_diagnostics(slam="laser slam", merging="line map merging")
+        slam, merging, paths = diagnostics["slam"], diagnostics["merging"], []
         rospy.Subscriber("/optimized_trajectory", Path, lambda m: paths.append(m), queue_size=100)
         buf = tf2_ros.Buffer(rospy.Duration(600))
         tf2_ros.TransformListener(buf)

@@ -178,6 +178,33 @@ def gone_nodes(*topics):
     return check
 
 
+def component_diagnostics(**components):
+    """Subscribes to /diagnostics: each keyword names a dict that takes the key-value pairs of the status
+    whose name ends with the given text (e.g. slam="laser slam"), and its message under "summary"."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    found = {name: {} for name in components}
+
+    def take(msg):
+        for s in msg.status:
+            for name, suffix in components.items():
+                if s.name.endswith(suffix):
+                    found[name].update({kv.key: kv.value for kv in s.values})
+                    found[name]["summary"] = s.message
+    rospy.Subscriber("/diagnostics", DiagnosticArray, take, queue_size=50)
+    return found
+
+
+def stop(proc, timeout):
+    """Stops a roslaunch child as Ctrl-C would; killed after `timeout` s."""
+    import signal
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
 def publishers(topic):
     """Nodes publishing `topic`, from the master."""
     import rosgraph
