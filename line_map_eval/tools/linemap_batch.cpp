@@ -326,6 +326,31 @@ BatchDataset slamDataset(const Arguments& a, const linemap::ParamSet& slam_param
                               "carmen+slam");
 }
 
+/// One line per run of `joined`: where it was placed and what it closed; returns how many were placed.
+std::size_t printRuns(const std::vector<std::string>& paths, const std::vector<Recording>& runs,
+                      const SessionsRun& joined, bool after_a_session)
+{
+  std::size_t placed = 0;
+  for (std::size_t r = 0; r < runs.size(); ++r)
+  {
+    std::cout << "  run " << r + 1 << " " << paths[r] << ": " << runs[r].scans.size() << " scans, ";
+    if (!joined.localized_at[r])
+    {
+      std::cout << "NOT placed: global localization found no pose in the map so far within its first 400 "
+                   "scans; left out\n";
+      continue;
+    }
+    ++placed;
+    std::cout << joined.keyframes[r].size() << " keyframes, "
+              << line_map_merging::closureSummary(joined.counters[r]);
+    if (after_a_session || r > 0)
+      std::cout << "; placed at scan " << *joined.localized_at[r] << ", " << joined.closures_to_earlier[r]
+                << " closures to earlier runs";
+    std::cout << "\n";
+  }
+  return placed;
+}
+
 /// Several runs (or runs after a saved session) mapped into one graph by the SLAM, then merged as one
 /// recording; the joined graph into `session`.
 BatchDataset sessionsDataset(const Arguments& a, const linemap::ParamSet& slam_params,
@@ -362,24 +387,7 @@ BatchDataset sessionsDataset(const Arguments& a, const linemap::ParamSet& slam_p
             << (saved ? " after the session " + a.session : std::string())
             << (use_odometry ? "" : ", no odometry") << ": " << joined.session.keyframes.size()
             << " keyframes in one graph, " << joined.cpu_seconds << " s CPU\n";
-  std::size_t placed = 0;
-  for (std::size_t r = 0; r < runs.size(); ++r)
-  {
-    std::cout << "  run " << r + 1 << " " << paths[r] << ": " << runs[r].scans.size() << " scans, ";
-    if (!joined.localized_at[r])
-    {
-      std::cout << "NOT placed: global localization found no pose in the map so far within its first 400 "
-                   "scans; left out\n";
-      continue;
-    }
-    ++placed;
-    std::cout << joined.keyframes[r].size() << " keyframes, "
-              << line_map_merging::closureSummary(joined.counters[r]);
-    if (saved || r > 0)
-      std::cout << "; placed at scan " << *joined.localized_at[r] << ", " << joined.closures_to_earlier[r]
-                << " closures to earlier runs";
-    std::cout << "\n";
-  }
+  const std::size_t placed = printRuns(paths, runs, joined, saved.has_value());
   if (placed == 0) throw std::runtime_error("no run could be placed in the session " + a.session);
   for (std::size_t r = 0; r < shifts.size(); ++r)
     if (shifts[r] != 0.0)

@@ -41,6 +41,33 @@ struct ScanOwner
   std::size_t scan = 0;
 };
 
+/// Every run's scans and keyframes at their poses in the joined graph `out.session`, by `owners` (one per
+/// session scan); the scans of `fresh_run` before its first keyframe are posed in the map frame already.
+void poseRunScans(const std::vector<ScanOwner>& owners, std::size_t fresh_run, SessionsRun& out)
+{
+  const auto& session = out.session;
+  const std::size_t n = out.scan_poses.size();
+  for (std::size_t k = 0; k < session.scans.size() && k < owners.size(); ++k)
+  {
+    const auto& scan = session.scans[k];
+    const ScanOwner& owner = owners[k];
+    std::optional<Pose2> pose;
+    if (scan.keyframe < session.nodes.size())
+      pose = session.nodes[scan.keyframe] * scan.relative;
+    else if (owner.run == fresh_run)
+      pose = scan.relative;
+    if (owner.run >= n)
+      out.saved_scan_poses.push_back(pose.value_or(scan.relative));  // as the SLAM itself reports it
+    else if (owner.scan < out.scan_poses[owner.run].size())
+      out.scan_poses[owner.run][owner.scan] = pose;
+  }
+  for (std::size_t k = 0; k < session.keyframes.size(); ++k)
+  {
+    const std::size_t scan = session.keyframes[k].scan;
+    if (scan < owners.size() && owners[scan].run < n)
+      out.keyframes[owners[scan].run].push_back({owners[scan].scan, session.nodes[k]});
+  }
+}
 }  // namespace
 
 SessionsRun runSessions(const std::vector<Recording>& runs,
@@ -96,27 +123,7 @@ SessionsRun runSessions(const std::vector<Recording>& runs,
   }
   if (!current) return out;
   out.session = std::move(*current);
-  const auto& session = out.session;
-  for (std::size_t k = 0; k < session.scans.size() && k < owners.size(); ++k)
-  {
-    const auto& scan = session.scans[k];
-    const ScanOwner& owner = owners[k];
-    std::optional<Pose2> pose;
-    if (scan.keyframe < session.nodes.size())
-      pose = session.nodes[scan.keyframe] * scan.relative;
-    else if (owner.run == fresh_run)
-      pose = scan.relative;
-    if (owner.run >= n)
-      out.saved_scan_poses.push_back(pose.value_or(scan.relative));  // as the SLAM itself reports it
-    else if (owner.scan < out.scan_poses[owner.run].size())
-      out.scan_poses[owner.run][owner.scan] = pose;
-  }
-  for (std::size_t k = 0; k < session.keyframes.size(); ++k)
-  {
-    const std::size_t scan = session.keyframes[k].scan;
-    if (scan < owners.size() && owners[scan].run < n)
-      out.keyframes[owners[scan].run].push_back({owners[scan].scan, session.nodes[k]});
-  }
+  poseRunScans(owners, fresh_run, out);
   return out;
 }
 
