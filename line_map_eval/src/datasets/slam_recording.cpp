@@ -27,6 +27,32 @@ line_map_merging::SlamScan slamScan(const Recording& recording, std::size_t inde
   return scan;
 }
 
+namespace
+{
+/// What the SLAM made of the run: the poses of the scans it accepted (`accepted`: their recording indices,
+/// in order) and of a continued session's saved scans, its new keyframes, closures, counters and session.
+void collectRun(const line_map_merging::LaserSlam& slam, std::size_t scans,
+                const SlamContinuation* continuation, const std::vector<std::size_t>& accepted,
+                SlamRecordingResult& result)
+{
+  const std::size_t saved_scans = continuation ? continuation->session.scans.size() : 0;
+  const auto poses = slam.scanPoses();
+  result.scan_poses.assign(scans, Pose2());
+  for (std::size_t k = 0; k < saved_scans && k < poses.size(); ++k)
+    result.continued_scan_poses.push_back(poses[k].second);
+  for (std::size_t k = saved_scans; k < poses.size() && k - saved_scans < accepted.size(); ++k)
+    result.scan_poses[accepted[k - saved_scans]] = poses[k].second;
+  const std::size_t saved_keyframes = continuation ? continuation->session.keyframes.size() : 0;
+  for (std::size_t k = saved_keyframes; k < slam.keyframes().size(); ++k)
+    result.keyframes.push_back({accepted[slam.keyframes()[k].scan - saved_scans], slam.graph().node(k)});
+  result.closures = slam.closureAttempts();
+  for (const auto& e : slam.graph().edges())
+    if (e.loop) result.loop_edges.push_back(e);
+  result.counters = slam.counters();
+  result.session = slam.session();
+}
+}  // namespace
+
 SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::LaserSlamParams& params,
                             bool use_odometry, const std::optional<FrontEndSlip>& slip,
                             const SlamContinuation* continuation)
@@ -45,7 +71,6 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
   if (continuation)
     search.emplace(continuation->session, continuation->localizer, continuation->search_scans,
                    continuation->start, continuation->sigma_xy, continuation->sigma_theta);
-  const std::size_t saved_scans = continuation ? continuation->session.scans.size() : 0;
   std::vector<std::size_t> accepted;  // recording index of each scan the SLAM accepted
   std::vector<std::size_t> held;      // recording index of each scan held by the search
   const auto add = [&](const line_map_merging::SlamScan& scan, std::size_t i)
@@ -79,20 +104,7 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
   }
   result.cpu_seconds = cpu() - cpu_start;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const auto poses = slam.scanPoses();
-  result.scan_poses.assign(recording.scans.size(), Pose2());
-  for (std::size_t k = 0; k < saved_scans && k < poses.size(); ++k)
-    result.continued_scan_poses.push_back(poses[k].second);
-  for (std::size_t k = saved_scans; k < poses.size() && k - saved_scans < accepted.size(); ++k)
-    result.scan_poses[accepted[k - saved_scans]] = poses[k].second;
-  const std::size_t saved_keyframes = continuation ? continuation->session.keyframes.size() : 0;
-  for (std::size_t k = saved_keyframes; k < slam.keyframes().size(); ++k)
-    result.keyframes.push_back({accepted[slam.keyframes()[k].scan - saved_scans], slam.graph().node(k)});
-  result.closures = slam.closureAttempts();
-  for (const auto& e : slam.graph().edges())
-    if (e.loop) result.loop_edges.push_back(e);
-  result.counters = slam.counters();
-  result.session = slam.session();
+  collectRun(slam, recording.scans.size(), continuation, accepted, result);
   return result;
 }
 
