@@ -3,11 +3,14 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "linemap/small_helpers.hpp"
 
@@ -38,6 +41,30 @@ std::string readFile(const std::string& path, const char* what)
   text << in.rdbuf();
   return text.str();
 }
+
+double cross(const Vec2& a, const Vec2& b)
+{
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+/// Shortest distance between the closed segments [p1, p2] and [q1, q2] (0 when they cross).
+double segmentDistance(const Vec2& p1, const Vec2& p2, const Vec2& q1, const Vec2& q2)
+{
+  const Vec2 r = p2 - p1, s = q2 - q1;
+  const double denom = cross(r, s);
+  if (std::abs(denom) > 1e-15)
+  {
+    const double t = cross(q1 - p1, s) / denom;
+    const double u = cross(q1 - p1, r) / denom;
+    if (t >= 0.0 && t <= 1.0 && u >= 0.0 && u <= 1.0) return 0.0;
+  }
+  return std::min({linemap::distanceToSegment(p1, q1, q2), linemap::distanceToSegment(p2, q1, q2),
+                   linemap::distanceToSegment(q1, p1, p2), linemap::distanceToSegment(q2, p1, p2)});
+}
+
+/// The keys of a world file's top level.
+const std::set<std::string> kWorldKeys{"name", "seed",  "walls",    "wall_thickness", "arc_sagitta",
+                                       "path", "laser", "odometry", "registration",   "min_visible_beams"};
 
 class WorldParser
 {
@@ -176,30 +203,81 @@ class WorldParser
     World w;
     w.source = source_;
     if (!root.IsDefined() || root.IsNull()) fail("(top level)", "the file is empty", root);
-    checkKeys(root, "",
-              {"name", "seed", "walls", "wall_thickness", "arc_sagitta", "path", "laser", "odometry",
-               "registration", "min_visible_beams"});
+    checkKeys(root, "", kWorldKeys);
     parseSettings(root, w);
     parseWalls(root, w);
     parsePath(root, w.path);
     if (const YAML::Node l = root["laser"]) laser(l, w.laser);
+    if (const YAML::Node odo = root["odometry"]) odometry(odo, w.odometry);
+    if (const YAML::Node reg = root["registration"]) registration(reg, w.registration);
+    return w;
+  }
+
+  /// The base world file of a world with `based_on`, relative to the directory of this one when it
+  /// is a file (else to the current directory).
+  std::string basePath(const YAML::Node& root) const
+  {
+    const YAML::Node n = root["based_on"];
+    if (!n.IsScalar() || n.Scalar().empty())
+      fail("based_on", "expected the path of the base world file (relative to this file's directory)", n);
+    std::filesystem::path base(n.Scalar());
+    std::error_code ec;
+    if (base.is_relative() && std::filesystem::is_regular_file(source_, ec))
+      base = std::filesystem::path(source_).parent_path() / base;
+    return base.string();
+  }
+
+  /// The world of `root`, which is `based_on` the world `base` read from `base_path`: the base with
+  /// this file's top-level keys in place of the base's (each key whole, as if the two top-level
+  /// maps were merged) and its `changes` applied to the base's walls. Not yet validated.
+  World derive(const YAML::Node& root, const World& base, const std::string& base_path) const
+  {
+    std::set<std::string> keys = kWorldKeys;
+    keys.insert({"based_on", "changes"});
+    checkKeys(root, "", keys);
+    if (root["walls"])
+      fail("walls",
+           "cannot be given with based_on (the walls are the base's: take some out and put others in "
+           "under changes: remove and add)",
+           root["walls"]);
+    if (root["wall_thickness"])
+      fail("wall_thickness",
+           "cannot be changed in a world based_on another (the base's walls keep their thickness; give an "
+           "added wall its own: {segment: [x1, y1, x2, y2], thickness: t})",
+           root["wall_thickness"]);
+    if (root["arc_sagitta"])
+      fail("arc_sagitta", "cannot be changed in a world based_on another (the base's arcs keep their pieces)",
+           root["arc_sagitta"]);
+
+    World w = base;
+    w.source = source_;
+    w.based_on = base_path;
+    w.removed_walls.clear();
+    w.added_walls.clear();
+    w.name.clear();  // this file's `name`, else its own base name
+    parseSettings(root, w);
+    if (root["path"])
+    {
+      w.path = PathModel{};
+      parsePath(root, w.path);
+    }
+    if (const YAML::Node l = root["laser"])
+    {
+      w.laser = LaserModel{};
+      laser(l, w.laser);
+    }
     if (const YAML::Node odo = root["odometry"])
     {
-      checkKeys(odo, "odometry", {"translation_noise", "rotation_noise", "heading_noise", "heading_bias"});
-      optionalNumber(odo, "odometry", "translation_noise", w.odometry.translation_noise, 0.0, false);
-      optionalNumber(odo, "odometry", "rotation_noise", w.odometry.rotation_noise, 0.0, false);
-      optionalNumber(odo, "odometry", "heading_noise", w.odometry.heading_noise, 0.0, false);
-      optionalNumber(odo, "odometry", "heading_bias", w.odometry.heading_bias, -HUGE_VAL, false);
+      w.odometry = OdometryModel{};
+      odometry(odo, w.odometry);
     }
     if (const YAML::Node reg = root["registration"])
     {
-      checkKeys(reg, "registration", {"position", "heading_deg", "correlation_length"});
-      optionalNumber(reg, "registration", "position", w.registration.position, 0.0, false);
-      double heading_deg = w.registration.heading * 180.0 / linemap::kPi;
-      optionalNumber(reg, "registration", "heading_deg", heading_deg, 0.0, false);
-      w.registration.heading = heading_deg * linemap::kPi / 180.0;
-      optionalNumber(reg, "registration", "correlation_length", w.registration.correlation_length, 0.0, true);
+      w.registration = RegistrationModel{};
+      registration(reg, w.registration);
     }
+    const YAML::Node changes = root["changes"];
+    if (changes && !changes.IsNull()) applyChanges(changes, base_path, w);
     return w;
   }
 
@@ -235,6 +313,116 @@ class WorldParser
       w.arc_sagitta = number(root["arc_sagitta"], "arc_sagitta");
       if (!(w.arc_sagitta > 0.0))
         fail("arc_sagitta", "must be > 0, got " + toString(w.arc_sagitta), root["arc_sagitta"]);
+    }
+  }
+
+  void odometry(const YAML::Node& odo, OdometryModel& out) const
+  {
+    checkKeys(odo, "odometry", {"translation_noise", "rotation_noise", "heading_noise", "heading_bias"});
+    optionalNumber(odo, "odometry", "translation_noise", out.translation_noise, 0.0, false);
+    optionalNumber(odo, "odometry", "rotation_noise", out.rotation_noise, 0.0, false);
+    optionalNumber(odo, "odometry", "heading_noise", out.heading_noise, 0.0, false);
+    optionalNumber(odo, "odometry", "heading_bias", out.heading_bias, -HUGE_VAL, false);
+  }
+
+  void registration(const YAML::Node& reg, RegistrationModel& out) const
+  {
+    checkKeys(reg, "registration", {"position", "heading_deg", "correlation_length"});
+    optionalNumber(reg, "registration", "position", out.position, 0.0, false);
+    double heading_deg = out.heading * 180.0 / linemap::kPi;
+    optionalNumber(reg, "registration", "heading_deg", heading_deg, 0.0, false);
+    out.heading = heading_deg * linemap::kPi / 180.0;
+    optionalNumber(reg, "registration", "correlation_length", out.correlation_length, 0.0, true);
+  }
+
+  /// `changes: {remove, add}` of a world based_on `base_path`, applied to `w`, the base's world (its
+  /// path already the final one).
+  void applyChanges(const YAML::Node& changes, const std::string& base_path, World& w) const
+  {
+    checkKeys(changes, "changes", {"remove", "add"});
+    // removed_by[k]: the entry of changes.remove that takes out the base's walls[k], -1 for none.
+    std::vector<int> removed_by(w.walls.size(), -1);
+    if (const YAML::Node remove = changes["remove"])
+    {
+      if (!remove.IsSequence())
+        fail("changes/remove", "expected a list of [x1, y1, x2, y2] (centre lines of the base's walls)",
+             remove);
+      for (std::size_t i = 0; i < remove.size(); ++i)
+      {
+        const std::string key = "changes/remove[" + std::to_string(i) + "]";
+        const auto v = numbers(remove[i], key, 4, "[x1, y1, x2, y2] (the centre line of a wall of the base)");
+        const Vec2 a(v[0], v[1]), b(v[2], v[3]);
+        const auto near = [](const Vec2& p, const Vec2& q)
+        { return std::abs(p.x() - q.x()) <= 1e-6 && std::abs(p.y() - q.y()) <= 1e-6; };
+        int taken_by = -1;
+        bool found = false;
+        for (std::size_t k = 0; k < w.walls.size() && !found; ++k)
+        {
+          const linemap::Segment2& s = w.walls[k].segment;
+          if (!((near(s.start, a) && near(s.end, b)) || (near(s.start, b) && near(s.end, a)))) continue;
+          if (removed_by[k] >= 0)
+          {
+            taken_by = removed_by[k];
+            continue;
+          }
+          removed_by[k] = static_cast<int>(i);
+          w.removed_walls.push_back(w.walls[k]);
+          found = true;
+        }
+        if (found) continue;
+        const std::string line = "[" + toString(v[0]) + ", " + toString(v[1]) + ", " + toString(v[2]) + ", " +
+                                 toString(v[3]) + "]";
+        if (taken_by >= 0)
+          fail(key,
+               "removes the wall " + line + " again (changes/remove[" + std::to_string(taken_by) +
+                   "] takes it out)",
+               remove[i]);
+        fail(key,
+             "matches no wall of the base world " + base_path + ": no centre line is " + line +
+                 " (to 1e-06 m, in either direction)",
+             remove[i]);
+      }
+    }
+    std::vector<Wall> kept;
+    for (std::size_t k = 0; k < w.walls.size(); ++k)
+      if (removed_by[k] < 0) kept.push_back(w.walls[k]);
+    w.walls = std::move(kept);
+
+    if (const YAML::Node add = changes["add"])
+    {
+      if (!add.IsSequence()) fail("changes/add", "expected a list of walls, written as in walls", add);
+      int arcs = 0;  // the added arcs are numbered after the base's
+      for (const Wall& wall : w.walls) arcs = std::max(arcs, wall.arc + 1);
+      for (const Wall& wall : w.removed_walls) arcs = std::max(arcs, wall.arc + 1);
+      for (std::size_t i = 0; i < add.size(); ++i)
+      {
+        const std::string key = "changes/add[" + std::to_string(i) + "]";
+        const std::size_t first = w.walls.size();
+        parseWall(add[i], key, w, arcs);
+        w.added_walls.insert(w.added_walls.end(), w.walls.begin() + static_cast<std::ptrdiff_t>(first),
+                             w.walls.end());
+        for (std::size_t k = first; k < w.walls.size(); ++k) checkClearance(w.walls[k], w.path, key, add[i]);
+      }
+    }
+  }
+
+  /// An added wall that the path passes closer than its clearance, named with its entry's line
+  /// (validateWorld() finds it too, but only by its index in the changed world's walls).
+  void checkClearance(const Wall& wall, const PathModel& path, const std::string& key,
+                      const YAML::Node& at) const
+  {
+    const auto& wp = path.waypoints;
+    for (std::size_t i = 0; i < wp.size(); ++i)
+    {
+      const std::size_t j = (i + 1) % wp.size();
+      const double d =
+          segmentDistance(wp[i], wp[j], wall.segment.start, wall.segment.end) - 0.5 * wall.thickness;
+      if (d < path.clearance)
+        fail(key,
+             "the path's leg from waypoint " + std::to_string(i) + " to waypoint " + std::to_string(j) +
+                 " passes " + toString(d) + " m from the surface of this wall (path/clearance is " +
+                 toString(path.clearance) + " m)",
+             at);
     }
   }
 
@@ -317,33 +505,54 @@ class WorldParser
   std::string source_;
 };
 
-double cross(const Vec2& a, const Vec2& b)
+/// The world files being read, outermost first: each file's path as named and as a canonical key.
+using BasedOnChain = std::vector<std::pair<std::string, std::string>>;
+
+std::string canonicalKey(const std::string& path)
 {
-  return a.x() * b.y() - a.y() * b.x();
+  std::error_code ec;
+  const std::filesystem::path p = std::filesystem::weakly_canonical(path, ec);
+  return ec ? std::filesystem::path(path).lexically_normal().string() : p.string();
 }
 
-/// Shortest distance between the closed segments [p1, p2] and [q1, q2] (0 when they cross).
-double segmentDistance(const Vec2& p1, const Vec2& p2, const Vec2& q1, const Vec2& q2)
+World parseWorldIn(const std::string& yaml_text, const std::string& source, BasedOnChain& chain)
 {
-  const Vec2 r = p2 - p1, s = q2 - q1;
-  const double denom = cross(r, s);
-  if (std::abs(denom) > 1e-15)
+  const YAML::Node root = loadYaml(yaml_text, source);
+  const WorldParser parser(source);
+  if (!root.IsMap() || !root["based_on"])
   {
-    const double t = cross(q1 - p1, s) / denom;
-    const double u = cross(q1 - p1, r) / denom;
-    if (t >= 0.0 && t <= 1.0 && u >= 0.0 && u <= 1.0) return 0.0;
+    World w = parser.parse(root);
+    validateWorld(w);
+    return w;
   }
-  return std::min({linemap::distanceToSegment(p1, q1, q2), linemap::distanceToSegment(p2, q1, q2),
-                   linemap::distanceToSegment(q1, p1, p2), linemap::distanceToSegment(q2, p1, p2)});
+  const std::string base_path = parser.basePath(root);
+  const std::string key = canonicalKey(base_path);
+  for (const auto& link : chain)
+    if (link.second == key)
+    {
+      std::string cycle;
+      for (const auto& named : chain) cycle += named.first + " -> ";
+      parser.fail("based_on", "a cycle of based_on: " + cycle + base_path, root["based_on"]);
+    }
+  std::ifstream in(base_path);
+  if (!in) parser.fail("based_on", "cannot open the base world file " + base_path, root["based_on"]);
+  std::stringstream text;
+  text << in.rdbuf();
+  chain.emplace_back(base_path, key);
+  const World base = parseWorldIn(text.str(), base_path, chain);
+  chain.pop_back();
+  World w = parser.derive(root, base, base_path);
+  validateWorld(w);
+  return w;
 }
-
 }  // namespace
 
 World parseWorld(const std::string& yaml_text, const std::string& source)
 {
-  World w = WorldParser(source).parse(loadYaml(yaml_text, source));
-  validateWorld(w);
-  return w;
+  BasedOnChain chain;
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(source, ec)) chain.emplace_back(source, canonicalKey(source));
+  return parseWorldIn(yaml_text, source, chain);
 }
 
 World loadWorld(const std::string& path)

@@ -86,6 +86,14 @@ struct World
   std::string name;    ///< YAML `name`, else the file's base name
   std::string source;  ///< the file it came from (for messages)
   std::vector<Wall> walls;
+  /// A world `based_on` another (the same building at a later session): the base file as resolved
+  /// (relative to this file's directory), the base's walls its `changes` took out, in the order of
+  /// `changes.remove`, and the walls it put in, in the order of `changes.add` (an arc's pieces in
+  /// turn); `walls` is the base's walls less the removed ones, in the base's order, then the added
+  /// ones. Empty for a world of its own (and relative to the direct base in a chain of them).
+  std::string based_on;
+  std::vector<Wall> removed_walls;
+  std::vector<Wall> added_walls;
   double wall_thickness = kDefaultWallThickness;  ///< YAML `wall_thickness`: of walls without their own [m]
   double arc_sagitta = kDefaultArcSagitta;        ///< YAML `arc_sagitta`: bound of the arcs' pieces [m]
   PathModel path;
@@ -100,9 +108,17 @@ struct World
 
 /// Reads a world file. Throws std::runtime_error naming the file, the key and the line
 /// for a missing key, a malformed value or a path that runs into a wall.
+///
+/// A file with `based_on: FILE` (relative to its own directory) is the base world changed: its
+/// `changes: {remove: [[x1, y1, x2, y2], ...], add: [WALL, ...]}` take out the base's walls with
+/// those centre lines (to 1e-6 m, either direction; one that matches none is an error) and add walls
+/// written as in `walls`. Its other top-level keys replace the base's whole (`name`, `seed`,
+/// `min_visible_beams`, `path`, `laser`, `odometry`, `registration`); `walls`, `wall_thickness` and
+/// `arc_sagitta` are refused. Bases may be based_on others in turn; a cycle is an error.
 World loadWorld(const std::string& path);
 
-/// Same from YAML text; `source` names it in error messages.
+/// Same from YAML text; `source` names it in error messages and, when it is a file, a relative
+/// `based_on` is relative to its directory (else to the current directory).
 World parseWorld(const std::string& yaml_text, const std::string& source);
 
 /// A sensor profile (config/sensors/*.yaml): an optional `name` and a `laser` block with the keys
