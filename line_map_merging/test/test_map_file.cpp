@@ -95,7 +95,7 @@ TEST(MapFile, SaveLoadSaveGivesIdenticalFiles)
   const std::string a = slurp(first), b = slurp(second);
   EXPECT_GT(a.size(), 1000u);
   EXPECT_EQ(a, b);
-  EXPECT_EQ(a.rfind("format_version: 3", 0), 0u) << "format_version must come first";
+  EXPECT_EQ(a.rfind("format_version: 4", 0), 0u) << "format_version must come first";
   std::remove(first.c_str());
   std::remove(second.c_str());
 }
@@ -170,8 +170,8 @@ TEST(MapFile, BadFilesLeaveTheMapUntouched)
   expectRejected("", "empty", bad);
   expectRejected(std::string("\x01\x02garbage: [unclosed\n"), "garbage", bad);
   std::string wrong_version = text;
-  wrong_version.replace(0, std::string("format_version: 3").size(), "format_version: 4");
-  expectRejected(wrong_version, "wrong version", "format_version 4");
+  wrong_version.replace(0, std::string("format_version: 4").size(), "format_version: 5");
+  expectRejected(wrong_version, "wrong version", "format_version 5");
   std::string corrupt = text;
   const std::size_t pos = corrupt.find("segment: [") + 10;
   corrupt.replace(pos, 1, "x");

@@ -7,11 +7,12 @@
 //   regroup.cpp              regroup on adjustment, resumed from a checkpoint where nothing moved
 //   crossing_resolution.cpp  no two map segments cross (bent walls into chains, T junctions)
 //   mp_gma.cpp               MP-GMA: adjust() to new keyframe poses, the consistency pass
+//   see_through.cpp          a later session retires the originals its scans see through
 //   map_file.cpp             save() and load(): the map file (YAML)
 //
 // Provenance tree: root = the map; children = map segments (stable ids); leaves = the original
-// segments in their keyframe's laser frame. Leaves are never dropped, so the map can always be
-// rebuilt from them under new keyframe poses.
+// segments in their keyframe's laser frame. Leaves are dropped only when a later session sees through
+// them (see_through), so the map can always be rebuilt from them under new keyframe poses.
 #pragma once
 
 #include <tbb/task_arena.h>
@@ -75,10 +76,23 @@ struct CaeParams
   /// and the first original of another keyframe fused into it admits it. Its originals stay in the
   /// provenance either way. 0 = every map segment is shown (the paper's behaviour).
   double single_view_min_length = 0.6;
+  /// A map that follows the building (see_through.cpp): the space between a keyframe's laser and each
+  /// segment it extracted is free, so an original of an EARLIER session lying in that space (by more
+  /// than see_through_margin from its sides and from the segment) was seen through: the wall it
+  /// stood for is gone. An original seen through over half its length by see_through_views keyframes
+  /// (with no keyframe between them seeing it in place) is retired; its map segment is re-fused from
+  /// the rest, or retired with its last original. Within one session nothing is retired: before a
+  /// loop closes, the drift alone would make a scan see through the walls it mapped before.
+  bool see_through = true;
+  /// [m] Above the disagreement of two sessions' poses and the range noise, below a wall's distance
+  /// from the next surface behind it (a door's depth, a room's width).
+  double see_through_margin = 0.25;
+  int see_through_views = 2;
 
   /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge",
   /// "absorb_contained", "regroup_on_adjust", "incremental_regroup", "resolve_crossings",
-  /// "crossing_overhang", "crossing_chain_angle", "single_view_min_length".
+  /// "crossing_overhang", "crossing_chain_angle", "single_view_min_length", "see_through",
+  /// "see_through_margin", "see_through_views".
   static CaeParams fromParams(const linemap::ParamSet& params);
   /// Throws linemap::ParameterError naming the key for an out-of-range value.
   void validate() const;
@@ -111,6 +125,11 @@ class CaeRlsm : public Merger
 
   const CaeParams& params() const { return params_; }
   std::uint64_t nextId() const { return next_id_; }
+  /// The session new keyframes join (KeyframeInfo::session).
+  std::uint32_t session() const { return session_; }
+  /// Originals and map segments retired as seen through (see_through) since construction or load.
+  std::size_t retiredLeaves() const { return retired_leaves_; }
+  std::size_t retiredSegments() const { return retired_segments_; }
 
   /// The steps of a keyframe (OTM-ILSM, map merge, crossing resolution) and of an adjustment.
   enum Step : std::size_t
@@ -122,8 +141,9 @@ class CaeRlsm : public Merger
     kAdjustOtm,  ///< regroup: the keyframe steps again, counted apart
     kAdjustMapMerge,
     kAdjustCrossings,
-    kAdjustIds,     ///< regroup: ids carried over, index rebuilt
-    kAdjustRefuse,  ///< without regroup: re-fusing, the consistency pass, crossings
+    kAdjustIds,           ///< regroup: ids carried over, index rebuilt
+    kAdjustRefuse,        ///< without regroup: re-fusing, the consistency pass, crossings
+    kKeyframeSeeThrough,  ///< a continued session's keyframe: originals it sees through retired
     kStepCount
   };
   /// Regroups that resumed from the last one's state (incremental_regroup) since construction.
@@ -151,6 +171,7 @@ class CaeRlsm : public Merger
   {
     std::uint32_t slot = 0;  // into keyframes_
     Segment2 local;
+    std::uint16_t seen_through = 0;  // keyframes of later sessions that saw through it, since one saw it
   };
 
   struct Node
@@ -215,6 +236,15 @@ class CaeRlsm : public Merger
   void indexUpdate(std::uint64_t id, Node& node);
   void indexRemove(std::uint64_t id, const Node& node);
 
+  // See-through retirement (see_through.cpp).
+  /// Votes with the keyframe at `slot` on the originals of earlier sessions in the free space before
+  /// its segments (`local`, its laser frame), retires those seen through often enough and re-fuses
+  /// or retires their map segments; the ids of map segments changed go to `changed`. Returns the
+  /// number of originals retired.
+  std::size_t retireSeenThrough(std::uint32_t slot, const std::vector<Segment2>& local, IdQueue& changed);
+  /// Drops the `retired` leaves (sorted) from leaves_ and their map segments.
+  void dropLeaves(const std::vector<std::uint32_t>& retired, IdQueue& changed);
+
   // MP-GMA (mp_gma.cpp).
   /// The keyframes' new poses and transforms (counted in `result`: moved, unknown).
   void moveKeyframes(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses,
@@ -267,9 +297,11 @@ class CaeRlsm : public Merger
   RTree index_;
   bool index_stale_ = false;  // set by adjust(): rebuilt in one go by the next search
   std::uint64_t next_id_ = 0;
+  std::uint32_t session_ = 0;
+  std::size_t retired_leaves_ = 0, retired_segments_ = 0;
   StepTimes<kStepCount> steps_{{"keyframe: OTM-ILSM", "keyframe: map merge", "keyframe: crossings",
                                 "adjust: poses", "adjust: OTM-ILSM", "adjust: map merge", "adjust: crossings",
-                                "adjust: ids and index", "adjust: re-fuse"}};
+                                "adjust: ids and index", "adjust: re-fuse", "keyframe: see-through"}};
   mutable std::vector<std::uint64_t> candidates_;  // scratch
   mutable std::vector<Entry> hits_;                // scratch
 };

@@ -39,6 +39,9 @@ struct KeyframeInfo
   /// Stamp matching gives a trajectory pose to this keyframe only when no other scan was nearer.
   double scan_gap_before = std::numeric_limits<double>::infinity();
   double scan_gap_after = std::numeric_limits<double>::infinity();
+  /// The mapping session it was merged in: 0 for a map begun from nothing, one more than the
+  /// loaded map's newest for a map continued from a file (CAE-RLSM; see CaeParams::see_through).
+  std::uint32_t session = 0;
 };
 
 /// One segment of the merged map.
@@ -60,6 +63,7 @@ struct AddResult
 {
   std::size_t merged = 0;    ///< segments that entered the map
   std::size_t rejected = 0;  ///< non-finite or zero-length segments, skipped
+  std::size_t retired = 0;   ///< original segments of earlier sessions this keyframe saw through, retired
 };
 
 struct AdjustResult

@@ -25,6 +25,9 @@ CaeParams CaeParams::fromParams(const linemap::ParamSet& params)
   p.crossing_overhang = params.getDouble("crossing_overhang", p.crossing_overhang);
   p.crossing_chain_angle = params.getDouble("crossing_chain_angle", p.crossing_chain_angle);
   p.single_view_min_length = params.getDouble("single_view_min_length", p.single_view_min_length);
+  p.see_through = params.getBool("see_through", p.see_through);
+  p.see_through_margin = params.getDouble("see_through_margin", p.see_through_margin);
+  p.see_through_views = params.getInt("see_through_views", p.see_through_views);
   p.validate();
   return p;
 }
@@ -42,6 +45,12 @@ void CaeParams::validate() const
   if (!(single_view_min_length >= 0.0 && std::isfinite(single_view_min_length)))
     throw linemap::ParameterError("parameter 'single_view_min_length': " +
                                   std::to_string(single_view_min_length) + " is not a finite length >= 0 m");
+  if (!(see_through_margin > 0.0 && std::isfinite(see_through_margin)))
+    throw linemap::ParameterError("parameter 'see_through_margin': " + std::to_string(see_through_margin) +
+                                  " is not a finite distance > 0 m");
+  if (see_through_views < 1 || see_through_views > 1000)
+    throw linemap::ParameterError("parameter 'see_through_views': " + std::to_string(see_through_views) +
+                                  " is not in [1, 1000]");
 }
 
 CaeRlsm::CaeRlsm(const CaeParams& params) : params_(params)
@@ -69,12 +78,18 @@ AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
   const auto slot = static_cast<std::uint32_t>(keyframes_.size());
   slot_of_.emplace(keyframe.index, slot);
   keyframes_.push_back({keyframe.index, keyframe.stamp, p, m});
+  keyframes_.back().session = session_;
   transforms_.emplace_back();
   const double c = std::cos(p.theta), s = std::sin(p.theta);
   transforms_.back() << c, -s, p.x, s, c, p.y;
 
   AddResult result;
   IdQueue touched;
+  if (params_.see_through && session_ > 0)
+  {
+    const StepTimes<kStepCount>::Scope timed(steps_, kKeyframeSeeThrough);
+    result.retired = retireSeenThrough(slot, keyframe.segments, touched);
+  }
   {
     const StepTimes<kStepCount>::Scope timed(steps_, kKeyframeOtm);
     for (const Segment2& local : keyframe.segments)
@@ -166,6 +181,8 @@ void CaeRlsm::reset()
   index_.clear();
   index_stale_ = false;
   next_id_ = 0;
+  session_ = 0;
+  retired_leaves_ = retired_segments_ = 0;
   checkpoint_ = RegroupCheckpoint();
   steps_.clear();
 }

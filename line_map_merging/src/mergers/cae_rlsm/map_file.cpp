@@ -17,9 +17,9 @@ namespace line_map_merging
 {
 namespace
 {
-// 2: parameters gained 'weighting', 'map_merge' and 'regroup_on_adjust'. 3: 'absorb_contained'. Older
-// files still load (see load()).
-constexpr int kFormatVersion = 3;
+// 2: parameters gained 'weighting', 'map_merge' and 'regroup_on_adjust'. 3: 'absorb_contained'.
+// 4: a keyframe entry may carry its session (a 9th number). Older files still load (see load()).
+constexpr int kFormatVersion = 4;
 constexpr int kOldestFormatVersion = 1;
 
 std::string where(const std::string& path, const YAML::Node& node, const std::string& field)
@@ -190,7 +190,9 @@ std::string CaeRlsm::mapText() const
   for (const KeyframeInfo& k : keyframes())
   {
     out << YAML::Flow << YAML::BeginSeq << k.index << k.stamp << k.pose.x << k.pose.y << k.pose.theta
-        << k.mount.x << k.mount.y << k.mount.theta << YAML::EndSeq;
+        << k.mount.x << k.mount.y << k.mount.theta;
+    if (k.session > 0) out << k.session;  // a map of one session is written as before sessions existed
+    out << YAML::EndSeq;
   }
   out << YAML::EndSeq;
 
@@ -267,16 +269,21 @@ void CaeRlsm::loadKeyframes(const std::string& path, const YAML::Node& root)
                        " must list keyframe_count = " + std::to_string(keyframe_count) + " keyframes");
   for (const YAML::Node& k : keyframes)
   {
-    if (!k.IsSequence() || k.size() != 8)
+    if (!k.IsSequence() || (k.size() != 8 && k.size() != 9))
       throw MapFileError(where(path, k, "keyframes") +
-                         " entries must be [index, stamp, x, y, theta, mount_x, mount_y, mount_theta]");
+                         " entries must be [index, stamp, x, y, theta, mount_x, mount_y, mount_theta, "
+                         "session (optional)]");
     const auto index = read<std::uint64_t>(path, k[0], "keyframes/index");
-    const std::vector<double> v = readNumbers(path, k, "keyframes", 8);
+    const std::vector<double> v = readNumbers(path, k, "keyframes", k.size());
+    const std::uint32_t session = k.size() == 9 ? read<std::uint32_t>(path, k[8], "keyframes/session") : 0;
     if (slot_of_.count(index))
       throw MapFileError(where(path, k, "keyframes") + ": keyframe index " + std::to_string(index) +
                          " repeated");
     slot_of_.emplace(index, static_cast<std::uint32_t>(keyframes_.size()));
     keyframes_.push_back({index, v[1], {v[2], v[3], v[4]}, {v[5], v[6], v[7]}});
+    keyframes_.back().session = session;
+    // Keyframes merged after this load belong to a later session.
+    session_ = std::max(session_, session + 1);
   }
   updateTransforms();
 }

@@ -1,0 +1,217 @@
+// A map that follows the building: a keyframe of a later session that sees through an original of an
+// earlier one votes to retire it. The witness is the keyframe's own segments: every beam that hit a
+// segment crossed the triangle between the laser and that segment, so that triangle, eroded by the
+// margin on its three sides, is free space. An original lying there over half its length was seen
+// through by the keyframe; one lying along a segment (within the margin) was seen in place, which
+// clears its votes. Only originals of earlier sessions are judged: within a session, drift before a loop
+// closes would see through the walls it mapped itself.
+#include <algorithm>
+#include <array>
+#include <unordered_map>
+#include <vector>
+
+#include "line_map_merging/mergers/cae_rlsm.hpp"
+
+namespace line_map_merging
+{
+namespace
+{
+namespace bgi = boost::geometry::index;
+
+double cross(const Vec2& a, const Vec2& b)
+{
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+/// A half-plane h(x) = n.x - c >= 0.
+struct HalfPlane
+{
+  Vec2 n;
+  double c;
+};
+
+/// The length of `s` inside every half-plane (Liang-Barsky clipping).
+double insideLength(const Segment2& s, const HalfPlane* planes, std::size_t count)
+{
+  const Vec2 d = s.end - s.start;
+  double lo = 0.0, hi = 1.0;
+  for (std::size_t i = 0; i < count && lo < hi; ++i)
+  {
+    const double at_start = planes[i].n.dot(s.start) - planes[i].c;
+    const double slope = planes[i].n.dot(d);
+    if (slope == 0.0)
+    {
+      if (at_start < 0.0) return 0.0;
+      continue;
+    }
+    const double t = -at_start / slope;
+    if (slope > 0.0)
+      lo = std::max(lo, t);
+    else
+      hi = std::min(hi, t);
+  }
+  return hi > lo ? (hi - lo) * d.norm() : 0.0;
+}
+
+/// What one extracted segment shows: the free triangle before it, and the band along it.
+struct Witness
+{
+  HalfPlane free[3];          // inside both sides' rays and before the segment, each by the margin
+  HalfPlane band[4];          // within the rays, and within the margin of the segment's line
+  std::array<double, 4> box;  // min x, min y, max x, max y of the triangle
+};
+
+/// The witness of `segment` (map frame) seen from `laser`; false when it shows nothing (a segment
+/// through the laser, or too short to leave a free triangle after the erosion).
+bool makeWitness(const Vec2& laser, Segment2 segment, double margin, Witness& w)
+{
+  Vec2 a = segment.start - laser, b = segment.end - laser;
+  if (cross(a, b) < 0.0) std::swap(a, b);  // counter-clockwise: the inside is left of o->a, right of o->b
+  const double na = a.norm(), nb = b.norm(), ab = (b - a).norm();
+  if (na == 0.0 || nb == 0.0 || ab <= 2.0 * margin) return false;
+  const Vec2 ua = a / na, ub = b / nb;
+  // Outward normal of the segment's side (away from the laser) and the laser's distance from its line.
+  const Vec2 outward = Vec2((b - a).y(), -(b - a).x()) / ab;
+  const double distance = outward.dot(a);
+  if (distance <= margin) return false;
+  // In laser-relative coordinates x' = x - laser: n.x' - c >= 0  <=>  n.x - (c + n.laser) >= 0.
+  const HalfPlane left{Vec2(-ua.y(), ua.x()), 0.0};   // cross(ua, x') >= 0
+  const HalfPlane right{Vec2(ub.y(), -ub.x()), 0.0};  // cross(x', ub) >= 0
+  const HalfPlane before{-outward, -distance};        // outward.x' <= distance
+  const HalfPlane behind{outward, distance};          // outward.x' >= distance
+  const auto shifted = [&](const HalfPlane& h, double by) {
+    return HalfPlane{h.n, h.c + by + h.n.dot(laser)};
+  };
+  w.free[0] = shifted(left, margin);
+  w.free[1] = shifted(right, margin);
+  w.free[2] = shifted(before, margin);
+  w.band[0] = shifted(left, 0.0);
+  w.band[1] = shifted(right, 0.0);
+  w.band[2] = shifted(before, -margin);
+  w.band[3] = shifted(behind, -margin);
+  w.box = {std::min({laser.x(), segment.start.x(), segment.end.x()}),
+           std::min({laser.y(), segment.start.y(), segment.end.y()}),
+           std::max({laser.x(), segment.start.x(), segment.end.x()}),
+           std::max({laser.y(), segment.start.y(), segment.end.y()})};
+  return true;
+}
+
+}  // namespace
+
+std::size_t CaeRlsm::retireSeenThrough(std::uint32_t slot, const std::vector<Segment2>& local,
+                                       IdQueue& changed)
+{
+  const Transform& t = transforms_[slot];
+  const Vec2 laser = t.col(2);
+  std::vector<Witness> witnesses;
+  witnesses.reserve(local.size());
+  for (const Segment2& s : local)
+  {
+    if (!isValidSegment(s)) continue;
+    const Segment2 world{t.leftCols<2>() * s.start + t.col(2), t.leftCols<2>() * s.end + t.col(2)};
+    Witness w;
+    if (makeWitness(laser, world, params_.see_through_margin, w)) witnesses.push_back(w);
+  }
+  if (witnesses.empty()) return 0;
+
+  // Per original of an earlier session near the witnesses: its length seen through and seen in place.
+  struct Seen
+  {
+    double through = 0.0, in_place = 0.0;
+  };
+  std::unordered_map<std::uint32_t, Seen> seen;
+  std::vector<std::uint64_t> near;
+  for (const Witness& w : witnesses)
+  {
+    near.clear();
+    if (params_.spatial_index)
+    {
+      if (index_stale_) rebuildIndex();
+      hits_.clear();
+      index_.query(bgi::intersects(Box(Point(w.box[0], w.box[1]), Point(w.box[2], w.box[3]))),
+                   std::back_inserter(hits_));
+      for (const Entry& e : hits_) near.push_back(e.second);
+    }
+    else
+    {
+      for (const auto& entry : nodes_) near.push_back(entry.first);
+    }
+    for (std::uint64_t id : near)
+      for (std::uint32_t l : nodes_.at(id).leaves)
+      {
+        if (keyframes_[leaves_[l].slot].session >= session_) continue;
+        const Segment2 world = worldLeaf(l);
+        const double through = insideLength(world, w.free, 3);
+        const double in_place = insideLength(world, w.band, 4);
+        if (through == 0.0 && in_place == 0.0) continue;
+        Seen& s = seen[l];
+        s.through += through;
+        s.in_place += in_place;
+      }
+  }
+
+  std::vector<std::uint32_t> retired;
+  for (const auto& [l, s] : seen)
+  {
+    LeafRecord& leaf = leaves_[l];
+    const double half = 0.5 * leaf.local.length();
+    if (s.in_place >= half)
+      leaf.seen_through = 0;
+    else if (s.through >= half && ++leaf.seen_through >= params_.see_through_views)
+      retired.push_back(l);
+  }
+  if (retired.empty()) return 0;
+  std::sort(retired.begin(), retired.end());
+  dropLeaves(retired, changed);
+  return retired.size();
+}
+
+void CaeRlsm::dropLeaves(const std::vector<std::uint32_t>& retired, IdQueue& changed)
+{
+  // Renumber the leaves that stay, in order, so the arrival order a regroup replays is kept.
+  std::vector<std::uint32_t> renumbered(leaves_.size(), UINT32_MAX);
+  std::vector<LeafRecord> kept;
+  kept.reserve(leaves_.size() - retired.size());
+  auto next_retired = retired.begin();
+  for (std::uint32_t l = 0; l < leaves_.size(); ++l)
+  {
+    if (next_retired != retired.end() && *next_retired == l)
+    {
+      ++next_retired;
+      continue;
+    }
+    renumbered[l] = static_cast<std::uint32_t>(kept.size());
+    kept.push_back(leaves_[l]);
+  }
+  leaves_ = std::move(kept);
+  retired_leaves_ += retired.size();
+
+  std::vector<std::uint64_t> emptied;
+  for (auto& [id, node] : nodes_)
+  {
+    const std::size_t before = node.leaves.size();
+    std::vector<std::uint32_t> leaves;
+    leaves.reserve(before);
+    for (std::uint32_t l : node.leaves)
+      if (renumbered[l] != UINT32_MAX) leaves.push_back(renumbered[l]);
+    node.leaves = std::move(leaves);
+    if (node.leaves.empty())
+      emptied.push_back(id);
+    else if (node.leaves.size() != before)
+    {
+      refuse(node);
+      indexUpdate(id, node);
+      changed.insert(id);
+    }
+  }
+  for (std::uint64_t id : emptied)
+  {
+    indexRemove(id, nodes_.at(id));
+    nodes_.erase(id);
+  }
+  retired_segments_ += emptied.size();
+  // The regroup checkpoint names leaves by their old numbers.
+  checkpoint_ = RegroupCheckpoint{false, {}, 0, {}, 0, checkpoint_.resumed};
+}
+
+}  // namespace line_map_merging
