@@ -463,14 +463,19 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
   return r;
 }
 
+SeenParts seenPartsOf(const GroundTruth& truth, const GroundTruthParams& params)
+{
+  SeenParts seen = seenParts(truth, params.min_seen_length, params.min_seen_beams);
+  if (params.accumulate_sightings)
+    seen = unionOfSeenParts(seen, accumulatedSeenParts(truth, params.min_seen_length, params.min_seen_beams));
+  return seen;
+}
+
 GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth, const std::vector<Segment2>& map,
                                              const GroundTruthParams& params)
 {
   params.validate();
-  SeenParts seen = seenParts(truth, params.min_seen_length, params.min_seen_beams);
-  if (params.accumulate_sightings)
-    seen = unionOfSeenParts(seen, accumulatedSeenParts(truth, params.min_seen_length, params.min_seen_beams));
-  return evaluateAgainstGroundTruth(truth.walls, seen, map, params, truth.curves,
+  return evaluateAgainstGroundTruth(truth.walls, seenPartsOf(truth, params), map, params, truth.curves,
                                     registrationSlack(truth, params.registration_sigmas));
 }
 

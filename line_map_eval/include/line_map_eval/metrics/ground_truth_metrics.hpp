@@ -133,6 +133,10 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<linemap::Segment2
 /// range of the scans that saw it (all 0 without a registration error).
 std::vector<double> registrationSlack(const GroundTruth& truth, double registration_sigmas);
 
+/// The parts of `truth`'s faces that count as seen: seenParts with min_seen_length and min_seen_beams, and
+/// with accumulate_sightings their union with accumulatedSeenParts.
+SeenParts seenPartsOf(const GroundTruth& truth, const GroundTruthParams& params);
+
 /// Against a simulation's ground truth: its faces over their parts seen in sights (seenParts with
 /// min_seen_length and min_seen_beams), its curves' joints excluded, with its registrationSlack.
 GroundTruthResult evaluateAgainstGroundTruth(const GroundTruth& truth,

@@ -18,6 +18,7 @@
 #include <tbb/task_arena.h>
 
 #include <Eigen/Core>
+#include <array>
 #include <boost/container/flat_set.hpp>
 #include <boost/geometry.hpp>
 #include <boost/geometry/index/rtree.hpp>
@@ -78,11 +79,12 @@ struct CaeParams
   double single_view_min_length = 0.6;
   /// A map that follows the building (see_through.cpp): the space between a keyframe's laser and each
   /// segment it extracted is free, so an original of an EARLIER session lying in that space (by more
-  /// than see_through_margin from its sides and from the segment) was seen through: the wall it
-  /// stood for is gone. An original seen through over half its length by see_through_views keyframes
-  /// (with no keyframe between them seeing it in place) is retired; its map segment is re-fused from
-  /// the rest, or retired with its last original. Within one session nothing is retired: before a
-  /// loop closes, the drift alone would make a scan see through the walls it mapped before.
+  /// than see_through_margin from its sides and from the segment) was seen through there: the wall it
+  /// stood for is gone. An original is judged by parts (sixteenths of its length): one seen through by
+  /// see_through_views keyframes (none seeing it in place since) over half of its parts is retired;
+  /// its map segment is re-fused from the rest, or retired with its last original. Within one session nothing
+  /// is retired: before a loop closes, the drift alone would make a scan see through the walls it mapped
+  /// before.
   bool see_through = true;
   /// [m] Above the disagreement of two sessions' poses and the range noise, below a wall's distance
   /// from the next surface behind it (a door's depth, a room's width).
@@ -167,11 +169,14 @@ class CaeRlsm : public Merger
     return id;
   }
 
+  /// An original is judged by parts (see_through): a keyframe sees through some of them, another the rest.
+  static constexpr std::size_t kSeeThroughBins = 16;
   struct LeafRecord
   {
     std::uint32_t slot = 0;  // into keyframes_
     Segment2 local;
-    std::uint16_t seen_through = 0;  // keyframes of later sessions that saw through it, since one saw it
+    /// Per bin along it: keyframes of later sessions that saw through it, since one saw it in place.
+    std::array<std::uint8_t, kSeeThroughBins> seen_through{};
   };
 
   struct Node

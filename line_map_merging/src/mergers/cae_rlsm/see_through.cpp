@@ -1,10 +1,11 @@
 // A map that follows the building: a keyframe of a later session that sees through an original of an
 // earlier one votes to retire it. The witness is the keyframe's own segments: every beam that hit a
 // segment crossed the triangle between the laser and that segment, so that triangle, eroded by the
-// margin on its three sides, is free space. An original lying there over half its length was seen
-// through by the keyframe; one lying along a segment (within the margin) was seen in place, which
-// clears its votes. Only originals of earlier sessions are judged: within a session, drift before a loop
-// closes would see through the walls it mapped itself.
+// margin on its three sides, is free space. The parts of an original lying there were seen through by
+// the keyframe; the parts lying along a segment (within the margin) were seen in place, which clears
+// their votes. Parts, because one keyframe seldom sees a whole wall through: a wall gone from the middle
+// of a room is seen through piece by piece as the robot drives past. Only originals of earlier sessions are
+// judged: within a session, drift before a loop closes would see through the walls it mapped itself.
 #include <algorithm>
 #include <array>
 #include <unordered_map>
@@ -30,8 +31,9 @@ struct HalfPlane
   double c;
 };
 
-/// The length of `s` inside every half-plane (Liang-Barsky clipping).
-double insideLength(const Segment2& s, const HalfPlane* planes, std::size_t count)
+/// The bins of a leaf (CaeRlsm::kSeeThroughBins, by position along it) whose centres lie inside every
+/// half-plane (Liang-Barsky clipping), as a bit mask.
+std::uint32_t insideBins(const Segment2& s, const HalfPlane* planes, std::size_t count, std::size_t bins)
 {
   const Vec2 d = s.end - s.start;
   double lo = 0.0, hi = 1.0;
@@ -41,7 +43,7 @@ double insideLength(const Segment2& s, const HalfPlane* planes, std::size_t coun
     const double slope = planes[i].n.dot(d);
     if (slope == 0.0)
     {
-      if (at_start < 0.0) return 0.0;
+      if (at_start < 0.0) return 0;
       continue;
     }
     const double t = -at_start / slope;
@@ -50,7 +52,13 @@ double insideLength(const Segment2& s, const HalfPlane* planes, std::size_t coun
     else
       hi = std::min(hi, t);
   }
-  return hi > lo ? (hi - lo) * d.norm() : 0.0;
+  std::uint32_t mask = 0;
+  for (std::size_t b = 0; b < bins; ++b)
+  {
+    const double centre = (static_cast<double>(b) + 0.5) / static_cast<double>(bins);
+    if (centre >= lo && centre <= hi) mask |= 1u << b;
+  }
+  return mask;
 }
 
 /// What one extracted segment shows: the free triangle before it, and the band along it.
@@ -114,10 +122,10 @@ std::size_t CaeRlsm::retireSeenThrough(std::uint32_t slot, const std::vector<Seg
   }
   if (witnesses.empty()) return 0;
 
-  // Per original of an earlier session near the witnesses: its length seen through and seen in place.
+  // Per original of an earlier session near the witnesses: its bins seen through and seen in place.
   struct Seen
   {
-    double through = 0.0, in_place = 0.0;
+    std::uint32_t through = 0, in_place = 0;
   };
   std::unordered_map<std::uint32_t, Seen> seen;
   std::vector<std::uint64_t> near;
@@ -141,24 +149,31 @@ std::size_t CaeRlsm::retireSeenThrough(std::uint32_t slot, const std::vector<Seg
       {
         if (keyframes_[leaves_[l].slot].session >= session_) continue;
         const Segment2 world = worldLeaf(l);
-        const double through = insideLength(world, w.free, 3);
-        const double in_place = insideLength(world, w.band, 4);
-        if (through == 0.0 && in_place == 0.0) continue;
+        const std::uint32_t through = insideBins(world, w.free, 3, kSeeThroughBins);
+        const std::uint32_t in_place = insideBins(world, w.band, 4, kSeeThroughBins);
+        if (through == 0 && in_place == 0) continue;
         Seen& s = seen[l];
-        s.through += through;
-        s.in_place += in_place;
+        s.through |= through;
+        s.in_place |= in_place;
       }
   }
 
   std::vector<std::uint32_t> retired;
+  const auto views = static_cast<std::uint8_t>(std::min(params_.see_through_views, 255));
   for (const auto& [l, s] : seen)
   {
     LeafRecord& leaf = leaves_[l];
-    const double half = 0.5 * leaf.local.length();
-    if (s.in_place >= half)
-      leaf.seen_through = 0;
-    else if (s.through >= half && ++leaf.seen_through >= params_.see_through_views)
-      retired.push_back(l);
+    std::size_t gone = 0;
+    for (std::size_t b = 0; b < kSeeThroughBins; ++b)
+    {
+      std::uint8_t& votes = leaf.seen_through[b];
+      if (s.in_place & (1u << b))
+        votes = 0;
+      else if ((s.through & (1u << b)) && votes < 255)
+        ++votes;
+      gone += votes >= views;
+    }
+    if (2 * gone >= kSeeThroughBins) retired.push_back(l);
   }
   if (retired.empty()) return 0;
   std::sort(retired.begin(), retired.end());
