@@ -5,7 +5,7 @@
 // (every old wall kept), and the second session mapped alone.
 //
 //   rosrun line_map_eval changed_world_benchmark [BEFORE.yaml AFTER.yaml] [--poses slam|truth]
-//       [--start X,Y,THETA] [--out DIR]
+//       [--start X,Y,THETA] [--param key=value]... [--out DIR]
 // --poses truth: the keyframes at their true poses (the map's own behaviour, without the SLAM's error).
 //   (from the repository root; default config/worlds/office.yaml config/worlds/office_changed.yaml)
 #include <cstdio>
@@ -22,7 +22,7 @@ int main(int argc, char** argv)
   using namespace line_map_eval;
   const char* usage =
       "usage: changed_world_benchmark [BEFORE.yaml AFTER.yaml] [--poses slam|truth] [--start X,Y,THETA] "
-      "[--out DIR]";
+      "[--param key=value]... [--out DIR]";
   const char* root_env = std::getenv("LINEMAP_ROOT");
   const std::string root = root_env ? root_env : ".";
   std::string before = root + "/config/worlds/office.yaml",
@@ -36,6 +36,7 @@ int main(int argc, char** argv)
   }
   std::optional<linemap::Pose2> start;
   ChangedWorldPoses poses = ChangedWorldPoses::kSlam;
+  std::vector<std::string> overrides;
   std::string out = "changed_world_out";
   if (const auto stop = benchmark::parseOptions(
           argc - first_option + 1, argv + first_option - 1, "changed_world_benchmark", usage,
@@ -48,6 +49,7 @@ int main(int argc, char** argv)
               start = p;
             }},
            {"--out", [&](const std::string& v) { out = v; }},
+           {"--param", [&](const std::string& v) { overrides.push_back(v); }},
            {"--poses", [&](const std::string& v)
             {
               if (v != "slam" && v != "truth")
@@ -59,6 +61,7 @@ int main(int argc, char** argv)
   BatchOptions options;
   options.params = loadParameterFiles(
       {config("line_extraction.yaml"), config("line_map_merging.yaml"), config("line_map_eval.yaml")});
+  for (const std::string& o : overrides) applyOverride(options.params, o);
   options.progress = false;
   options.figure_formats = kFigurePng;
   const auto slam = line_map_merging::LaserSlamParams::fromParams(loadParameterFiles({config("slam.yaml")}));
@@ -79,7 +82,7 @@ int main(int argc, char** argv)
   std::printf("seen walls: removed %.1f m, added %.1f m, unchanged %.1f m\n", c.removed_length,
               c.added_length, c.unchanged_length);
   std::printf(
-      "| map | q (now) | removed walls retired | added walls covered | unchanged walls covered | "
+      "| map | q (building now) | removed walls retired | added walls covered | unchanged walls covered | "
       "coverage of its world | segments |\n|---|---|---|---|---|---|---|\n");
   const auto row = [](const char* name, const ChangedWorldMap& m)
   {

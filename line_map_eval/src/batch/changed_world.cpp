@@ -1,6 +1,10 @@
 // Two sessions in a building that changed between them (changed_world.hpp).
 #include "line_map_eval/batch/changed_world.hpp"
 
+#include <Eigen/Geometry>
+#include <cmath>
+#include <stdexcept>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -24,6 +28,42 @@ Recording slamInput(const SimulationResult& sim, bool rezero)
   return recordingPart(r, 0, r.scans.size(), rezero);
 }
 
+/// Where a SLAM-made recording's map frame lies in the world: the rigid transform that best fits its
+/// keyframes' positions to their true ones (least squares, as the absolute trajectory error is measured).
+/// The SLAM knows nothing of the world frame; pinning its frame to one scan's true pose would let that
+/// one pose's error shift the whole map against the ground truth.
+Pose2 worldFrameOf(const Recording& slam_made, const Recording& truth)
+{
+  std::unordered_map<std::size_t, Pose2> true_pose;
+  for (const CorrectedKeyframe& k : truth.keyframes) true_pose.emplace(k.scan_index, k.pose);
+  std::vector<std::pair<linemap::Vec2, linemap::Vec2>> pairs;  // (SLAM, true) positions
+  for (const CorrectedKeyframe& k : slam_made.keyframes)
+    if (const auto it = true_pose.find(k.scan_index); it != true_pose.end())
+      pairs.emplace_back(k.pose.translation(), it->second.translation());
+  if (pairs.size() < 2)
+    throw std::runtime_error("changed world: fewer than two SLAM keyframes to place the map by");
+  // In 2D the least-squares rotation is closed form: the angle of the summed cross and dot products of the
+  // centred pairs; the translation then maps the one centroid onto the other.
+  linemap::Vec2 from_mean = linemap::Vec2::Zero(), to_mean = linemap::Vec2::Zero();
+  for (const auto& [from, to] : pairs)
+  {
+    from_mean += from;
+    to_mean += to;
+  }
+  from_mean /= static_cast<double>(pairs.size());
+  to_mean /= static_cast<double>(pairs.size());
+  double cross = 0.0, dot = 0.0;
+  for (const auto& [from, to] : pairs)
+  {
+    const linemap::Vec2 a = from - from_mean, b = to - to_mean;
+    cross += a.x() * b.y() - a.y() * b.x();
+    dot += a.dot(b);
+  }
+  const double theta = std::atan2(cross, dot);
+  const linemap::Vec2 t = to_mean - Eigen::Rotation2Dd(theta) * from_mean;
+  return Pose2(t.x(), t.y(), theta);
+}
+
 /// A SLAM-made recording as a batch dataset in the world frame, scored against `truth`.
 BatchDataset worldDataset(Recording recording, const Pose2& to_world, const GroundTruth& truth,
                           const std::string& name)
@@ -41,6 +81,30 @@ BatchOptions cae(const BatchOptions& options, const std::string& out_dir)
   o.mergers = {"cae"};
   o.out_dir = out_dir;
   return o;
+}
+
+/// `points` less those on walls removed since the first session: the building as it stands, as far as the
+/// scans saw it. A wall the second session no longer sees (behind a door closed since, or a new cabinet)
+/// still stands and keeps its points.
+std::vector<linemap::Vec2> standingPoints(const std::vector<linemap::Vec2>& points,
+                                          const ChangePieces& pieces)
+{
+  // Beyond the range noise of a point on the wall, within the wall's thickness: the point was on it.
+  constexpr double kOnWall = 0.1;
+  std::vector<linemap::Vec2> out;
+  out.reserve(points.size());
+  for (const linemap::Vec2& p : points)
+  {
+    bool removed = false;
+    for (const linemap::Segment2& s : pieces.removed)
+      if (linemap::distanceToSegment(p, s.start, s.end) < kOnWall)
+      {
+        removed = true;
+        break;
+      }
+    if (!removed) out.push_back(p);
+  }
+  return out;
 }
 
 /// The map `text` (a first session's, on true poses) for a dataset to continue: its keyframes at their
@@ -71,10 +135,9 @@ ChangedWorldResult runChangedWorld(const World& before, const World& after, cons
   const SimulationResult second_sim = simulate(after, later);
   const GroundTruthParams truth_params = GroundTruthParams::fromParams(options.params);
   const ChangePieces pieces = changePieces(first_sim.truth, second_sim.truth, truth_params);
-  const LookupTable table = LookupTable::build(registeredScanPoints(second_sim.recording),
-                                               LookupTableParams::fromParams(options.params));
+  const LookupTableParams table_params = LookupTableParams::fromParams(options.params);
   const QualityParams quality = QualityParams::fromParams(options.params);
-  const auto score = [&](const BatchResult& batch)
+  const auto score = [&](const BatchResult& batch, const LookupTable& table)
   {
     const std::vector<linemap::Segment2>& map = batch.mergers.at(0).final_map;
     const auto& truth = batch.mergers.at(0).ground_truth;
@@ -82,6 +145,8 @@ ChangedWorldResult runChangedWorld(const World& before, const World& after, cons
                            truth ? 100.0 * truth->coverage : 0.0, scoreChanges(pieces, map, truth_params),
                            map.size()};
   };
+  const auto tableOf = [&](const std::vector<linemap::Vec2>& points)
+  { return LookupTable::build(standingPoints(points, pieces), table_params); };
   const auto mapText = [](const std::string& dir)
   { return linemap::readWholeFile(dir + "/cae/map.yaml", "map file"); };
   BatchOptions keep_all = cae(options, work_dir + "/kept");
@@ -96,49 +161,67 @@ ChangedWorldResult runChangedWorld(const World& before, const World& after, cons
       d.truth = sim.truth;
       return d;
     };
+    std::vector<linemap::Vec2> both = registeredScanPoints(first_sim.recording);
+    const std::vector<linemap::Vec2> second_points = registeredScanPoints(second_sim.recording);
+    both.insert(both.end(), second_points.begin(), second_points.end());
+    const LookupTable table = tableOf(both);
     const BatchResult first_batch =
         runBatch(dataset(first_sim, after.name + " session 1"), cae(options, work_dir + "/first"));
-    result.first = score(first_batch);
+    result.first = score(first_batch, table);
     result.fresh =
-        score(runBatch(dataset(second_sim, after.name + " alone"), cae(options, work_dir + "/fresh")));
+        score(runBatch(dataset(second_sim, after.name + " alone"), cae(options, work_dir + "/fresh")), table);
     BatchDataset continued = dataset(second_sim, after.name + " continued");
     continued.saved_map = savedOnTruePoses(mapText(work_dir + "/first"), first_batch.registered_points);
     result.localized_at = 0;
-    result.continued = score(runBatch(continued, cae(options, work_dir + "/continued")));
-    result.kept = score(runBatch(continued, keep_all));
+    result.continued = score(runBatch(continued, cae(options, work_dir + "/continued")), table);
+    result.kept = score(runBatch(continued, keep_all), table);
     return result;
   }
 
-  const Pose2 to_world = first_sim.recording.keyframes.front().pose;
   const std::vector<Recording> first_run{slamInput(first_sim, false)},
       second_run{slamInput(second_sim, true)};
   // The first session: its graph and its map file.
   const SessionsRun first = runSessions(first_run, std::nullopt, slam, localizer, true);
+  const Recording first_made = joinedRecording(first_run, first, true);
+  const Pose2 to_world = worldFrameOf(first_made, first_sim.recording);
   const std::string first_dir = work_dir + "/first";
-  result.first = score(runBatch(worldDataset(joinedRecording(first_run, first, true), to_world,
-                                             first_sim.truth, after.name + " session 1"),
-                                cae(options, first_dir)));
+  const BatchResult first_batch =
+      runBatch(worldDataset(first_made, to_world, first_sim.truth, after.name + " session 1"),
+               cae(options, first_dir));
   line_map_merging::Session saved;
   saved.slam = first.session;
   saved.line_map = mapText(first_dir);
 
-  // The second session from nothing.
+  // The second session from nothing, scored in its own frame against its own scans.
   const SessionsRun alone = runSessions(second_run, std::nullopt, slam, localizer, true);
-  result.fresh = score(runBatch(
-      worldDataset(joinedRecording(second_run, alone, true), second_sim.recording.keyframes.front().pose,
-                   second_sim.truth, after.name + " alone"),
-      cae(options, work_dir + "/fresh")));
+  const Recording alone_made = joinedRecording(second_run, alone, true);
+  const BatchResult fresh_batch =
+      runBatch(worldDataset(alone_made, worldFrameOf(alone_made, second_sim.recording), second_sim.truth,
+                            after.name + " alone"),
+               cae(options, work_dir + "/fresh"));
+  result.fresh = score(fresh_batch, tableOf(fresh_batch.registered_points));
 
-  // The second session continuing the first.
+  // The second session continuing the first. The other maps are scored in the joined graph's frame, against
+  // both sessions' scans as it registered them.
   const SessionsRun joined = runSessions(second_run, first.session, slam, localizer, true, {start});
   result.localized_at = joined.localized_at.at(0);
   result.closures_between = joined.closures_to_earlier.at(0);
-  if (!result.localized_at) return result;
-  BatchDataset continued = worldDataset(joinedRecording(second_run, joined, true), to_world, second_sim.truth,
-                                        after.name + " continued");
-  continued.saved_map = continuedMap(saved, joined.session, "the first session", to_world);
-  result.continued = score(runBatch(continued, cae(options, work_dir + "/continued")));
-  result.kept = score(runBatch(continued, keep_all));
+  if (!result.localized_at)
+  {
+    result.first = score(first_batch, tableOf(first_batch.registered_points));
+    return result;
+  }
+  // The joined graph's frame is the first session's, its keyframes moved a little by the joined optimisation.
+  const Recording joined_made = joinedRecording(second_run, joined, true);
+  const Pose2 joined_to_world = worldFrameOf(joined_made, second_sim.recording);
+  BatchDataset continued =
+      worldDataset(joined_made, joined_to_world, second_sim.truth, after.name + " continued");
+  continued.saved_map = continuedMap(saved, joined.session, "the first session", joined_to_world);
+  const BatchResult continued_batch = runBatch(continued, cae(options, work_dir + "/continued"));
+  const LookupTable table = tableOf(continued_batch.registered_points);
+  result.first = score(first_batch, table);
+  result.continued = score(continued_batch, table);
+  result.kept = score(runBatch(continued, keep_all), table);
   return result;
 }
 

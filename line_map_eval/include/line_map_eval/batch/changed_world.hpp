@@ -3,7 +3,7 @@
 // continues the first session: the SLAM is placed in the saved graph and goes on, and CAE-RLSM goes on
 // from the saved map with its provenance, retiring what the second session sees through (see_through).
 // The maps are scored on the removed, added and unchanged walls (change_coverage.hpp) and by q against
-// the second session's scans. `changed_world_benchmark` and test_changed_world drive it.
+// the building as it stands. `changed_world_benchmark` and test_changed_world drive it.
 #pragma once
 
 #include <optional>
@@ -19,7 +19,11 @@ namespace line_map_eval
 {
 struct ChangedWorldMap
 {
-  double quality = 0.0;  ///< q [%] against the second session's scans at their true poses (the building now)
+  /// q [%] against the building as it stands: both sessions' scan points, less those on walls removed
+  /// since (a wall the second session no longer sees still stands). With true poses, the scans at their
+  /// true poses; with the SLAM, as the joined graph registered them (the second session alone: as its own
+  /// graph did), as q is measured on logs without ground truth.
+  double quality = 0.0;
   /// [%] ground-truth coverage against the world its run mapped (the first session's: the world before).
   double truth_coverage = 0.0;
   ChangeScores changes;
