@@ -83,12 +83,12 @@ int main(int argc, char** argv)
               c.added_length, c.unchanged_length);
   std::printf(
       "| map | q (building now) | removed walls retired | added walls covered | unchanged walls covered | "
-      "coverage of its world | segments |\n|---|---|---|---|---|---|---|\n");
+      "coverage of its world | segments | originals retired |\n|---|---|---|---|---|---|---|---|\n");
   const auto row = [](const char* name, const ChangedWorldMap& m)
   {
-    std::printf("| %s | %.2f %% | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %zu |\n", name, m.quality,
+    std::printf("| %s | %.2f %% | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %zu | %zu |\n", name, m.quality,
                 m.changes.removed_retired, m.changes.added_coverage, m.changes.unchanged_coverage,
-                m.truth_coverage, m.segments);
+                m.truth_coverage, m.segments, m.retired);
   };
   row("first session", r.first);
   if (r.localized_at)

@@ -30,7 +30,8 @@ const ChangedWorldResult& officeChanged()
         loadParameterFiles({LINEMAP_SOURCE_DIR "/config/localization.yaml"}));
     return runChangedWorld(loadWorld(LINEMAP_SOURCE_DIR "/config/worlds/office.yaml"),
                            loadWorld(LINEMAP_SOURCE_DIR "/config/worlds/office_changed.yaml"), options,
-                           ChangedWorldPoses::kTruth, slam, localizer, ::testing::TempDir() + "changed_world");
+                           ChangedWorldPoses::kTruth, slam, localizer,
+                           ::testing::TempDir() + "changed_world");
   }();
   return result;
 }
@@ -61,6 +62,8 @@ TEST(ChangedWorld, WithoutRetirementTheRemovedWallsStay)
 {
   const ChangedWorldResult& r = officeChanged();
   EXPECT_LT(r.kept.changes.removed_retired, 20.0);
+  EXPECT_EQ(r.kept.retired, 0u);
+  EXPECT_GT(r.continued.retired, 0u);
   EXPECT_LT(r.kept.quality, r.continued.quality - 2.0);
 }
 

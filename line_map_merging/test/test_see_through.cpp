@@ -20,6 +20,14 @@ const Segment2 kOldWallLeft(Vec2(0.0, 2.0), Vec2(-2.0, 2.0));
 // line y = 2 for |x| < 2.4 - 0.25 / cos(atan(6 / 5)) = 2.01, so the whole old wall lies in it.
 const Segment2 kBackWall(Vec2(6.0, 5.0), Vec2(-6.0, 5.0));
 
+/// The margin the triangles below are worked out for.
+CaeParams withMargin025()
+{
+  CaeParams p;
+  p.see_through_margin = 0.25;
+  return p;
+}
+
 Keyframe keyframe(std::uint64_t index, const std::vector<Segment2>& segments)
 {
   Keyframe k;
@@ -30,7 +38,7 @@ Keyframe keyframe(std::uint64_t index, const std::vector<Segment2>& segments)
 }
 
 /// A map of session 0 with the old wall, continued: what a session file gives the next session.
-CaeRlsm continuedMap(const CaeParams& params = CaeParams())
+CaeRlsm continuedMap(const CaeParams& params = withMargin025())
 {
   CaeRlsm first(params);
   first.addKeyframe(keyframe(0, {kOldWallRight, kOldWallLeft}));
@@ -70,7 +78,7 @@ TEST(SeeThrough, ALaterSessionRetiresAWallItSeesThroughTwice)
 TEST(SeeThrough, NothingIsRetiredWithinOneSession)
 {
   // Drift before a loop closes makes a scan see through walls of its own session: they stay.
-  CaeRlsm cae;
+  CaeRlsm cae(withMargin025());
   cae.addKeyframe(keyframe(0, {kOldWallRight, kOldWallLeft}));
   for (std::uint64_t i = 1; i < 5; ++i) EXPECT_EQ(cae.addKeyframe(keyframe(i, {kBackWall})).retired, 0u);
   EXPECT_TRUE(mapsWallAt(cae.map(), 2.0));
@@ -92,7 +100,7 @@ TEST(SeeThrough, AWallSeenInPlaceInBetweenKeepsIt)
 
 TEST(SeeThrough, AWallBehindTheSegmentStays)
 {
-  CaeParams params;
+  CaeParams params = withMargin025();
   params.see_through_views = 1;
   // The back wall is the old one now: a new wall in front of it (y = 2) hides it, never sees through it.
   CaeRlsm first(params);

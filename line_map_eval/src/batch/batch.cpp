@@ -417,6 +417,7 @@ MergerHolder runOnline(const BatchSetup& setup, const SharedEvaluation& shared, 
   const auto& counters = holder.mapper->counters();
   run.adjustments = counters.adjustments;
   run.rebuilds = counters.rebuilds;
+  run.retired = counters.retired;
   run.adjust_ms = timed.adjustTime();
   run.per_frame_ms = linemap::median(timed.addTimes());
   run.per_frame_p99_ms = linemap::percentile(timed.addTimes(), 0.99);

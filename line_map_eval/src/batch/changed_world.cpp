@@ -143,7 +143,7 @@ ChangedWorldResult runChangedWorld(const World& before, const World& after, cons
     const auto& truth = batch.mergers.at(0).ground_truth;
     return ChangedWorldMap{computeMapQuality(table, map, quality).quality,
                            truth ? 100.0 * truth->coverage : 0.0, scoreChanges(pieces, map, truth_params),
-                           map.size()};
+                           map.size(), batch.mergers.at(0).retired};
   };
   const auto tableOf = [&](const std::vector<linemap::Vec2>& points)
   { return LookupTable::build(standingPoints(points, pieces), table_params); };

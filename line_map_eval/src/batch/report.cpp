@@ -193,6 +193,7 @@ void emitRunning(YAML::Emitter& out, const MergerRun& r)
   field(out, "trajectories", r.trajectories);
   field(out, "adjustments", r.adjustments);
   field(out, "rebuilds", r.rebuilds);
+  field(out, "retired_originals", r.retired);
   measure(out, "evaluation_ms", r.evaluation_ms);
   field(out, "online", r.online);
   field(out, "provenance", r.provenance);
@@ -403,6 +404,7 @@ void mergerNote(std::ostringstream& md, const MergerRun& r)
      << fixed(r.evaluation_ms, 1) << " ms";
   if (r.adjustments) md << "; " << r.adjustments << " adjustments, " << fixed(r.adjust_ms, 1) << " ms";
   if (r.rebuilds) md << "; rebuilt from the nodes of the first trajectory";
+  if (r.retired) md << "; " << r.retired << " originals of the saved map retired (seen through)";
   if (!r.step_ms.empty())
   {
     md << "; steps";

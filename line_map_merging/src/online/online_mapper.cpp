@@ -81,6 +81,7 @@ bool OnlineMapper::merge(double stamp, const linemap::Pose2& laser, const linema
   }
   counters_.last_otm_ms = linemap::millisecondsSince(t0);
   counters_.bad_segments += result.rejected;
+  counters_.retired += result.retired;
   ++counters_.keyframes_added;
   continuous_[keyframe.index] = continuous;
   keyframe_stamps_.insert(stamp);
@@ -420,6 +421,7 @@ std::vector<std::pair<std::string, std::string>> OnlineMapper::diagnostics() con
           {"scans held for a trajectory", n(nodes_.held())},
           {"nodes waiting for their scan", n(nodes_.waiting())},
           {"nodes without a scan", n(nodes_.unmatched())},
+          {"originals retired (seen through)", n(c.retired)},
           {"bad segments", n(c.bad_segments)},
           {"bad trajectory poses", n(c.bad_poses)},
           {"unmatched trajectory poses", n(c.unmatched_poses)},

@@ -134,6 +134,7 @@ struct MergerRun
   std::size_t trajectories = 0;  ///< trajectories fed to the OnlineMapper (online mergers)
   std::size_t adjustments = 0;   ///< adjust() calls the OnlineMapper made
   std::size_t rebuilds = 0;      ///< maps made again from the nodes of the first trajectory
+  std::size_t retired = 0;       ///< originals of a saved map retired as seen through (see_through)
   std::optional<double> quality_before_adjust;  ///< [%] map just before the last trajectory
   std::optional<GroundTruthResult> ground_truth;
   double per_frame_ms = std::numeric_limits<double>::quiet_NaN();      ///< median addKeyframe, online only

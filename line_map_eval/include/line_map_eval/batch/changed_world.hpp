@@ -28,6 +28,7 @@ struct ChangedWorldMap
   double truth_coverage = 0.0;
   ChangeScores changes;
   std::size_t segments = 0;
+  std::size_t retired = 0;  ///< originals of the first session's map retired as seen through
 };
 
 struct ChangedWorldResult

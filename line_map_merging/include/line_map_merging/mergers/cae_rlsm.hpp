@@ -88,7 +88,7 @@ struct CaeParams
   bool see_through = true;
   /// [m] Above the disagreement of two sessions' poses and the range noise, below a wall's distance
   /// from the next surface behind it (a door's depth, a room's width).
-  double see_through_margin = 0.25;
+  double see_through_margin = 0.2;
   int see_through_views = 2;
 
   /// Reads the fusion block plus "threads", "consistent_adjustment", "spatial_index", "map_merge",

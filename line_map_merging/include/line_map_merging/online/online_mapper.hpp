@@ -75,6 +75,8 @@ struct MapperCounters
   std::size_t scans = 0, keyframes_added = 0, below_gate = 0, replayed = 0, zero_stamps = 0;
   std::size_t dropped = 0;  ///< by the caller (no transform) or the merger (rejected)
   std::size_t bad_segments = 0;
+  std::size_t retired =
+      0;  ///< originals of earlier sessions retired as seen through (CaeParams::see_through)
   std::size_t trajectories = 0, ignored_trajectories = 0, bad_poses = 0, unmatched_poses = 0;
   std::size_t adjustments = 0, adjustment_failures = 0;
   std::size_t time_jumps = 0, autosaves = 0, autosave_failures = 0;
