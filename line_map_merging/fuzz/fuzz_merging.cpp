@@ -13,7 +13,11 @@
 #include <utility>
 #include <vector>
 
+// Before fuzz_check.hpp: its check() macro would break Boost.Geometry's concepts::check.
+#include "line_map_merging/mergers/cae_rlsm.hpp"
+// clang-format off
 #include "fuzz_check.hpp"
+// clang-format on
 #include "line_map_merging/mergers/merger.hpp"
 
 namespace
@@ -167,6 +171,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         readLeaves(in, *merger);
         break;
       default:
+        if (auto* cae = dynamic_cast<line_map_merging::CaeRlsm*>(merger.get()); cae && in.ConsumeBool())
+        {
+          // Continued as a new session: later keyframes judge the originals so far (see_through).
+          const std::uint32_t session = cae->session();
+          cae->loadText(cae->mapText(), "fuzz");
+          check(cae->session() <= session + 1);
+        }
         if (in.ConsumeIntegralInRange<int>(0, 3) == 0) merger->reset();
         check(merger->segmentCount() <= merger->leafCount() || !merger->hasProvenance());
         break;
