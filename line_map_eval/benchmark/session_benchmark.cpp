@@ -4,8 +4,10 @@
 // continues the session (found by global localization first, as linemap_batch LOG --slam --session F) and
 // when it is mapped alone, in CPU time of the SLAM (the search for the start apart).
 //
-//   rosrun line_map_eval session_benchmark SESSION_FILE [--runs N] [--continue LOG]   (from the repository
-//   root)
+//   rosrun line_map_eval session_benchmark SESSION_FILE [--runs N] [--continue LOG [--whole LOG]]   (from the
+//   repository root)
+// With --whole WHOLE (the uninterrupted log the session's log and LOG were cut from): what LOG's scans cost
+// at the end of that one drive, where they revisit the first part's places as a continuation does.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -29,7 +31,9 @@ using line_map_eval::benchmark::millisSince;
 namespace
 {
 /// Per scan, the SLAM's CPU time mapping `log` alone and continuing the session `path` with it.
-void continuationCost(const std::string& path, const std::string& log)
+/// `whole` (optional): the uninterrupted log the session's log and `log` were cut from; the same scans of
+/// `log` then also cost what they cost at the end of one drive (the whole log's SLAM less its first part's).
+void continuationCost(const std::string& path, const std::string& log, const std::string& whole)
 {
   using namespace line_map_eval;
   const Recording run = fromCarmen(readCarmenLog(log), nullptr);
@@ -54,12 +58,35 @@ void continuationCost(const std::string& path, const std::string& log)
   std::printf("  continuing the session             %8.2f ms (%.2fx; found at scan %zu, search %.1f s CPU)\n",
               1e3 * continued.slam_cpu_seconds[0] / scans, continued.slam_cpu_seconds[0] / alone.cpu_seconds,
               *continued.localized_at[0], continued.cpu_seconds - continued.slam_cpu_seconds[0]);
+  // Where the difference goes: the back end's work per scan (wall time of its steps).
+  const auto parts = [scans](const char* what, const line_map_merging::SlamCounters& c)
+  {
+    std::printf("  %-34s optimisation %.2f ms (%zu runs), loop search %.2f ms (%zu attempts, %zu accepted)\n",
+                what, c.total_optimization_ms / scans, c.optimizations, c.total_loop_ms / scans,
+                c.loop_attempts, c.loops_accepted);
+  };
+  parts("alone, per scan:", alone.counters);
+  parts("continuing, per scan:", continued.counters[0]);
+  if (whole.empty()) return;
+  const Recording drive = fromCarmen(readCarmenLog(whole), nullptr);
+  if (drive.scans.size() <= run.scans.size())
+  {
+    std::printf("  %s is not longer than %s: no uninterrupted drive to compare with\n", whole.c_str(),
+                log.c_str());
+    return;
+  }
+  const SlamRecordingResult all = runSlam(drive, slam);
+  const SlamRecordingResult before =
+      runSlam(recordingPart(drive, 0, drive.scans.size() - run.scans.size(), false), slam);
+  const double last = all.cpu_seconds - before.cpu_seconds;
+  std::printf("  the same scans ending one drive (%s) %8.2f ms (continuing: %.2fx)\n", whole.c_str(),
+              1e3 * last / scans, continued.slam_cpu_seconds[0] / last);
 }
 }  // namespace
 
 int main(int argc, char** argv)
 {
-  const char* usage = "usage: session_benchmark SESSION_FILE [--runs N] [--continue LOG]";
+  const char* usage = "usage: session_benchmark SESSION_FILE [--runs N] [--continue LOG [--whole LOG]]";
   if (argc < 2 || argv[1][0] == '-')
   {
     std::fprintf(stderr, "%s\n", usage);
@@ -67,11 +94,12 @@ int main(int argc, char** argv)
   }
   const std::string path = argv[1];
   std::size_t runs = 5;
-  std::string log;
+  std::string log, whole;
   if (const auto stop = line_map_eval::benchmark::parseOptions(
           argc - 1, argv + 1, "session_benchmark", usage,
           {{"--runs", [&](const std::string& v) { runs = std::max<std::size_t>(1, std::stoul(v)); }},
-           {"--continue", [&](const std::string& v) { log = v; }}}))
+           {"--continue", [&](const std::string& v) { log = v; }},
+           {"--whole", [&](const std::string& v) { whole = v; }}}))
     return *stop;
   std::vector<double> read_ms, restore_ms, map_ms, total_ms;
   std::size_t keyframes = 0, segments = 0;
@@ -103,6 +131,6 @@ int main(int argc, char** argv)
   line("restore the SLAM", restore_ms);
   line("load the line map (CAE-RLSM)", map_ms);
   line("total", total_ms);
-  if (!log.empty()) continuationCost(path, log);
+  if (!log.empty()) continuationCost(path, log, whole);
   return 0;
 }
