@@ -5,7 +5,7 @@
 // (every old wall kept), and the second session mapped alone.
 //
 //   rosrun line_map_eval changed_world_benchmark [BEFORE.yaml AFTER.yaml] [--poses slam|truth]
-//       [--start X,Y,THETA] [--param key=value]... [--out DIR]
+//       [--start X,Y,THETA] [--param key=value]... [--seed N] [--out DIR]
 // --poses truth: the keyframes at their true poses (the map's own behaviour, without the SLAM's error).
 //   (from the repository root; default config/worlds/office.yaml config/worlds/office_changed.yaml)
 #include <cstdio>
@@ -22,7 +22,7 @@ int main(int argc, char** argv)
   using namespace line_map_eval;
   const char* usage =
       "usage: changed_world_benchmark [BEFORE.yaml AFTER.yaml] [--poses slam|truth] [--start X,Y,THETA] "
-      "[--param key=value]... [--out DIR]";
+      "[--param key=value]... [--seed N] [--out DIR]";
   const char* root_env = std::getenv("LINEMAP_ROOT");
   const std::string root = root_env ? root_env : ".";
   std::string before = root + "/config/worlds/office.yaml",
@@ -37,6 +37,7 @@ int main(int argc, char** argv)
   std::optional<linemap::Pose2> start;
   ChangedWorldPoses poses = ChangedWorldPoses::kSlam;
   std::vector<std::string> overrides;
+  std::optional<std::uint32_t> seed;
   std::string out = "changed_world_out";
   if (const auto stop = benchmark::parseOptions(
           argc - first_option + 1, argv + first_option - 1, "changed_world_benchmark", usage,
@@ -50,6 +51,7 @@ int main(int argc, char** argv)
             }},
            {"--out", [&](const std::string& v) { out = v; }},
            {"--param", [&](const std::string& v) { overrides.push_back(v); }},
+           {"--seed", [&](const std::string& v) { seed = static_cast<std::uint32_t>(std::stoul(v)); }},
            {"--poses", [&](const std::string& v)
             {
               if (v != "slam" && v != "truth")
@@ -67,8 +69,11 @@ int main(int argc, char** argv)
   const auto slam = line_map_merging::LaserSlamParams::fromParams(loadParameterFiles({config("slam.yaml")}));
   const auto localizer =
       line_map_merging::LocalizerParams::fromParams(loadParameterFiles({config("localization.yaml")}));
+  World before_world = loadWorld(before), after_world = loadWorld(after);
+  if (seed)  // other noise in both sessions (the second's is its world's seed plus one)
+    before_world.seed = after_world.seed = *seed;
   const ChangedWorldResult r =
-      runChangedWorld(loadWorld(before), loadWorld(after), options, poses, slam, localizer, out, start);
+      runChangedWorld(before_world, after_world, options, poses, slam, localizer, out, start);
 
   std::printf("%s -> %s (figures and maps under %s/)\n", before.c_str(), after.c_str(), out.c_str());
   if (poses == ChangedWorldPoses::kTruth)
