@@ -175,8 +175,6 @@ class CaeRlsm : public Merger
   {
     std::uint32_t slot = 0;  // into keyframes_
     Segment2 local;
-    /// Per bin along it: keyframes of later sessions that saw through it, since one saw it in place.
-    std::array<std::uint8_t, kSeeThroughBins> seen_through{};
   };
 
   struct Node
@@ -303,6 +301,9 @@ class CaeRlsm : public Merger
   bool index_stale_ = false;  // set by adjust(): rebuilt in one go by the next search
   std::uint64_t next_id_ = 0;
   std::uint32_t session_ = 0;
+  /// Per original a keyframe of a later session saw through, by leaf, per bin along it: keyframes that saw
+  /// that part through since one saw it in place. Apart from the leaves: most never get a vote.
+  std::unordered_map<std::uint32_t, std::array<std::uint8_t, kSeeThroughBins>> see_through_votes_;
   std::size_t retired_leaves_ = 0, retired_segments_ = 0;
   StepTimes<kStepCount> steps_{{"keyframe: OTM-ILSM", "keyframe: map merge", "keyframe: crossings",
                                 "adjust: poses", "adjust: OTM-ILSM", "adjust: map merge", "adjust: crossings",

@@ -182,6 +182,7 @@ void CaeRlsm::reset()
   index_stale_ = false;
   next_id_ = 0;
   session_ = 0;
+  see_through_votes_.clear();
   retired_leaves_ = retired_segments_ = 0;
   checkpoint_ = RegroupCheckpoint();
   steps_.clear();

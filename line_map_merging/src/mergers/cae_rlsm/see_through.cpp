@@ -162,11 +162,12 @@ std::size_t CaeRlsm::retireSeenThrough(std::uint32_t slot, const std::vector<Seg
   const auto views = static_cast<std::uint8_t>(std::min(params_.see_through_views, 255));
   for (const auto& [l, s] : seen)
   {
-    LeafRecord& leaf = leaves_[l];
+    if (s.through == 0 && !see_through_votes_.count(l)) continue;  // seen in place, nothing to clear
+    auto& bins = see_through_votes_[l];
     std::size_t gone = 0;
     for (std::size_t b = 0; b < kSeeThroughBins; ++b)
     {
-      std::uint8_t& votes = leaf.seen_through[b];
+      std::uint8_t& votes = bins[b];
       if (s.in_place & (1u << b))
         votes = 0;
       else if ((s.through & (1u << b)) && votes < 255)
@@ -200,6 +201,10 @@ void CaeRlsm::dropLeaves(const std::vector<std::uint32_t>& retired, IdQueue& cha
   }
   leaves_ = std::move(kept);
   retired_leaves_ += retired.size();
+  std::unordered_map<std::uint32_t, std::array<std::uint8_t, kSeeThroughBins>> votes;
+  for (const auto& [l, bins] : see_through_votes_)
+    if (renumbered[l] != UINT32_MAX) votes.emplace(renumbered[l], bins);
+  see_through_votes_ = std::move(votes);
 
   std::vector<std::uint64_t> emptied;
   for (auto& [id, node] : nodes_)
