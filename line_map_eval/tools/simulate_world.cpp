@@ -43,6 +43,7 @@ options (override the world file):
   --noise SIGMA      Gaussian range noise [m]
   --spurious F       fraction of readings replaced by uniform [0, range_max) (e.g. 0.2)
   --no-drift         odometry equals the true motion
+  --start-time T     stamp of the first scan [s] (default 1; a later session: after the first's last)
   --pose-noise P,H[,L]  registration error of the trajectory: std P [m] of x and y, H [deg] of the
                      heading, correlated over L m of path (default 10; the world's `registration`)
   --every N          publish the trajectory every N keyframes as well (default: only at the end)
@@ -108,6 +109,8 @@ bool parseOption(const std::string& arg, const std::function<const char*()>& val
     a.options.spurious = parseNumber(arg, value(), 0.0, 1.0);
   else if (arg == "--no-drift")
     a.options.drift = false;
+  else if (arg == "--start-time")
+    a.options.start_time = parseNumber(arg, value(), 1e-3, 4e9);
   else if (arg == "--pose-noise")
     a.options.registration = line_map_eval::parseRegistrationOption(arg, value());
   else if (arg == "--every")

@@ -10,7 +10,6 @@ import bz2
 import math
 import os
 import re
-import struct
 import subprocess
 import sys
 import tempfile
@@ -49,24 +48,6 @@ def split_log(raw, out_dir):
     return paths
 
 
-def saved_keyframes(session):
-    """(stamp, x, y) of every keyframe of a session file's KEYF and NODE records."""
-    records = dict(lt.session_records(session))
-    keyf, node = records["KEYF"], records["NODE"]
-    n = struct.unpack_from("<Q", keyf)[0]
-    stamps, at = [], 8
-    for _ in range(n):
-        stamps.append(struct.unpack_from("<d", keyf, at)[0])
-        at += 8 + 8 + 24 + 8
-        m = struct.unpack_from("<Q", keyf, at)[0]
-        at += 8 + 16 * m
-        j = struct.unpack_from("<Q", keyf, at)[0]
-        at += 8 + 32 * j
-    poses = [struct.unpack_from("<3d", node, 8 + 24 * k) for k in range(n)]
-    map_keyframes = int(re.search(rb"keyframe_count: (\d+)", records["LMAP"]).group(1))
-    return [(t, p[0], p[1]) for t, p in zip(stamps, poses)], map_keyframes
-
-
 class CheckSessionContinue(unittest.TestCase):
     def test_a_saved_session_goes_on_live(self):
         raw = os.path.join(lt.datasets_dir(), "intel.clf.bz2")
@@ -79,7 +60,7 @@ class CheckSessionContinue(unittest.TestCase):
                           "--no-figures", "--no-progress", "--out", os.path.join(work, "batch"),
                           "--save-session", session], 600)
         self.assertEqual(rc, 0, log)
-        saved, saved_map_keyframes = saved_keyframes(session)
+        saved, saved_map_keyframes = lt.session_keyframes(session)
         bag = os.path.join(work, "second.bag")
         rc, log = lt.run(["rosrun", "line_map_eval", "carmen_to_bag", second, bag, "--no-progress"], 300)
         self.assertEqual(rc, 0, log)

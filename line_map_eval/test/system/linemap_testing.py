@@ -3,6 +3,7 @@ bags, the ground-truth wall coverage oracle, topic collection, the recorded regr
 the test artefact directory. Imported by the checker scripts next to this file."""
 import math
 import os
+import re
 import struct
 import subprocess
 import tempfile
@@ -87,11 +88,13 @@ def relations_error(poses, relations):
 
 
 def simulate(world, seed, scans, prefix="system_", extra=()):
-    """Simulates config/worlds/<world>.yaml into a temporary bag; returns (bag, truth yaml path, log)."""
+    """Simulates config/worlds/<world>.yaml into a temporary bag (`scans` None: the world's own count);
+    returns (bag, truth yaml path, log)."""
     bag = os.path.join(tempfile.mkdtemp(prefix=prefix), world + ".bag")
+    count = [] if scans is None else ["--scans", str(scans)]
     rc, out = run(["rosrun", "line_map_eval", "simulate_world",
                    os.path.join(repo_root(), "config", "worlds", world + ".yaml"), bag,
-                   "--seed", str(seed), "--scans", str(scans), "--no-progress"] + list(extra), 120)
+                   "--seed", str(seed), "--no-progress"] + count + list(extra), 120)
     if rc != 0:
         raise RuntimeError("simulate_world failed:\n" + out)
     return bag, bag[:-len(".bag")] + ".truth.yaml", out
@@ -540,3 +543,21 @@ def session_records(path):
         at += 16 + size
     assert records[-1][0] == "END ", [t for t, _ in records]
     return records
+
+
+def session_keyframes(session):
+    """(stamp, x, y) of every keyframe of a session file's KEYF and NODE records."""
+    records = dict(session_records(session))
+    keyf, node = records["KEYF"], records["NODE"]
+    n = struct.unpack_from("<Q", keyf)[0]
+    stamps, at = [], 8
+    for _ in range(n):
+        stamps.append(struct.unpack_from("<d", keyf, at)[0])
+        at += 8 + 8 + 24 + 8
+        m = struct.unpack_from("<Q", keyf, at)[0]
+        at += 8 + 16 * m
+        j = struct.unpack_from("<Q", keyf, at)[0]
+        at += 8 + 32 * j
+    poses = [struct.unpack_from("<3d", node, 8 + 24 * k) for k in range(n)]
+    map_keyframes = int(re.search(rb"keyframe_count: (\d+)", records["LMAP"]).group(1))
+    return [(t, p[0], p[1]) for t, p in zip(stamps, poses)], map_keyframes
