@@ -121,85 +121,97 @@ BatchDataset::SavedMap savedOnTruePoses(const std::string& text, const std::vect
   return out;
 }
 
-}  // namespace
-
-ChangedWorldResult runChangedWorld(const World& before, const World& after, const BatchOptions& options,
-                                   ChangedWorldPoses poses, const line_map_merging::LaserSlamParams& slam,
-                                   const line_map_merging::LocalizerParams& localizer,
-                                   const std::string& work_dir, const std::optional<linemap::Pose2>& start)
+/// What both kinds of run share: the two simulations, the change pieces, and how a map is scored.
+struct ChangedWorldRun
 {
-  const SimulationResult first_sim = simulate(before);
-  SimulationOptions later;
-  later.seed = after.seed + 1;                                         // other noise, as on another day
-  later.start_time = first_sim.recording.scans.back().stamp + 3600.0;  // an hour later: one time line
-  const SimulationResult second_sim = simulate(after, later);
-  const GroundTruthParams truth_params = GroundTruthParams::fromParams(options.params);
-  const ChangePieces pieces = changePieces(first_sim.truth, second_sim.truth, truth_params);
-  const LookupTableParams table_params = LookupTableParams::fromParams(options.params);
-  const QualityParams quality = QualityParams::fromParams(options.params);
-  const auto score = [&](const BatchResult& batch, const LookupTable& table)
+  const World& after;
+  const BatchOptions& options;
+  const std::string& work_dir;
+  SimulationResult first_sim, second_sim;
+  GroundTruthParams truth_params;
+  ChangePieces pieces;
+  LookupTableParams table_params;
+  QualityParams quality;
+
+  ChangedWorldMap score(const BatchResult& batch, const LookupTable& table) const
   {
     const std::vector<linemap::Segment2>& map = batch.mergers.at(0).final_map;
     const auto& truth = batch.mergers.at(0).ground_truth;
     return ChangedWorldMap{computeMapQuality(table, map, quality).quality,
                            truth ? 100.0 * truth->coverage : 0.0, scoreChanges(pieces, map, truth_params),
                            map.size(), batch.mergers.at(0).retired};
-  };
-  const auto tableOf = [&](const std::vector<linemap::Vec2>& points)
-  { return LookupTable::build(standingPoints(points, pieces), table_params); };
-  const auto mapText = [](const std::string& dir)
-  { return linemap::readWholeFile(dir + "/cae/map.yaml", "map file"); };
-  BatchOptions keep_all = cae(options, work_dir + "/kept");
-  applyOverride(keep_all.params, "see_through=false");
-  ChangedWorldResult result;
-
-  if (poses == ChangedWorldPoses::kTruth)
-  {
-    const auto dataset = [](const SimulationResult& sim, const std::string& name)
-    {
-      BatchDataset d = datasetFromRecording(sim.recording, name, "world");
-      d.truth = sim.truth;
-      return d;
-    };
-    std::vector<linemap::Vec2> both = registeredScanPoints(first_sim.recording);
-    const std::vector<linemap::Vec2> second_points = registeredScanPoints(second_sim.recording);
-    both.insert(both.end(), second_points.begin(), second_points.end());
-    const LookupTable table = tableOf(both);
-    const BatchResult first_batch =
-        runBatch(dataset(first_sim, after.name + " session 1"), cae(options, work_dir + "/first"));
-    result.first = score(first_batch, table);
-    result.fresh =
-        score(runBatch(dataset(second_sim, after.name + " alone"), cae(options, work_dir + "/fresh")), table);
-    BatchDataset continued = dataset(second_sim, after.name + " continued");
-    continued.saved_map = savedOnTruePoses(mapText(work_dir + "/first"), first_batch.registered_points);
-    result.localized_at = 0;
-    result.continued = score(runBatch(continued, cae(options, work_dir + "/continued")), table);
-    result.kept = score(runBatch(continued, keep_all), table);
-    return result;
   }
+  LookupTable tableOf(const std::vector<linemap::Vec2>& points) const
+  {
+    return LookupTable::build(standingPoints(points, pieces), table_params);
+  }
+  std::string mapText(const std::string& dir) const
+  {
+    return linemap::readWholeFile(dir + "/cae/map.yaml", "map file");
+  }
+  BatchOptions keepAll() const
+  {
+    BatchOptions keep_all = cae(options, work_dir + "/kept");
+    applyOverride(keep_all.params, "see_through=false");
+    return keep_all;
+  }
+};
 
-  const std::vector<Recording> first_run{slamInput(first_sim, false)},
-      second_run{slamInput(second_sim, true)};
+ChangedWorldResult onTruePoses(const ChangedWorldRun& run)
+{
+  const auto dataset = [](const SimulationResult& sim, const std::string& name)
+  {
+    BatchDataset d = datasetFromRecording(sim.recording, name, "world");
+    d.truth = sim.truth;
+    return d;
+  };
+  std::vector<linemap::Vec2> both = registeredScanPoints(run.first_sim.recording);
+  const std::vector<linemap::Vec2> second_points = registeredScanPoints(run.second_sim.recording);
+  both.insert(both.end(), second_points.begin(), second_points.end());
+  const LookupTable table = run.tableOf(both);
+  const std::string& name = run.after.name;
+  ChangedWorldResult result;
+  const BatchResult first_batch =
+      runBatch(dataset(run.first_sim, name + " session 1"), cae(run.options, run.work_dir + "/first"));
+  result.first = run.score(first_batch, table);
+  result.fresh = run.score(
+      runBatch(dataset(run.second_sim, name + " alone"), cae(run.options, run.work_dir + "/fresh")), table);
+  BatchDataset continued = dataset(run.second_sim, name + " continued");
+  continued.saved_map = savedOnTruePoses(run.mapText(run.work_dir + "/first"), first_batch.registered_points);
+  result.localized_at = 0;
+  result.continued = run.score(runBatch(continued, cae(run.options, run.work_dir + "/continued")), table);
+  result.kept = run.score(runBatch(continued, run.keepAll()), table);
+  return result;
+}
+
+ChangedWorldResult onSlamPoses(const ChangedWorldRun& run, const line_map_merging::LaserSlamParams& slam,
+                               const line_map_merging::LocalizerParams& localizer,
+                               const std::optional<linemap::Pose2>& start)
+{
+  const std::string& name = run.after.name;
+  const std::vector<Recording> first_run{slamInput(run.first_sim, false)},
+      second_run{slamInput(run.second_sim, true)};
+  ChangedWorldResult result;
   // The first session: its graph and its map file.
   const SessionsRun first = runSessions(first_run, std::nullopt, slam, localizer, true);
   const Recording first_made = joinedRecording(first_run, first, true);
-  const Pose2 to_world = worldFrameOf(first_made, first_sim.recording);
-  const std::string first_dir = work_dir + "/first";
+  const Pose2 to_world = worldFrameOf(first_made, run.first_sim.recording);
+  const std::string first_dir = run.work_dir + "/first";
   const BatchResult first_batch =
-      runBatch(worldDataset(first_made, to_world, first_sim.truth, after.name + " session 1"),
-               cae(options, first_dir));
+      runBatch(worldDataset(first_made, to_world, run.first_sim.truth, name + " session 1"),
+               cae(run.options, first_dir));
   line_map_merging::Session saved;
   saved.slam = first.session;
-  saved.line_map = mapText(first_dir);
+  saved.line_map = run.mapText(first_dir);
 
   // The second session from nothing, scored in its own frame against its own scans.
   const SessionsRun alone = runSessions(second_run, std::nullopt, slam, localizer, true);
   const Recording alone_made = joinedRecording(second_run, alone, true);
   const BatchResult fresh_batch =
-      runBatch(worldDataset(alone_made, worldFrameOf(alone_made, second_sim.recording), second_sim.truth,
-                            after.name + " alone"),
-               cae(options, work_dir + "/fresh"));
-  result.fresh = score(fresh_batch, tableOf(fresh_batch.registered_points));
+      runBatch(worldDataset(alone_made, worldFrameOf(alone_made, run.second_sim.recording),
+                            run.second_sim.truth, name + " alone"),
+               cae(run.options, run.work_dir + "/fresh"));
+  result.fresh = run.score(fresh_batch, run.tableOf(fresh_batch.registered_points));
 
   // The second session continuing the first. The other maps are scored in the joined graph's frame, against
   // both sessions' scans as it registered them.
@@ -208,21 +220,47 @@ ChangedWorldResult runChangedWorld(const World& before, const World& after, cons
   result.closures_between = joined.closures_to_earlier.at(0);
   if (!result.localized_at)
   {
-    result.first = score(first_batch, tableOf(first_batch.registered_points));
+    result.first = run.score(first_batch, run.tableOf(first_batch.registered_points));
     return result;
   }
   // The joined graph's frame is the first session's, its keyframes moved a little by the joined optimisation.
   const Recording joined_made = joinedRecording(second_run, joined, true);
-  const Pose2 joined_to_world = worldFrameOf(joined_made, second_sim.recording);
+  const Pose2 joined_to_world = worldFrameOf(joined_made, run.second_sim.recording);
   BatchDataset continued =
-      worldDataset(joined_made, joined_to_world, second_sim.truth, after.name + " continued");
+      worldDataset(joined_made, joined_to_world, run.second_sim.truth, name + " continued");
   continued.saved_map = continuedMap(saved, joined.session, "the first session", joined_to_world);
-  const BatchResult continued_batch = runBatch(continued, cae(options, work_dir + "/continued"));
-  const LookupTable table = tableOf(continued_batch.registered_points);
-  result.first = score(first_batch, table);
-  result.continued = score(continued_batch, table);
-  result.kept = score(runBatch(continued, keep_all), table);
+  const BatchResult continued_batch = runBatch(continued, cae(run.options, run.work_dir + "/continued"));
+  const LookupTable table = run.tableOf(continued_batch.registered_points);
+  result.first = run.score(first_batch, table);
+  result.continued = run.score(continued_batch, table);
+  result.kept = run.score(runBatch(continued, run.keepAll()), table);
   return result;
+}
+
+}  // namespace
+
+ChangedWorldResult runChangedWorld(const World& before, const World& after, const BatchOptions& options,
+                                   ChangedWorldPoses poses, const line_map_merging::LaserSlamParams& slam,
+                                   const line_map_merging::LocalizerParams& localizer,
+                                   const std::string& work_dir, const std::optional<linemap::Pose2>& start)
+{
+  SimulationResult first_sim = simulate(before);
+  SimulationOptions later;
+  later.seed = after.seed + 1;                                         // other noise, as on another day
+  later.start_time = first_sim.recording.scans.back().stamp + 3600.0;  // an hour later: one time line
+  SimulationResult second_sim = simulate(after, later);
+  const GroundTruthParams truth_params = GroundTruthParams::fromParams(options.params);
+  ChangePieces pieces = changePieces(first_sim.truth, second_sim.truth, truth_params);
+  const ChangedWorldRun run{after,
+                            options,
+                            work_dir,
+                            std::move(first_sim),
+                            std::move(second_sim),
+                            truth_params,
+                            std::move(pieces),
+                            LookupTableParams::fromParams(options.params),
+                            QualityParams::fromParams(options.params)};
+  return poses == ChangedWorldPoses::kTruth ? onTruePoses(run) : onSlamPoses(run, slam, localizer, start);
 }
 
 }  // namespace line_map_eval
