@@ -9,7 +9,6 @@ the new partition is in it. The map is compared with the world through the rigid
 saved keyframes to their true poses (the SLAM's frame is its own)."""
 import math
 import os
-import subprocess
 import sys
 import tempfile
 import unittest
@@ -120,16 +119,8 @@ class CheckChangedWorld(unittest.TestCase):
 
         maps = []
         rospy.Subscriber("/line_map", LineMap, lambda m: maps.append(m), queue_size=10)
-        diagnostics = lt.component_diagnostics(slam="laser slam", merging="line map merging")
-        slam, merging = diagnostics["slam"], diagnostics["merging"]
-        launch_log = open(os.path.join(lt.artifact_dir(), "changed_world_roslaunch.log"), "w")
-        pipeline = subprocess.Popen(["roslaunch", os.path.join(lt.repo_root(), "launch", "linemap.launch"),
-                                     "slam:=true", "session:=" + session, "evaluate:=false", "output:=log"],
-                                    stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
+        pipeline, slam, merging, key = lt.start_session_pipeline("changed_world", session)
         try:
-            key = "session " + session
-            lt.wait_until(lambda: key in slam and "keyframes" in merging, "the SLAM's session diagnostics",
-                          lambda: "slam %s, merging %s" % (sorted(slam)[:3], bool(merging)), 120.0)
             lt.play(second, RATE)
             limit = lt.work_limit(lt.bag_scans(second)[2], RATE)
             retired = "originals retired (seen through)"

@@ -10,7 +10,6 @@ import bz2
 import math
 import os
 import re
-import subprocess
 import sys
 import tempfile
 import unittest
@@ -66,17 +65,10 @@ class CheckSessionContinue(unittest.TestCase):
         self.assertEqual(rc, 0, log)
         _, _, bag_seconds = lt.bag_scans(bag)
 
-        diagnostics = lt.component_diagnostics(slam="laser slam", merging="line map merging")
-        slam, merging, paths = diagnostics["slam"], diagnostics["merging"], []
+        paths = []
         rospy.Subscriber("/optimized_trajectory", Path, lambda m: paths.append(m), queue_size=100)
-        launch_log = open(os.path.join(lt.artifact_dir(), "session_continue_roslaunch.log"), "w")
-        pipeline = subprocess.Popen(["roslaunch", os.path.join(lt.repo_root(), "launch", "linemap.launch"),
-                                     "slam:=true", "session:=" + session, "evaluate:=false", "output:=log"],
-                                    stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
+        pipeline, slam, merging, key = lt.start_session_pipeline("session_continue", session)
         try:
-            key = "session " + session
-            lt.wait_until(lambda: key in slam and "keyframes" in merging, "the SLAM's session diagnostics",
-                          lambda: "slam %s, merging %s" % (sorted(slam)[:3], bool(merging)), 120.0)
             # Played at twice the log's speed: the scans searched wait for the global search, and the merger
             # drops those the SLAM has not posed within its tf_timeout once it is found (until it caught up).
             lt.play(bag, RATE)

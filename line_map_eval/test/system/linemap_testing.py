@@ -561,3 +561,23 @@ def session_keyframes(session):
     poses = [struct.unpack_from("<3d", node, 8 + 24 * k) for k in range(n)]
     map_keyframes = int(re.search(rb"keyframe_count: (\d+)", records["LMAP"]).group(1))
     return [(t, p[0], p[1]) for t, p in zip(stamps, poses)], map_keyframes
+
+
+def start_session_pipeline(name, session):
+    """linemap.launch slam:=true session:=SESSION, its output in the artefact NAME_roslaunch.log. Returns (the
+    roslaunch process, the SLAM's and the merger's diagnostics as they arrive, the SLAM's session key) once
+    both report; the caller stops the process."""
+    diagnostics = component_diagnostics(slam="laser slam", merging="line map merging")
+    slam, merging = diagnostics["slam"], diagnostics["merging"]
+    launch_log = open(os.path.join(artifact_dir(), name + "_roslaunch.log"), "w")
+    pipeline = subprocess.Popen(["roslaunch", os.path.join(repo_root(), "launch", "linemap.launch"),
+                                 "slam:=true", "session:=" + session, "evaluate:=false", "output:=log"],
+                                stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
+    key = "session " + session
+    try:
+        wait_until(lambda: key in slam and "keyframes" in merging, "the SLAM's session diagnostics",
+                   lambda: "slam %s, merging %s" % (sorted(slam)[:3], bool(merging)), 120.0)
+    except BaseException:
+        stop(pipeline, 30)
+        raise
+    return pipeline, slam, merging, key
