@@ -69,6 +69,53 @@ TEST(SlamSessions, TheSecondPartContinuesTheFirstPartsSession)
   EXPECT_GE(two.closures_between, 5u);
 }
 
+// A run that global localization cannot place in time (here: it gives up after one scan) is mapped apart in
+// its own frame while the search goes on; found later, it joins the saved graph. In the changed office (the
+// office's and the loop world's rings look alike half a turn away, and the search accepts the place there)
+// the joined trajectory must be where the ground truth has it:
+// every keyframe of both parts within 0.1 m of its true position after one rigid fit. Left out, or joined
+// at a wrong place, the second part's keyframes would be metres off.
+TEST(SlamSessions, ARunNotFoundInTimeJoinsWhenFoundLater)
+{
+  const World world = loadWorld(LINEMAP_SOURCE_DIR "/config/worlds/office_changed.yaml");
+  Recording recording = simulate(world).recording;
+  const std::vector<Relation> relations = truthRelations(recording);
+  const std::vector<CorrectedKeyframe> truth = recording.keyframes;
+  recording.keyframes.clear();
+  const std::size_t k = revisitPastTheMiddle(truth, recording.scans.size());
+  ASSERT_GT(k, 0u) << "the drive never comes back to a place it saw";
+  const std::size_t cut = truth[k].scan_index;
+  const auto slam_params = line_map_merging::LaserSlamParams::fromParams(
+      loadParameterFiles({LINEMAP_SOURCE_DIR "/config/slam.yaml"}));
+  const auto localizer_params = line_map_merging::LocalizerParams::fromParams(
+      loadParameterFiles({LINEMAP_SOURCE_DIR "/config/localization.yaml"}));
+  const SlamRecordingResult single = runSlam(recording, slam_params);
+  const RelationsError one =
+      errorOf(relations, recording, {single.scan_poses.begin(), single.scan_poses.end()});
+  const TwoSessionRun two =
+      runTwoSessions(recording, cut, slam_params, localizer_params, true, std::nullopt, 1);
+  ASSERT_FALSE(two.localized_at.has_value()) << "placed within one scan: nothing mapped apart to join";
+  ASSERT_TRUE(two.joined_at.has_value()) << "the second part was never found and joined";
+  const RelationsError both = errorOf(relations, recording, two.scan_poses);
+  std::vector<std::pair<linemap::Vec2, linemap::Vec2>> pairs;  // (joined, true) positions
+  for (const CorrectedKeyframe& t : truth)
+    if (const auto& p = two.scan_poses.at(t.scan_index))
+      pairs.emplace_back(p->translation(), t.pose.translation());
+  const Pose2 fit = linemap::bestRigidFit(pairs);
+  double worst = 0.0;
+  for (const auto& [joined, true_position] : pairs)
+    worst = std::max(worst, (fit.apply(joined) - true_position).norm());
+  std::printf(
+      "single run %.4f m; cut at scan %zu, the second part mapped apart and joined at its scan %zu, %zu "
+      "closures between them: %.4f m over %zu relations, worst keyframe %.3f m from the truth\n",
+      one.translation_mean, cut, *two.joined_at, two.closures_between, both.translation_mean, both.used,
+      worst);
+  EXPECT_GT(pairs.size(), truth.size() * 9 / 10);
+  EXPECT_LE(worst, 0.1);
+  EXPECT_GE(two.closures_between, 2u);  // the tie at the join and closures to the saved keyframes after it
+  EXPECT_LE(both.translation_mean, 1.5 * one.translation_mean);
+}
+
 namespace
 {
 /// The loop world, its drive cut at a revisit past the middle (as above), and the batch's view of it.

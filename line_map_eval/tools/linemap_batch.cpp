@@ -334,16 +334,20 @@ std::size_t printRuns(const std::vector<std::string>& paths, const std::vector<R
   for (std::size_t r = 0; r < runs.size(); ++r)
   {
     std::cout << "  run " << r + 1 << " " << paths[r] << ": " << runs[r].scans.size() << " scans, ";
-    if (!joined.localized_at[r])
+    if (!joined.localized_at[r] && !joined.joined_at[r])
     {
-      std::cout << "NOT placed: global localization found no pose in the map so far within its first 400 "
-                   "scans; left out\n";
+      std::cout << "NOT placed: global localization found no pose in the map so far, neither within its "
+                   "first 400 scans nor later; left out\n";
       continue;
     }
     ++placed;
     std::cout << joined.keyframes[r].size() << " keyframes, "
               << line_map_merging::closureSummary(joined.counters[r]);
-    if (after_a_session || r > 0)
+    if (joined.joined_at[r])
+      std::cout << "; not found within its first 400 scans: mapped apart, and joined at scan "
+                << *joined.joined_at[r] << " (the map frame is now this run's), "
+                << joined.closures_to_earlier[r] << " closures to earlier runs";
+    else if (after_a_session || r > 0)
       std::cout << "; placed at scan " << *joined.localized_at[r] << ", " << joined.closures_to_earlier[r]
                 << " closures to earlier runs";
     std::cout << "\n";

@@ -347,3 +347,59 @@ TEST(SlamSession, AContinuedRunJoinsTheSavedGraph)
               std::max(e.from, e.to) >= saved.keyframes.size();
   EXPECT_GE(across, 4u) << "the start's tie and closures between the runs";
 }
+
+// A second run mapped apart (its own frame: the odometry from zero) joins the saved session at its 20th
+// scan, told where the saved frame lies in its own (as the session search finds it, 0.15 m and 0.04 rad off
+// here). The saved scans then lie in the second run's frame, before its own, and the joined trajectory is
+// one rigid motion from the truth: closures to the saved keyframes pull the tie right. Joined as if the
+// frames were one, the first lap would be metres off; an inconsistent session changes nothing.
+TEST(SlamSession, ARunMappedApartJoinsTheSavedSessionInItsOwnFrame)
+{
+  const Drive drive;
+  const std::size_t half = drive.truth.size() / 2;
+  LaserSlam first;
+  for (std::size_t i = 0; i < half; ++i) first.addScan(drive.scan(i));
+  const SlamSession saved = first.session();
+
+  LaserSlam second;
+  const Pose2 restart = drive.odom[half].inverse();
+  const auto scan = [&](std::size_t i)
+  {
+    SlamScan s = drive.scan(i);
+    s.odom = restart * *s.odom;  // the odometry starts again at zero
+    return s;
+  };
+  const std::size_t join_at = half + 20;
+  for (std::size_t i = half; i <= join_at; ++i) second.addScan(scan(i));
+  // The second run's frame is its first pose: the saved frame (the first lap's first pose) lies there at
+  // truth[half]^-1 * truth[0].
+  const Pose2 saved_in_own = drive.truth[half].inverse() * drive.truth[0];
+  SlamSession broken = saved;
+  broken.edges.front().to = 1000;
+  const SlamSession before = second.session();
+  EXPECT_THROW(second.joinSession(broken, saved_in_own, 0.2, 0.1), std::out_of_range);
+  expectSameSlam(before, second.session());
+
+  second.joinSession(saved, saved_in_own * Pose2(0.15, -0.1, 0.04), 0.2, 0.1);
+  EXPECT_EQ(second.keyframes().size(), saved.keyframes.size() + before.keyframes.size());
+  for (std::size_t i = join_at + 1; i < drive.truth.size(); ++i) second.addScan(scan(i));
+  const auto poses = second.scanPoses();
+  ASSERT_EQ(poses.size(), drive.truth.size());
+  // The graph's fixed node is now the first saved keyframe, placed by the tie: the frame may move by the
+  // tie's error, so the trajectory is compared with the truth after one rigid fit.
+  std::vector<std::pair<linemap::Vec2, linemap::Vec2>> pairs;
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    pairs.emplace_back(poses[i].second.translation(), drive.truth[i].translation());
+  const Pose2 fit = linemap::bestRigidFit(pairs);
+  double worst = 0.0;
+  for (const auto& [joined, truth] : pairs) worst = std::max(worst, (fit.apply(joined) - truth).norm());
+  EXPECT_LT(worst, 0.1);
+  // Where the fit put the second run's frame: its first pose, within the tie's error.
+  const Pose2 own_origin = fit.inverse() * drive.truth[half];
+  EXPECT_LT(std::hypot(own_origin.x, own_origin.y), 0.3);
+  std::size_t across = 0;
+  for (const auto& e : second.graph().edges())
+    across += e.loop && std::min(e.from, e.to) < saved.keyframes.size() &&
+              std::max(e.from, e.to) >= saved.keyframes.size();
+  EXPECT_GE(across, 4u) << "the tie and closures between the runs";
+}

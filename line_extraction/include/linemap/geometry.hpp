@@ -5,6 +5,8 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 namespace linemap
 {
@@ -71,6 +73,34 @@ inline Pose2 interpolate(const Pose2& a, const Pose2& b, double t)
 {
   return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y),
           normalizeAngle(a.theta + t * normalizeAngle(b.theta - a.theta))};
+}
+
+/// The rigid transform that best maps the first point of each pair onto the second (least squares, as the
+/// absolute trajectory error is measured); identity for fewer than two pairs. In 2D the rotation is closed
+/// form: the angle of the summed cross and dot products of the centred pairs; the translation then maps the
+/// one centroid onto the other.
+inline Pose2 bestRigidFit(const std::vector<std::pair<Vec2, Vec2>>& pairs)
+{
+  if (pairs.size() < 2) return Pose2();
+  Vec2 from_mean = Vec2::Zero(), to_mean = Vec2::Zero();
+  for (const auto& [from, to] : pairs)
+  {
+    from_mean += from;
+    to_mean += to;
+  }
+  from_mean /= static_cast<double>(pairs.size());
+  to_mean /= static_cast<double>(pairs.size());
+  double cross = 0.0, dot = 0.0;
+  for (const auto& [from, to] : pairs)
+  {
+    const Vec2 a = from - from_mean, b = to - to_mean;
+    cross += a.x() * b.y() - a.y() * b.x();
+    dot += a.dot(b);
+  }
+  const double theta = std::atan2(cross, dot);
+  const double c = std::cos(theta), s = std::sin(theta);
+  const Vec2 rotated(c * from_mean.x() - s * from_mean.y(), s * from_mean.x() + c * from_mean.y());
+  return Pose2(to_mean.x() - rotated.x(), to_mean.y() - rotated.y(), theta);
 }
 
 /// A directed segment; its heading points from start to end.

@@ -42,26 +42,7 @@ Pose2 worldFrameOf(const Recording& slam_made, const Recording& truth)
       pairs.emplace_back(k.pose.translation(), it->second.translation());
   if (pairs.size() < 2)
     throw std::runtime_error("changed world: fewer than two SLAM keyframes to place the map by");
-  // In 2D the least-squares rotation is closed form: the angle of the summed cross and dot products of the
-  // centred pairs; the translation then maps the one centroid onto the other.
-  linemap::Vec2 from_mean = linemap::Vec2::Zero(), to_mean = linemap::Vec2::Zero();
-  for (const auto& [from, to] : pairs)
-  {
-    from_mean += from;
-    to_mean += to;
-  }
-  from_mean /= static_cast<double>(pairs.size());
-  to_mean /= static_cast<double>(pairs.size());
-  double cross = 0.0, dot = 0.0;
-  for (const auto& [from, to] : pairs)
-  {
-    const linemap::Vec2 a = from - from_mean, b = to - to_mean;
-    cross += a.x() * b.y() - a.y() * b.x();
-    dot += a.dot(b);
-  }
-  const double theta = std::atan2(cross, dot);
-  const linemap::Vec2 t = to_mean - Eigen::Rotation2Dd(theta) * from_mean;
-  return Pose2(t.x(), t.y(), theta);
+  return linemap::bestRigidFit(pairs);
 }
 
 /// A SLAM-made recording as a batch dataset in the world frame, scored against `truth`.

@@ -35,14 +35,16 @@ void collectRun(const line_map_merging::LaserSlam& slam, std::size_t scans,
                 const SlamContinuation* continuation, const std::vector<std::size_t>& accepted,
                 SlamRecordingResult& result)
 {
-  const std::size_t saved_scans = continuation ? continuation->session.scans.size() : 0;
+  // A run mapped apart and never joined holds no saved scans or keyframes.
+  const bool holds_saved = continuation && (result.placed_at || result.joined_at);
+  const std::size_t saved_scans = holds_saved ? continuation->session.scans.size() : 0;
   const auto poses = slam.scanPoses();
   result.scan_poses.assign(scans, Pose2());
   for (std::size_t k = 0; k < saved_scans && k < poses.size(); ++k)
     result.continued_scan_poses.push_back(poses[k].second);
   for (std::size_t k = saved_scans; k < poses.size() && k - saved_scans < accepted.size(); ++k)
     result.scan_poses[accepted[k - saved_scans]] = poses[k].second;
-  const std::size_t saved_keyframes = continuation ? continuation->session.keyframes.size() : 0;
+  const std::size_t saved_keyframes = holds_saved ? continuation->session.keyframes.size() : 0;
   for (std::size_t k = saved_keyframes; k < slam.keyframes().size(); ++k)
     result.keyframes.push_back({accepted[slam.keyframes()[k].scan - saved_scans], slam.graph().node(k)});
   result.closures = slam.closureAttempts();
@@ -76,6 +78,10 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
   const auto add = [&](const line_map_merging::SlamScan& scan, std::size_t i)
   {
     if (slam.addScan(scan) != line_map_merging::SlamOutcome::kRejected) accepted.push_back(i);
+    if (search && !result.joined_at &&
+        search->afterScan(scan, recording.base_to_laser.translation(), slam) ==
+            line_map_merging::SessionContinuation::State::kJoined)
+      result.joined_at = i;
   };
   for (std::size_t i = 0; i < recording.scans.size(); ++i)
   {
@@ -91,12 +97,11 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
         held.push_back(i);
         continue;
       }
+      // Given up, the run is mapped apart from its first scan searched, and joined when found later.
       if (state == line_map_merging::SessionContinuation::State::kGaveUp)
-      {
-        result.placed_at = std::nullopt;  // offline the run is left out, not mapped apart
-        break;
-      }
-      result.placed_at = i;
+        result.placed_at = std::nullopt;
+      else
+        result.placed_at = i;
       const auto replay = search->takeHeld();  // all the held scans, or none
       for (std::size_t k = 0; k < replay.size(); ++k) add(replay[k], held[held.size() - replay.size() + k]);
     }

@@ -81,6 +81,7 @@ SessionsRun runSessions(const std::vector<Recording>& runs,
   out.scan_poses.resize(n);
   out.keyframes.resize(n);
   out.localized_at.assign(n, std::nullopt);
+  out.joined_at.assign(n, std::nullopt);
   out.closures_to_earlier.assign(n, 0);
   out.counters.assign(n, {});
   out.slam_cpu_seconds.assign(n, 0.0);
@@ -104,7 +105,8 @@ SessionsRun runSessions(const std::vector<Recording>& runs,
         runSlam(run, slam_params, use_odometry, std::nullopt, continuation ? &*continuation : nullptr);
     out.cpu_seconds += result.cpu_seconds;
     out.localized_at[r] = result.placed_at;
-    if (!result.placed_at) continue;  // never found: left out
+    out.joined_at[r] = result.joined_at;
+    if (!result.placed_at && !result.joined_at) continue;  // never found: left out
     out.counters[r] = result.counters;
     out.slam_cpu_seconds[r] = result.cpu_seconds - result.search_cpu_seconds;
     // The run's accepted scans follow the saved ones in the session, in order and with their stamps.
@@ -151,7 +153,8 @@ Recording joinedRecording(const std::vector<Recording>& runs, const SessionsRun&
     const Recording& part = runs[r];
     const auto posed = std::find_if(run.scan_poses[r].begin(), run.scan_poses[r].end(),
                                     [](const std::optional<Pose2>& p) { return p.has_value(); });
-    if (!run.localized_at[r] || posed == run.scan_poses[r].end() || part.scans.empty()) continue;
+    if ((!run.localized_at[r] && !run.joined_at[r]) || posed == run.scan_poses[r].end() || part.scans.empty())
+      continue;
     if (first)
     {
       out.geometry = part.geometry;
@@ -228,6 +231,7 @@ TwoSessionRun runTwoSessions(const Recording& recording, std::size_t cut,
   out.scan_poses = run.scan_poses[0];
   out.scan_poses.insert(out.scan_poses.end(), run.scan_poses[1].begin(), run.scan_poses[1].end());
   out.localized_at = run.localized_at[1];
+  out.joined_at = run.joined_at[1];
   out.closures_between = run.closures_to_earlier[1];
   out.first_counters = run.counters[0];
   out.second_counters = run.counters[1];

@@ -1,5 +1,6 @@
 #include "line_map_merging/localization/session_continuation.hpp"
 
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -58,10 +59,50 @@ SessionContinuation::State SessionContinuation::addScan(const SlamScan& scan, co
   else if (searched_ >= search_scans_)
   {
     state_ = State::kGaveUp;
-    localizer_.reset();
+    // The search goes on from the SLAM's own poses: the held scans' odometry is a different frame's.
+    localizer_->startGlobalLocalization();
   }
   else
     held_.push_back(scan);
+  return state_;
+}
+
+SessionContinuation::State SessionContinuation::afterScan(const SlamScan& scan, const linemap::Vec2& sensor,
+                                                          LaserSlam& slam)
+{
+  if (state_ != State::kGaveUp || slam.keyframes().empty()) return state_;
+  ++searched_apart_;
+  LocalizerScan in;
+  in.stamp = scan.stamp;
+  in.points = scan.points;
+  in.odom = slam.currentLocal();  // smooth, unlike the map pose, which optimisations move
+  in.sensor = sensor;
+  const LocalizerResult result = localizer_->addScan(in);
+  if (!result.localized)
+  {
+    candidate_.reset();
+    return state_;
+  }
+  // The same scan in both maps: the saved frame's pose in the SLAM's. Mapped apart, a wrong place found in
+  // a map with look-alike rooms would join two maps for good, so the place must hold while the robot drives
+  // on: tracked all along, the frame implied by each scan staying where the first put it.
+  const linemap::Pose2 implied = slam.currentPose() * result.pose.inverse();
+  const double travelled = slam.keyframes().back().path;
+  if (!candidate_ || result.outcome == LocalizerOutcome::kRecovered)
+    candidate_ = Candidate{implied, travelled};
+  const linemap::Pose2 drift = candidate_->implied.inverse() * implied;
+  if (std::hypot(drift.x, drift.y) > confirm_xy || std::fabs(drift.theta) > confirm_theta)
+  {
+    candidate_.reset();
+    localizer_->startGlobalLocalization();
+    return state_;
+  }
+  if (travelled - candidate_->path < confirm_path) return state_;
+  joined_ = implied;
+  slam.joinSession(session_, *joined_, sigma_xy_, sigma_theta_);
+  state_ = State::kJoined;
+  localizer_.reset();
+  session_ = SlamSession();  // the SLAM holds it now
   return state_;
 }
 
@@ -86,7 +127,13 @@ std::string SessionContinuation::summary() const
       break;
     case State::kGaveUp:
       out << "the robot was not found in the saved map within " << search_scans_
-          << " scans: mapping a new map in its own frame (the saved one is not joined)";
+          << " scans: mapping a new map in its own frame, still looking for it (scan " << searched_apart_
+          << " since)";
+      break;
+    case State::kJoined:
+      out << "joined the saved session after " << searched_apart_ << " scans mapped apart: the saved map "
+          << "frame lies at (" << joined_->x << ", " << joined_->y << ", " << joined_->theta
+          << ") in this map";
       break;
   }
   return out.str();

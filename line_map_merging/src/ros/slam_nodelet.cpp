@@ -129,7 +129,7 @@ class SlamNodelet : public nodelet::Nodelet
     if (!continuation_ || continuation_->state() != SessionContinuation::State::kSearching) return true;
     const auto state = continuation_->addScan(scan, mount.translation(), *slam_);
     if (state == SessionContinuation::State::kSearching) return false;
-    for (const SlamScan& held : continuation_->takeHeld()) slam_->addScan(held);  // from the search's start
+    for (const SlamScan& held : continuation_->takeHeld()) addToSlam(held, mount);  // from the search's start
     if (state == SessionContinuation::State::kPlaced)
     {
       NODELET_INFO("slam: %s", continuation_->summary().c_str());
@@ -144,6 +144,17 @@ class SlamNodelet : public nodelet::Nodelet
     else
       NODELET_WARN("slam: %s", continuation_->summary().c_str());
     return true;
+  }
+
+  /// The SLAM takes the scan; a run that gave its session up looks for itself in it meanwhile, and joins it
+  /// when found (the merger's line map is not joined: it holds what was mapped since).
+  SlamOutcome addToSlam(const SlamScan& scan, const linemap::Pose2& mount)
+  {
+    const SlamOutcome outcome = slam_->addScan(scan);
+    if (continuation_ && continuation_->state() == SessionContinuation::State::kGaveUp &&
+        continuation_->afterScan(scan, mount.translation(), *slam_) == SessionContinuation::State::kJoined)
+      NODELET_INFO("slam: %s", continuation_->summary().c_str());
+    return outcome;
   }
 
   /// The merging nodelet's map through a file beside `path`: its text (empty: no merger answered).
@@ -275,7 +286,7 @@ class SlamNodelet : public nodelet::Nodelet
       scan.points.push_back(mount->apply({r * std::cos(a), r * std::sin(a)}));
     }
     if (!placedInSession(scan, *mount)) return;
-    if (slam_->addScan(scan) == SlamOutcome::kRejected) return;
+    if (addToSlam(scan, *mount) == SlamOutcome::kRejected) return;
     publishTf(stamp, scan.odom);
     if (slam_->graphOptimized() || (slam_->keyframeAdded() && publish_period_ > 0.0 &&
                                     ros::WallTime::now().toSec() - last_publish_ >= publish_period_))

@@ -155,22 +155,25 @@ void LaserSlam::addKeyframe(LocalScanResult& scan, std::size_t scan_index)
 
 void LaserSlam::anchorContinuation(std::size_t k)
 {
+  tieToNearestSaved(k, continuation_->first_keyframe, continuation_->sigma_xy, continuation_->sigma_theta);
+}
+
+void LaserSlam::tieToNearestSaved(std::size_t k, std::size_t saved, double sigma_xy, double sigma_theta)
+{
   const linemap::Vec2 here = graph_.node(k).translation();
   std::size_t nearest = 0;
   double best = std::numeric_limits<double>::infinity();
-  for (std::size_t j = 0; j < continuation_->first_keyframe; ++j)
+  for (std::size_t j = 0; j < saved; ++j)
   {
     const double d = (graph_.node(j).translation() - here).squaredNorm();
     if (d < best) best = d, nearest = j;
   }
-  // The start as a measurement from the saved keyframe nearest to it, robust as a closure is: the closures
-  // that follow outweigh a start known only roughly.
   PoseGraphEdge e;
   e.from = nearest;
   e.to = k;
   e.measurement = graph_.node(nearest).inverse() * graph_.node(k);
-  e.sigma_xy = continuation_->sigma_xy;
-  e.sigma_theta = continuation_->sigma_theta;
+  e.sigma_xy = sigma_xy;
+  e.sigma_theta = sigma_theta;
   e.loop = true;
   graph_.addEdge(e);
 }
@@ -400,6 +403,67 @@ void LaserSlam::continueFrom(const SlamSession& session, const Pose2& start, dou
   // is a loop candidate of the new ones from the start (paths only grow along the keyframes).
   front_end_.restart(keyframes_.back().path + params_.loop_min_path);
   continuation_ = Continuation{keyframes_.size(), start, sigma_xy, sigma_theta};
+}
+
+void LaserSlam::joinSession(const SlamSession& saved, const Pose2& saved_in_map, double sigma_xy,
+                            double sigma_theta)
+{
+  if (saved.keyframes.empty()) throw std::invalid_argument("session: no keyframes to join");
+  if (keyframes_.empty()) throw std::invalid_argument("joinSession: this run has no keyframe to tie yet");
+  if (!(sigma_xy > 0.0) || !(sigma_theta > 0.0))
+    throw std::invalid_argument("joinSession: the tie's sigmas must be positive");
+  const std::size_t n = saved.keyframes.size(), m = saved.scans.size();
+  if (saved.nodes.size() != n)
+    throw std::invalid_argument("session: " + std::to_string(saved.nodes.size()) + " graph nodes for " +
+                                std::to_string(n) + " keyframes");
+  // The saved graph alone first: an edge or scan naming a keyframe it does not have throws here, before
+  // anything of this run changes.
+  PoseGraph graph(graphParams(params_));
+  for (const auto& node : saved.nodes) graph.addNode(saved_in_map * node);
+  for (const auto& e : saved.edges) graph.addEdge(e);
+  std::vector<ScanRecord> scans;
+  scans.reserve(m + scans_.size());
+  for (const auto& s : saved.scans)
+  {
+    if (s.keyframe != static_cast<std::size_t>(-1) && s.keyframe >= n)
+      throw std::invalid_argument("session: a scan on keyframe " + std::to_string(s.keyframe) + " of " +
+                                  std::to_string(n));
+    // A scan before the saved first keyframe holds its map pose, which moves with the map.
+    scans.push_back({s.stamp, s.keyframe, s.keyframe < n ? s.relative : saved_in_map * s.relative});
+  }
+  // This run after them: indices shifted, paths too (paths only grow along the keyframes, and every saved
+  // keyframe is then a loop candidate of this run's).
+  const double path_shift = saved.keyframes.back().path + params_.loop_min_path;
+  for (std::size_t i = 0; i < keyframes_.size(); ++i) graph.addNode(graph_.node(i));
+  for (PoseGraphEdge e : graph_.edges())
+  {
+    e.from += n;
+    e.to += n;
+    graph.addEdge(e);
+  }
+  for (ScanRecord s : scans_)
+  {
+    if (s.keyframe != static_cast<std::size_t>(-1)) s.keyframe += n;
+    scans.push_back(s);
+  }
+  std::vector<SlamKeyframe> keyframes = saved.keyframes;
+  for (SlamKeyframe kf : keyframes_)
+  {
+    kf.scan += m;
+    kf.path += path_shift;
+    keyframes.push_back(std::move(kf));
+  }
+  graph_ = std::move(graph);
+  keyframes_ = std::move(keyframes);
+  scans_ = std::move(scans);
+  front_end_.shiftPath(path_shift);
+  // The loop bookkeeping names keyframes by index: it starts afresh, as after restore().
+  constraints_ = ConstraintBuilder(params_);
+  gate_ = ClosureGate(params_);
+  continuation_ = Continuation{n, saved_in_map, sigma_xy, sigma_theta};
+  tieToNearestSaved(keyframes_.size() - 1, n, sigma_xy, sigma_theta);
+  constraints_.closureAccepted(keyframes_.back().path, graph_);
+  graph_optimized_ = true;  // the trajectory gained the saved keyframes
 }
 
 }  // namespace line_map_merging

@@ -32,6 +32,9 @@ struct SlamRecordingResult
   /// Continuing a session: the scan at which the robot was found (0 with a given start); none: it was not
   /// found, and nothing was mapped (a new run: 0).
   std::optional<std::size_t> placed_at = 0;
+  /// Not found in time: the run was mapped apart, and joined the session at this scan, when found later
+  /// (none: never found; the run's own map alone).
+  std::optional<std::size_t> joined_at;
   double seconds = 0.0;  ///< front and back end, the whole recording (wall time)
   double cpu_seconds =
       0.0;  ///< the same in CPU time of this thread, the search for a continuation's start included
@@ -40,8 +43,8 @@ struct SlamRecordingResult
 
 /// A saved session the run goes on from, as the SLAM nodelet's ~session (SessionContinuation): the
 /// recording's first scan is at `start` in the session's map frame, or, without one, the robot is first found
-/// by global localization in the first `search_scans` scans (then the run starts at the scan it was found at);
-/// known to the sigmas.
+/// by global localization in the first `search_scans` scans (then the run starts at the scan it was found
+/// at); known to the sigmas.
 struct SlamContinuation
 {
   line_map_merging::SlamSession session;

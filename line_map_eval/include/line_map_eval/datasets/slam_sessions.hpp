@@ -32,9 +32,12 @@ struct SessionsRun
   /// Per run: its keyframes (index into the run's scans) at their final base poses.
   std::vector<std::vector<CorrectedKeyframe>> keyframes;
   /// Per run: the scan at which it was placed in the map (0: the first run of a new map, or a given start);
-  /// none: global localization never accepted a pose in the run's first `localize_scans` scans, and the
-  /// run is left out of the graph.
+  /// none: global localization accepted no pose in the run's first `localize_scans` scans.
   std::vector<std::optional<std::size_t>> localized_at;
+  /// Per run not placed in time: the scan at which it was found later. It was mapped apart from its first
+  /// scan, and the map so far joined it there (the map frame is then this run's). A run neither placed nor
+  /// joined is left out of the graph.
+  std::vector<std::optional<std::size_t>> joined_at;
   /// The saved session's scans (if one was continued), in its order, as the joined graph left them.
   std::vector<Pose2> saved_scan_poses;
   /// Per run: the loop edges joining one of its keyframes to a keyframe of an earlier run or of the saved
@@ -89,6 +92,8 @@ struct TwoSessionRun
   /// The second part's scan at which global localization accepted a pose (0 with a given start); none:
   /// never (then the second part is not mapped).
   std::optional<std::size_t> localized_at;
+  /// Not localized in time: the second part's scan at which it was found later and joined (above).
+  std::optional<std::size_t> joined_at;
   std::size_t closures_between = 0;  ///< loop edges joining the two sessions' keyframes
   line_map_merging::SlamCounters first_counters, second_counters;
   double cpu_seconds = 0.0;  ///< both SLAM runs and the localization

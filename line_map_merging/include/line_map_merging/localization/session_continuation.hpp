@@ -5,8 +5,9 @@
 // scans searched before it are not mapped (carried back to them by the odometry, the start would take on the
 // odometry's drift over the whole search). A start given up front (an initial pose) skips the search. When no
 // pose is accepted within a number of scans the session is given up: the SLAM maps a new map in its own frame
-// from the held scans on (none is lost), and the state says so (joining the two by a later closure is not
-// done).
+// from the held scans on (none is lost), and the state says so. The search goes on meanwhile, on the SLAM's
+// own poses as odometry (afterScan): once the robot is found in the saved map the SLAM joins it
+// (LaserSlam::joinSession), in the frame it has been mapping in.
 #pragma once
 
 #include <cstddef>
@@ -31,7 +32,8 @@ class SessionContinuation
   {
     kSearching,  ///< global localization in the saved map under way: the SLAM gets no scans yet
     kPlaced,     ///< the SLAM continues the session
-    kGaveUp,     ///< not found in time: the SLAM maps a new map in its own frame
+    kGaveUp,     ///< not found in time: the SLAM maps a new map in its own frame, the search goes on
+    kJoined,     ///< found later: the SLAM joined the saved session into its own frame
   };
 
   /// `search_scans`: scans to search before giving up (>= 1). `start`: the first scan's base pose in the
@@ -46,6 +48,12 @@ class SessionContinuation
   /// `slam` takeHeld() and this scan. Afterwards nothing happens and the state is returned. `sensor`: the
   /// laser's position in the base frame.
   State addScan(const SlamScan& scan, const linemap::Vec2& sensor, LaserSlam& slam);
+  /// After the SLAM took `scan` (every scan, whatever the state): while the session is given up, the scan is
+  /// searched for in the saved map with the SLAM's front-end pose as its odometry; at the pose accepted the
+  /// SLAM joins the saved session (kJoined) once the place has held while the robot drove 5 m on (tracked
+  /// throughout, each scan implying the same saved frame within 0.3 m and 0.05 rad): a place looking like
+  /// another would otherwise join two maps for good. Otherwise nothing happens. Returns the state.
+  State afterScan(const SlamScan& scan, const linemap::Vec2& sensor, LaserSlam& slam);
   /// The scans held during the search that the SLAM is to take before the current one: after kGaveUp every
   /// scan searched, after kPlaced none; emptied.
   std::vector<SlamScan> takeHeld();
@@ -53,6 +61,10 @@ class SessionContinuation
   State state() const { return state_; }
   /// Scans searched so far (the one placed at included).
   std::size_t searched() const { return searched_; }
+  /// Scans searched after giving up, up to the one the SLAM joined at (kJoined).
+  std::size_t searchedApart() const { return searched_apart_; }
+  /// The saved map frame's pose in the SLAM's map frame (kJoined).
+  const std::optional<linemap::Pose2>& joinedAt() const { return joined_; }
   /// The accepted pose, of the scan placed at (searched() - 1), which the SLAM continued from (kPlaced).
   const std::optional<linemap::Pose2>& found() const { return found_; }
   const SlamSession& session() const { return session_; }
@@ -66,8 +78,20 @@ class SessionContinuation
   std::optional<linemap::Pose2> given_start_, found_;
   std::vector<SlamScan> held_;
   double sigma_xy_, sigma_theta_;
+  /// A place found after giving up, being confirmed: the saved frame's pose it implies, and the SLAM's path
+  /// when it was found.
+  struct Candidate
+  {
+    linemap::Pose2 implied;
+    double path = 0.0;
+  };
+  std::optional<Candidate> candidate_;
+  /// The confirmation: a path this long [m] tracked with every scan's implied frame within these of the
+  /// first.
+  static constexpr double confirm_path = 5.0, confirm_xy = 0.3, confirm_theta = 0.05;
   State state_ = State::kSearching;
-  std::size_t searched_ = 0;
+  std::size_t searched_ = 0, searched_apart_ = 0;
+  std::optional<linemap::Pose2> joined_;
 };
 
 }  // namespace line_map_merging

@@ -92,6 +92,17 @@ class LaserSlam
   /// by that pose, the rest by the chain and by loop closures to the saved keyframes as to its own.
   void continueFrom(const SlamSession& session, const linemap::Pose2& start, double sigma_xy,
                     double sigma_theta);
+  /// Joins a saved session this run could not be placed in when it started (it mapped apart, in its own
+  /// frame) once the robot is found in it: `saved_in_map` is the saved map frame's pose in this run's map
+  /// frame. The saved keyframes, graph and scans are moved there and put before this run's, and this run's
+  /// newest keyframe is tied to the saved keyframe nearest to it, known to `sigma_xy` and `sigma_theta`;
+  /// loop closures to the saved keyframes follow as to this run's own. This run's frame stays the map
+  /// frame (the graph's fixed node is then the first saved keyframe, so it holds up to `saved_in_map`'s
+  /// error); the front end goes on undisturbed. Throws
+  /// std::invalid_argument (and changes nothing) for an inconsistent session, one without keyframes, a
+  /// run without a keyframe yet, or sigmas that are not positive.
+  void joinSession(const SlamSession& saved, const linemap::Pose2& saved_in_map, double sigma_xy,
+                   double sigma_theta);
 
  private:
   /// Whether the stamp went back by more than time_jump_tolerance (counted).
@@ -138,6 +149,9 @@ class LaserSlam
   /// The continued trajectory's first keyframe `k`: its node at the start pose, tied to the nearest saved
   /// keyframe.
   void anchorContinuation(std::size_t k);
+  /// Ties keyframe `k` where the graph has it to the nearest of the keyframes before `saved` (a loop edge
+  /// with these sigmas, robust as a closure is: the closures that follow outweigh a start known roughly).
+  void tieToNearestSaved(std::size_t k, std::size_t saved, double sigma_xy, double sigma_theta);
   bool keyframe_added_ = false, graph_optimized_ = false;
   SlamCounters counters_;
 };

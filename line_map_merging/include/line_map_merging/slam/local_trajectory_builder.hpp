@@ -54,6 +54,8 @@ class LocalTrajectoryBuilder
   /// Starts afresh in a new local frame (the next scan at its origin), the path counted on from `path`
   /// (a new trajectory in a restored session: paths only grow along the keyframes).
   void restart(double path);
+  /// Counts the path on from `shift` further (a run joined after a saved session: LaserSlam::joinSession).
+  void shiftPath(double shift) { path_ += shift; }
   /// Fault injection (tests, the robustness benchmark): the front end's estimate jumps by `slip`,
   /// composed onto the last scan's pose, as after a false match it cannot see; its local map moves with
   /// it, so the following scans are matched consistently in the slipped frame and only the graph's
