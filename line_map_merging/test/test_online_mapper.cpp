@@ -8,9 +8,11 @@
 #include <cmath>
 #include <filesystem>
 #include <random>
+#include <unordered_map>
 
 #include "drift_drive.hpp"
 #include "line_map_merging/online/online_mapper.hpp"
+#include "linemap/atomic_file.hpp"
 
 using namespace line_map_merging;
 using linemap::Pose2;
@@ -468,4 +470,64 @@ TEST(TrajectoryAnchor, ScansAndNodesOutOfOrder)
     EXPECT_EQ(nc.corrections[i].first, stamps[i]);
     EXPECT_NEAR(nc.corrections[i].second.x, shifts[i], 1e-12);
   }
+}
+
+// A saved map joined by a run that mapped apart in another frame (OnlineMapper::appendText): the first half
+// of the drive mapped and saved; the second half mapped in a frame `moved` from the first's. Appended at
+// `moved`, the saved keyframes lie where the second run's frame has them (at once, before any trajectory),
+// and a trajectory of both halves in that frame (naming the saved keyframes by stamp) puts every keyframe on
+// the truth there. A file that cannot be read changes nothing.
+TEST(OnlineMapperFiles, AnAppendedMapJoinsAtThePlaceGivenAndMovesWithTheTrajectory)
+{
+  Drive run;
+  const int half = kScans / 2;
+  auto first = mapper();
+  for (int i = 0; i < half; ++i) first->addScan(run.scan(i));
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("online_append_" + std::to_string(::getpid()) + ".yaml"))
+          .string();
+  first->merger().save(path);
+  const std::string text = linemap::readWholeFile(path, "map file");
+  std::filesystem::remove(path);
+  const std::size_t saved_keyframes = first->merger().keyframeCount();
+
+  const Pose2 moved(3.0, -1.0, 0.5);  // the first run's map frame in the second's
+  auto second = mapper();
+  for (int i = half; i < kScans; ++i) second->addScan(run.scan(i, moved));
+  const std::size_t own_keyframes = second->merger().keyframeCount();
+  EXPECT_THROW(second->appendText(text.substr(0, text.size() / 2), "cut", moved), MapFileError);
+  EXPECT_EQ(second->merger().keyframeCount(), own_keyframes);
+
+  EXPECT_EQ(second->appendText(text, "saved", moved), saved_keyframes);
+  EXPECT_EQ(second->merger().keyframeCount(), saved_keyframes + own_keyframes);
+  EXPECT_EQ(second->appendText(text, "saved", moved), 0u) << "keyframes it has are skipped";
+  std::unordered_map<double, Pose2> saved_pose;
+  for (const KeyframeInfo& k : first->merger().keyframes()) saved_pose.emplace(k.stamp, k.pose);
+  std::size_t placed = 0;
+  for (const KeyframeInfo& k : second->merger().keyframes())
+    if (const auto it = saved_pose.find(k.stamp); it != saved_pose.end())
+    {
+      const Pose2 expected = moved * it->second;
+      EXPECT_NEAR(k.pose.x, expected.x, 1e-9);
+      EXPECT_NEAR(k.pose.y, expected.y, 1e-9);
+      EXPECT_NEAR(linemap::normalizeAngle(k.pose.theta - expected.theta), 0.0, 1e-9);
+      ++placed;
+    }
+  EXPECT_EQ(placed, saved_keyframes);
+  std::vector<StampedPose> nodes;
+  for (int i = 0; i < kScans; i += 2) nodes.emplace_back(run.stamps[i], moved * run.truth[i]);
+  second->addTrajectory(nodes);
+  double worst = 0.0;
+  for (const KeyframeInfo& k : second->merger().keyframes())
+  {
+    const Pose2 t = moved * run.truth[scanOf(run, k.stamp)];
+    worst = std::max(worst, std::hypot(k.pose.x - t.x, k.pose.y - t.y));
+  }
+  EXPECT_LT(worst, kPosTol);
+  // The saved originals are in the map: the wall reaches back to where the first half began seeing it.
+  const Vec2 wall_start = moved.apply(Vec2(-1.0, 1.0));
+  double nearest = 1e9;
+  for (const MapSegment& m : second->merger().map())
+    nearest = std::min({nearest, (m.segment.start - wall_start).norm(), (m.segment.end - wall_start).norm()});
+  EXPECT_LT(nearest, 0.01);
 }

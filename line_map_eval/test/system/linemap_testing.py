@@ -563,15 +563,16 @@ def session_keyframes(session):
     return [(t, p[0], p[1]) for t, p in zip(stamps, poses)], map_keyframes
 
 
-def start_session_pipeline(name, session):
-    """linemap.launch slam:=true session:=SESSION, its output in the artefact NAME_roslaunch.log. Returns (the
-    roslaunch process, the SLAM's and the merger's diagnostics as they arrive, the SLAM's session key) once
-    both report; the caller stops the process."""
+def start_session_pipeline(name, session, search_scans=400):
+    """linemap.launch slam:=true session:=SESSION session_search_scans:=SEARCH_SCANS, its output in the artefact
+    NAME_roslaunch.log. Returns (the roslaunch process, the SLAM's and the merger's diagnostics as they arrive,
+    the SLAM's session key) once both report; the caller stops the process."""
     diagnostics = component_diagnostics(slam="laser slam", merging="line map merging")
     slam, merging = diagnostics["slam"], diagnostics["merging"]
     launch_log = open(os.path.join(artifact_dir(), name + "_roslaunch.log"), "w")
     pipeline = subprocess.Popen(["roslaunch", os.path.join(repo_root(), "launch", "linemap.launch"),
-                                 "slam:=true", "session:=" + session, "evaluate:=false", "output:=log"],
+                                 "slam:=true", "session:=" + session, "session_search_scans:=%d" % search_scans,
+                                 "evaluate:=false", "output:=log"],
                                 stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
     key = "session " + session
     try:

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <sstream>
 
+#include "linemap/atomic_file.hpp"
 #include "linemap/small_helpers.hpp"
 
 namespace line_map_merging
@@ -240,6 +241,18 @@ MapCommandAnswer ConcurrentMapper::loadMap(const std::string& path)
   const std::string error = attemptAll([&] { load(path); });
   return answerOf(error, "loaded " + std::to_string(live_->merger().segmentCount()) + " segments, " +
                              std::to_string(live_->merger().keyframeCount()) + " keyframes from " + path);
+}
+
+MapCommandAnswer ConcurrentMapper::appendMap(const std::string& path, const linemap::Pose2& placed)
+{
+  std::size_t added = 0;
+  const std::string error = attemptAll(
+      [&]
+      {
+        finish();
+        added = live_->appendText(linemap::readWholeFile(path, "map file"), path, placed);
+      });
+  return answerOf(error, "merged " + std::to_string(added) + " keyframes of " + path + " into the map");
 }
 
 std::string ConcurrentMapper::autosave(const std::string& path, double now, bool wait)

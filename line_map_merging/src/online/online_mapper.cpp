@@ -268,6 +268,33 @@ void OnlineMapper::loadText(const std::string& text, const std::string& origin)
   adoptLoadedMap();
 }
 
+std::size_t OnlineMapper::appendText(const std::string& text, const std::string& origin,
+                                     const linemap::Pose2& placed)
+{
+  std::unique_ptr<Merger> saved = merger_->clone();
+  if (!saved || !merger_->hasProvenance())
+    throw MapFileError(origin + ": the " + merger_->name() +
+                       " merger keeps no original segments, so a saved map cannot be merged into its map");
+  saved->reset();
+  saved->loadText(text, origin);  // throws before this map changes
+  std::unordered_map<std::uint64_t, std::vector<linemap::Segment2>> originals;
+  for (const MapSegment& s : saved->map())
+    for (const Leaf& leaf : saved->leaves(s.id)) originals[leaf.keyframe].push_back(leaf.segment);
+  std::vector<KeyframeInfo> keyframes = saved->keyframes();
+  std::sort(keyframes.begin(), keyframes.end(),
+            [](const KeyframeInfo& a, const KeyframeInfo& b) { return a.stamp < b.stamp; });
+  std::size_t added = 0;
+  for (const KeyframeInfo& k : keyframes)
+  {
+    if (keyframe_stamps_.count(k.stamp)) continue;
+    const linemap::Pose2 laser = placed * k.pose;
+    if (!merge(k.stamp, laser, laser, k.mount, originals[k.index])) continue;
+    history_.add(k.stamp, laser * k.mount.inverse());
+    ++added;
+  }
+  return added;
+}
+
 void OnlineMapper::adoptLoadedMap()
 {
   gate_.reset();

@@ -1,6 +1,7 @@
 // ROS wrapper of the online mapper (concurrent_mapper.hpp): line_segments (+ tf) and optimized_trajectory
 // in; line_map, its markers and its occupancy grid (grid_publisher.hpp) out.
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <line_map_msgs/AppendMap.h>
 #include <line_map_msgs/LoadMap.h>
 #include <line_map_msgs/ResetMap.h>
 #include <line_map_msgs/SaveMap.h>
@@ -81,6 +82,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
         nh.subscribe("optimized_trajectory", 10, &LineMapMergingNodelet::onTrajectory, this, hints);
     save_srv_ = pnh.advertiseService("save_map", &LineMapMergingNodelet::onSave, this);
     load_srv_ = pnh.advertiseService("load_map", &LineMapMergingNodelet::onLoad, this);
+    append_srv_ = pnh.advertiseService("append_map", &LineMapMergingNodelet::onAppend, this);
     reset_srv_ = pnh.advertiseService("reset_map", &LineMapMergingNodelet::onReset, this);
     const double period = mapper_->mapper().params().autosave_period;
     if (period > 0.0 && !autosave_path_.empty())
@@ -192,6 +194,14 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     return answer(res, loaded) && (loaded.success ? publish(ros::Time::now()) : true);
   }
 
+  bool onAppend(line_map_msgs::AppendMap::Request& req, line_map_msgs::AppendMap::Response& res)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const MapCommandAnswer added =
+        mapper_->appendMap(req.path, linemap::Pose2(req.pose.x, req.pose.y, req.pose.theta));
+    return answer(res, added) && (added.success ? publish(ros::Time::now()) : true);
+  }
+
   bool onReset(line_map_msgs::ResetMap::Request&, line_map_msgs::ResetMap::Response& res)
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -240,7 +250,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   std::unique_ptr<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>> waiting_;
   ros::Subscriber trajectory_sub_;
   ros::Publisher map_pub_, marker_pub_;
-  ros::ServiceServer save_srv_, load_srv_, reset_srv_;
+  ros::ServiceServer save_srv_, load_srv_, append_srv_, reset_srv_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;
   ros::WallTimer autosave_timer_, poll_timer_;
 };

@@ -8,6 +8,7 @@
 // scans search the saved map until the robot is found, then the SLAM maps on in it and the merger gets its
 // map.
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <line_map_msgs/AppendMap.h>
 #include <line_map_msgs/LoadMap.h>
 #include <line_map_msgs/SaveMap.h>
 #include <nav_msgs/Path.h>
@@ -147,13 +148,21 @@ class SlamNodelet : public nodelet::Nodelet
   }
 
   /// The SLAM takes the scan; a run that gave its session up looks for itself in it meanwhile, and joins it
-  /// when found (the merger's line map is not joined: it holds what was mapped since).
+  /// when found: the graph here, the saved line map into the merger's (append_map, at the place found).
   SlamOutcome addToSlam(const SlamScan& scan, const linemap::Pose2& mount)
   {
     const SlamOutcome outcome = slam_->addScan(scan);
-    if (continuation_ && continuation_->state() == SessionContinuation::State::kGaveUp &&
-        continuation_->afterScan(scan, mount.translation(), *slam_) == SessionContinuation::State::kJoined)
-      NODELET_INFO("slam: %s", continuation_->summary().c_str());
+    if (!continuation_ || continuation_->state() != SessionContinuation::State::kGaveUp ||
+        continuation_->afterScan(scan, mount.translation(), *slam_) != SessionContinuation::State::kJoined)
+      return outcome;
+    NODELET_INFO("slam: %s", continuation_->summary().c_str());
+    if (!session_map_.empty())  // the service call waits for the merger: not in the scan callback
+      merger_loader_ = std::thread(
+          [this, text = std::move(session_map_), placed = *continuation_->joinedAt()]
+          {
+            const std::string note = appendMergerMap(session_path_, text, placed);  // "; what happened"
+            NODELET_INFO("slam: %s", note.substr(2).c_str());
+          });
     return outcome;
   }
 
@@ -231,6 +240,22 @@ class SlamNodelet : public nodelet::Nodelet
     std::remove(srv.request.path.c_str());
     return done ? "; the line map to " + merger_
                 : "; the line map not loaded (merger '" + merger_ + "': " + srv.response.message + ")";
+  }
+
+  std::string appendMergerMap(const std::string& path, const std::string& text, const linemap::Pose2& placed)
+  {
+    line_map_msgs::AppendMap srv;
+    srv.request.path = path + ".map.tmp";
+    srv.request.pose.x = placed.x;
+    srv.request.pose.y = placed.y;
+    srv.request.pose.theta = placed.theta;
+    linemap::writeFileAtomically(srv.request.path, text, "map file");
+    const bool done = !merger_.empty() &&
+                      ros::service::waitForService(merger_ + "/append_map", ros::Duration(1.0)) &&
+                      ros::service::call(merger_ + "/append_map", srv) && srv.response.success;
+    std::remove(srv.request.path.c_str());
+    return done ? "; the saved line map merged into " + merger_ + "'s"
+                : "; the saved line map not merged (merger '" + merger_ + "': " + srv.response.message + ")";
   }
 
   /// Before the tf wait (false: turned away): a zero stamp would be posed at the latest transform;

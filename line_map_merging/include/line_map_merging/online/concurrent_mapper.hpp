@@ -66,6 +66,8 @@ class ConcurrentMapper
   /// load keeps the map).
   MapCommandAnswer saveMap(const std::string& path);
   MapCommandAnswer loadMap(const std::string& path);
+  /// OnlineMapper::appendText of the file at `path` (the append_map service), after finish().
+  MapCommandAnswer appendMap(const std::string& path, const linemap::Pose2& placed);
   /// OnlineMapper::autosave on the live mapper (a snapshot of a whole state); `wait` (the last save)
   /// finishes the adjustments first.
   std::string autosave(const std::string& path, double now, bool wait = false);

@@ -122,6 +122,15 @@ class OnlineMapper
   /// The same from the text of a map file (a session's map); `origin` names it in errors.
   void loadText(const std::string& text, const std::string& origin);
 
+  /// Adds the keyframes of a map file's text to this map (a saved map joined by a run that mapped apart,
+  /// LaserSlam::joinSession): each keyframe's original segments are merged as a new keyframe at its pose
+  /// moved by `placed` (the file's map frame in this one's), in the order of their stamps; keyframes whose
+  /// stamp this map has are skipped. Their poses stand in for their odometry, so a trajectory naming their
+  /// stamps moves them, as after load(). Needs a merger that keeps provenance (the originals); throws
+  /// MapFileError naming `origin` (and keeps the map) for a file that cannot be read or such a merger.
+  /// Returns the keyframes added.
+  std::size_t appendText(const std::string& text, const std::string& origin, const linemap::Pose2& placed);
+
   /// The autosave policy: true when autosave is on, the map changed since the last save and the
   /// period has passed since the last save (`now` in seconds, e.g. wall time).
   bool autosaveDue(double now) const;
