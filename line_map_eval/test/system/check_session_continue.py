@@ -16,6 +16,7 @@ import unittest
 
 import rospy
 import rostest
+from line_map_msgs.srv import SaveMap
 from nav_msgs.msg import Path
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
@@ -154,6 +155,11 @@ class CheckSessionContinue(unittest.TestCase):
                               slam.get(key), len(paths), len(paths[-1].poses) if paths else 0, len(saved),
                               merging.get("keyframes"), saved_map_keyframes),
                           limit, gone=lt.gone_nodes("/tf"))
+            # The joined line map as an artefact (linemap_export draws it).
+            rospy.wait_for_service("/line_map_merging/save_map", timeout=60.0)
+            saved_map = rospy.ServiceProxy("/line_map_merging/save_map", SaveMap)(
+                path=os.path.join(lt.artifact_dir(), "session_join_map.yaml"))
+            self.assertTrue(saved_map.success, saved_map.message)
         finally:
             lt.stop(pipeline, 30)
         last = paths[-1].poses
