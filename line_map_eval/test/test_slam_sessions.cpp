@@ -35,28 +35,43 @@ RelationsError errorOf(const std::vector<Relation>& relations, const Recording& 
     if (poses[i]) trajectory.push_back({recording.scans[i].stamp, *poses[i]});
   return relationsError(relations, trajectory);
 }
+/// A world's drive cut at a revisit past its middle, with its true relations and keyframes, the default SLAM
+/// and localization parameters, and one uninterrupted SLAM run's relations error.
+struct CutDrive
+{
+  Recording recording;
+  std::vector<Relation> relations;
+  std::vector<CorrectedKeyframe> truth;
+  std::size_t revisit = 0, cut = 0;
+  line_map_merging::LaserSlamParams slam_params;
+  line_map_merging::LocalizerParams localizer_params;
+  RelationsError one;
+
+  explicit CutDrive(const std::string& world_file)
+      : recording(simulate(loadWorld(world_file)).recording),
+        relations(truthRelations(recording)),
+        truth(recording.keyframes),
+        slam_params(line_map_merging::LaserSlamParams::fromParams(
+            loadParameterFiles({LINEMAP_SOURCE_DIR "/config/slam.yaml"}))),
+        localizer_params(line_map_merging::LocalizerParams::fromParams(
+            loadParameterFiles({LINEMAP_SOURCE_DIR "/config/localization.yaml"})))
+  {
+    recording.keyframes.clear();
+    revisit = revisitPastTheMiddle(truth, recording.scans.size());
+    cut = truth[revisit].scan_index;
+    const SlamRecordingResult single = runSlam(recording, slam_params);
+    one = errorOf(relations, recording, {single.scan_poses.begin(), single.scan_poses.end()});
+  }
+};
 }  // namespace
 
 TEST(SlamSessions, TheSecondPartContinuesTheFirstPartsSession)
 {
-  const World world = loadWorld(LINEMAP_SOURCE_DIR "/config/worlds/loop.yaml");
-  Recording recording = simulate(world).recording;
-  const std::vector<Relation> relations = truthRelations(recording);
-  const std::vector<CorrectedKeyframe> truth = recording.keyframes;
-  recording.keyframes.clear();
-  const std::size_t k = revisitPastTheMiddle(truth, recording.scans.size());
-  ASSERT_GT(k, 0u) << "the drive never comes back to a place it saw";
-  const std::size_t cut = truth[k].scan_index;
+  const CutDrive d(LINEMAP_SOURCE_DIR "/config/worlds/loop.yaml");
+  ASSERT_GT(d.revisit, 0u) << "the drive never comes back to a place it saw";
+  const auto& [recording, relations, truth, k, cut, slam_params, localizer_params, one] = d;
   // The map frame is the first scan's pose.
   const Pose2 start = truth.front().pose.inverse() * truth[k].pose * Pose2(0.15, -0.1, 0.04);
-
-  const auto slam_params = line_map_merging::LaserSlamParams::fromParams(
-      loadParameterFiles({LINEMAP_SOURCE_DIR "/config/slam.yaml"}));
-  const auto localizer_params = line_map_merging::LocalizerParams::fromParams(
-      loadParameterFiles({LINEMAP_SOURCE_DIR "/config/localization.yaml"}));
-  const SlamRecordingResult single = runSlam(recording, slam_params);
-  const RelationsError one =
-      errorOf(relations, recording, {single.scan_poses.begin(), single.scan_poses.end()});
   const TwoSessionRun two = runTwoSessions(recording, cut, slam_params, localizer_params, true, start);
   const RelationsError both = errorOf(relations, recording, two.scan_poses);
   std::printf(
@@ -77,21 +92,9 @@ TEST(SlamSessions, TheSecondPartContinuesTheFirstPartsSession)
 // at a wrong place, the second part's keyframes would be metres off.
 TEST(SlamSessions, ARunNotFoundInTimeJoinsWhenFoundLater)
 {
-  const World world = loadWorld(LINEMAP_SOURCE_DIR "/config/worlds/office_changed.yaml");
-  Recording recording = simulate(world).recording;
-  const std::vector<Relation> relations = truthRelations(recording);
-  const std::vector<CorrectedKeyframe> truth = recording.keyframes;
-  recording.keyframes.clear();
-  const std::size_t k = revisitPastTheMiddle(truth, recording.scans.size());
-  ASSERT_GT(k, 0u) << "the drive never comes back to a place it saw";
-  const std::size_t cut = truth[k].scan_index;
-  const auto slam_params = line_map_merging::LaserSlamParams::fromParams(
-      loadParameterFiles({LINEMAP_SOURCE_DIR "/config/slam.yaml"}));
-  const auto localizer_params = line_map_merging::LocalizerParams::fromParams(
-      loadParameterFiles({LINEMAP_SOURCE_DIR "/config/localization.yaml"}));
-  const SlamRecordingResult single = runSlam(recording, slam_params);
-  const RelationsError one =
-      errorOf(relations, recording, {single.scan_poses.begin(), single.scan_poses.end()});
+  const CutDrive d(LINEMAP_SOURCE_DIR "/config/worlds/office_changed.yaml");
+  ASSERT_GT(d.revisit, 0u) << "the drive never comes back to a place it saw";
+  const auto& [recording, relations, truth, k, cut, slam_params, localizer_params, one] = d;
   const TwoSessionRun two =
       runTwoSessions(recording, cut, slam_params, localizer_params, true, std::nullopt, 1);
   ASSERT_FALSE(two.localized_at.has_value()) << "placed within one scan: nothing mapped apart to join";

@@ -38,7 +38,7 @@ void usage(std::ostream& out)
          "                         [--corrected LOG] [--trajectory FILE]... [--param key=value]...\n"
          "                         [--config FILE] [--write FILE] [--out DIR] [--no-figures]\n"
          "                         [--localize MAP_FILE [--initial-pose X,Y,THETA] [--localize-config FILE]\n"
-         "                          [--localize-param key=value]...] [--two-sessions]\n"
+         "                          [--localize-param key=value]...] [--two-sessions [--search-scans N]]\n"
          "Prints the mean and standard deviation of the translational and rotational relation error of\n"
          "each trajectory (default: --slam).\n"
          "  --slam              laser SLAM on the log's scans and odometry\n"
@@ -63,7 +63,9 @@ void usage(std::ostream& out)
          "  --two-sessions      the SLAM in two sessions: the log cut at its middle scan, the first half\n"
          "                      mapped and saved, the second half (odometry from zero, as after a\n"
          "                      restart) globally localized in the first's keyframes and continuing its\n"
-         "                      session; the joined trajectory against the single run\n";
+         "                      session; the joined trajectory against the single run\n"
+         "  --search-scans N    with --two-sessions: scans to search before the second half maps apart\n"
+         "                      (joined to the first when found later; default 400)\n";
 }
 
 Trajectory readTrajectory(const std::string& path)
@@ -120,6 +122,7 @@ struct Arguments
   std::string corrected, config, write, localize, localize_config, out_dir = "linemap_relations_out";
   std::optional<Pose2> initial_pose;
   bool slam = false, slam_no_odom = false, odometry = false, figures = true, two_sessions = false;
+  std::size_t search_scans = 400;
 };
 
 Pose2 parsePose(const std::string& v)
@@ -162,6 +165,22 @@ bool parseArguments(int argc, char** argv, Arguments& a)
       a.odometry = true;
     else if (arg == "--two-sessions")
       a.two_sessions = true;
+    else if (arg == "--search-scans")
+    {
+      const std::string v = cl.value();
+      std::size_t used = 0;
+      long n = -1;
+      try
+      {
+        n = std::stol(v, &used);
+      }
+      catch (const std::exception&)
+      {
+      }
+      if (n < 1 || used != v.size())
+        throw std::invalid_argument("--search-scans expects a whole number >= 1, got '" + v + "'");
+      a.search_scans = static_cast<std::size_t>(n);
+    }
     else if (arg == "--no-figures")
       a.figures = false;
     else if (arg == "--initial-pose")
@@ -256,9 +275,9 @@ void reportTwoSessions(const Evaluation& ev)
       loadParameterFiles(configFiles(a.localize_config, "config/localization.yaml"));
   for (const auto& o : a.localize_overrides) applyOverride(loc_params, o);
   const std::size_t cut = ev.recording.scans.size() / 2;
-  const TwoSessionRun r =
-      runTwoSessions(ev.recording, cut, line_map_merging::LaserSlamParams::fromParams(params),
-                     line_map_merging::LocalizerParams::fromParams(loc_params), true);
+  const TwoSessionRun r = runTwoSessions(
+      ev.recording, cut, line_map_merging::LaserSlamParams::fromParams(params),
+      line_map_merging::LocalizerParams::fromParams(loc_params), true, std::nullopt, a.search_scans);
   Trajectory joined;
   for (std::size_t i = 0; i < r.scan_poses.size() && i < ev.raw.scans.size(); ++i)
     if (r.scan_poses[i]) joined.push_back({ev.raw.scans[i].timestamp, *r.scan_poses[i]});
@@ -267,8 +286,12 @@ void reportTwoSessions(const Evaluation& ev)
   if (r.localized_at)
     extra << "the second half localized at its scan " << *r.localized_at << ", " << r.closures_between
           << " closures between the sessions, " << line_map_merging::closureSummary(r.second_counters);
+  else if (r.joined_at)
+    extra << "the second half not found within " << a.search_scans
+          << " scans: mapped apart and joined at its scan " << *r.joined_at << ", " << r.closures_between
+          << " closures between the sessions, " << line_map_merging::closureSummary(r.second_counters);
   else
-    extra << "the second half never localized: not mapped";
+    extra << "the second half never found: not mapped";
   print("two sessions, joined", relationsError(ev.relations, joined), extra.str());
   if (!a.write.empty()) writeTrajectory(a.write, joined);
 }
