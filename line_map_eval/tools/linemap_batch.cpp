@@ -135,22 +135,6 @@ struct Arguments
   BatchOptions options;
 };
 
-std::size_t parseEvery(const std::string& v)
-{
-  std::size_t used = 0;
-  long n = -1;
-  try
-  {
-    n = std::stol(v, &used);
-  }
-  catch (const std::exception&)
-  {
-  }
-  if (n < 0 || used != v.size())
-    throw std::invalid_argument("--every: expected a count >= 0, got '" + v + "'");
-  return static_cast<std::size_t>(n);
-}
-
 /// Parses the command line; false after --help. Throws std::invalid_argument on a bad one.
 bool parseArguments(int argc, char** argv, Arguments& a)
 {
@@ -176,7 +160,7 @@ bool parseArguments(int argc, char** argv, Arguments& a)
     else if (list)
       list->push_back(cl.value());
     else if (arg == "--every")
-      a.options.adjust_every = parseEvery(cl.value());
+      a.options.adjust_every = parseCount(arg, cl.value());
     else if (arg == "--no-progress")
       a.options.progress = false;
     else if (arg == "--no-figures")

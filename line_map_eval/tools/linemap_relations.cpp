@@ -166,21 +166,7 @@ bool parseArguments(int argc, char** argv, Arguments& a)
     else if (arg == "--two-sessions")
       a.two_sessions = true;
     else if (arg == "--search-scans")
-    {
-      const std::string v = cl.value();
-      std::size_t used = 0;
-      long n = -1;
-      try
-      {
-        n = std::stol(v, &used);
-      }
-      catch (const std::exception&)
-      {
-      }
-      if (n < 1 || used != v.size())
-        throw std::invalid_argument("--search-scans expects a whole number >= 1, got '" + v + "'");
-      a.search_scans = static_cast<std::size_t>(n);
-    }
+      a.search_scans = parseCount(arg, cl.value(), 1);
     else if (arg == "--no-figures")
       a.figures = false;
     else if (arg == "--initial-pose")

@@ -20,6 +20,7 @@
 #include "line_map_eval/simulation/ground_truth.hpp"
 #include "line_map_eval/simulation/simulator.hpp"
 #include "linemap/small_helpers.hpp"
+#include "tool_main.hpp"
 
 namespace
 {
@@ -62,13 +63,14 @@ Readings without a return are +inf (above range_max, as REP 117 says).
 unsigned long long parseCount(const std::string& option, const char* text, unsigned long long min,
                               unsigned long long max)
 {
-  char* end = nullptr;
-  errno = 0;
-  const unsigned long long v = std::strtoull(text, &end, 10);
-  if (errno != 0 || end == text || *end != '\0' || text[0] == '-' || v < min || v > max)
-    usageError(option + " expects an integer in [" + std::to_string(min) + ", " + std::to_string(max) +
-               "], got '" + text + "'");
-  return v;
+  try
+  {
+    return line_map_eval::parseCount(option, text, min, max);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    usageError(e.what());
+  }
 }
 
 double parseNumber(const std::string& option, const char* text, double min, double max)

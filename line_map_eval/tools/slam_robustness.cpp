@@ -74,20 +74,6 @@ struct Arguments
   std::uint32_t seed = 1;
 };
 
-std::size_t parseCount(const std::string& option, const std::string& v)
-{
-  try
-  {
-    std::size_t used = 0;
-    const long long n = std::stoll(v, &used);
-    if (used == v.size() && n >= 0) return static_cast<std::size_t>(n);
-  }
-  catch (const std::exception&)
-  {
-  }
-  throw std::invalid_argument(option + " expects a count, got '" + v + "'");
-}
-
 bool parseArguments(int argc, char** argv, Arguments& a)
 {
   for (CommandLine cl(argc, argv); cl.next();)

@@ -1,6 +1,9 @@
 // The frame of a tool's main: the command line, then the work, each with its own exit code.
 #pragma once
 
+#include <cerrno>
+#include <climits>
+#include <cstdlib>
 #include <exception>
 #include <functional>
 #include <iostream>
@@ -35,6 +38,24 @@ class CommandLine
   int i_ = 0;
   std::string arg_;
 };
+
+/// The value of `option` as a whole number in [min, max]; throws std::invalid_argument naming the option and
+/// the text otherwise (a sign, a fraction, trailing characters, out of range).
+inline unsigned long long parseCount(const std::string& option, const std::string& text,
+                                     unsigned long long min = 0, unsigned long long max = ULLONG_MAX)
+{
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
+  if (errno != 0 || text.empty() || *end != '\0' || text[0] == '-' || text[0] == '+' || text[0] == ' ' ||
+      v < min || v > max)
+    throw std::invalid_argument(option + " expects a whole number " +
+                                (max == ULLONG_MAX
+                                     ? ">= " + std::to_string(min)
+                                     : "in [" + std::to_string(min) + ", " + std::to_string(max) + "]") +
+                                ", got '" + text + "'");
+  return v;
+}
 
 /// Runs `parse`: false (--help) prints the usage on stdout and returns 0; an exception prints
 /// "NAME: what" + `gap` and the usage on stderr and returns 2. Then returns `run`'s exit code, or 1
