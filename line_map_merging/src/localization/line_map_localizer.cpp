@@ -84,6 +84,7 @@ LocalizerParams LocalizerParams::fromParams(const linemap::ParamSet& p)
   s.hypothesis_min_share = share(p, "global/hypothesis_min_share", s.hypothesis_min_share);
   s.hypotheses = countParam(p, "global/hypotheses", s.hypotheses, 1);
   s.research_every = countParam(p, "global/research_every", s.research_every, 1);
+  s.research_every_apart = countParam(p, "global/research_every_apart", s.research_every_apart, 1);
   s.accept_share = share(p, "global/accept_share", s.accept_share);
   s.accept_margin = share(p, "global/accept_margin", s.accept_margin);
   s.accept_travel = p.getNonNegative("global/accept_travel", s.accept_travel);

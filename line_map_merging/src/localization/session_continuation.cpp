@@ -59,8 +59,11 @@ SessionContinuation::State SessionContinuation::addScan(const SlamScan& scan, co
   else if (searched_ >= search_scans_)
   {
     state_ = State::kGaveUp;
-    // The search goes on from the SLAM's own poses: the held scans' odometry is a different frame's.
-    localizer_->startGlobalLocalization();
+    // The search goes on from the SLAM's own poses (the held scans' odometry is a different frame's), its
+    // global searches repeated less often: the SLAM maps in the same thread meanwhile.
+    LocalizerParams apart = localizer_->params();
+    apart.research_every = apart.research_every_apart;
+    localizer_ = std::make_unique<LineMapLocalizer>(sessionSurfaces(session_), apart);
   }
   else
     held_.push_back(scan);

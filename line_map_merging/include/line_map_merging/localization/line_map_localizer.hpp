@@ -65,9 +65,12 @@ struct LocalizerParams
   double hypothesis_smoothing = 0.15;  ///< weight of the newest scan in a hypothesis' mean
   std::size_t hypotheses = 30;         ///< at most tracked at once
   std::size_t research_every = 10;     ///< scans between global searches while undecided
-  double accept_share = 0.6;           ///< mean inlier share an accepted hypothesis needs
-  double accept_margin = 0.08;         ///< lead over the best distinct rival
-  double accept_travel = 2.0;          ///< [m] or accept_turn [rad] of motion since the hypothesis began
+  /// The same while a SLAM that gave its session search up maps apart (SessionContinuation): it looks on for
+  /// itself in the same thread.
+  std::size_t research_every_apart = 50;
+  double accept_share = 0.6;    ///< mean inlier share an accepted hypothesis needs
+  double accept_margin = 0.08;  ///< lead over the best distinct rival
+  double accept_travel = 2.0;   ///< [m] or accept_turn [rad] of motion since the hypothesis began
   double accept_turn = 1.5;
   std::size_t accept_scans = 10;  ///< and at least this many scans
 
