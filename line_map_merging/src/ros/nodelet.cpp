@@ -80,10 +80,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     waiting_->subscribe(nh, "line_segments", queue, [this](const SegmentsEvent& e) { return arrive(e); });
     trajectory_sub_ =
         nh.subscribe("optimized_trajectory", 10, &LineMapMergingNodelet::onTrajectory, this, hints);
-    save_srv_ = pnh.advertiseService("save_map", &LineMapMergingNodelet::onSave, this);
-    load_srv_ = pnh.advertiseService("load_map", &LineMapMergingNodelet::onLoad, this);
-    append_srv_ = pnh.advertiseService("append_map", &LineMapMergingNodelet::onAppend, this);
-    reset_srv_ = pnh.advertiseService("reset_map", &LineMapMergingNodelet::onReset, this);
+    advertiseServices(pnh);
     const double period = mapper_->mapper().params().autosave_period;
     if (period > 0.0 && !autosave_path_.empty())
       autosave_timer_ = nh.createWallTimer(ros::WallDuration(period), [this](const ros::WallTimerEvent&)
@@ -178,6 +175,14 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     if (autosave_path_.empty()) return;
     const std::string error = mapper_->autosave(autosave_path_, now, !std::isfinite(now));
     if (!error.empty()) NODELET_WARN_THROTTLE(30.0, "line_map_merging: autosave failed: %s", error.c_str());
+  }
+
+  void advertiseServices(ros::NodeHandle& pnh)
+  {
+    save_srv_ = pnh.advertiseService("save_map", &LineMapMergingNodelet::onSave, this);
+    load_srv_ = pnh.advertiseService("load_map", &LineMapMergingNodelet::onLoad, this);
+    append_srv_ = pnh.advertiseService("append_map", &LineMapMergingNodelet::onAppend, this);
+    reset_srv_ = pnh.advertiseService("reset_map", &LineMapMergingNodelet::onReset, this);
   }
 
   bool onSave(line_map_msgs::SaveMap::Request& req, line_map_msgs::SaveMap::Response& res)
