@@ -531,3 +531,61 @@ TEST(OnlineMapperFiles, AnAppendedMapJoinsAtThePlaceGivenAndMovesWithTheTrajecto
     nearest = std::min({nearest, (m.segment.start - wall_start).norm(), (m.segment.end - wall_start).norm()});
   EXPECT_LT(nearest, 0.01);
 }
+
+// Two robots into one map (lanes): both drive the same drive at the same stamps, the second in its own map
+// frame, which lies at `placed` in the first's. Until it is placed its scans and trajectory wait; placed, its
+// scans become keyframes of their own (the same stamps as the first robot's keyframes, yet no replay) and
+// its trajectory, in its own frame, puts them on the truth; each robot's trajectory moves its keyframes only.
+TEST(OnlineMapperLanes, ASecondRobotWaitsForItsPlacementAndKeepsItsOwnKeyframes)
+{
+  Drive run;
+  const Pose2 placed(2.0, -1.0, 0.7);  // the second robot's map frame in the first's
+  auto m = mapper();
+  for (int i = 0; i < kScans; ++i)
+  {
+    m->addScan(run.scan(i));
+    StampedScan second = run.scan(i, placed.inverse());
+    second.lane = 1;
+    EXPECT_EQ(m->addScan(second), ScanOutcome::kHeld);
+  }
+  const std::size_t first_keyframes = static_cast<std::size_t>(kScans / 4);
+  EXPECT_EQ(m->merger().keyframeCount(), first_keyframes);
+  EXPECT_FALSE(m->lanePlacement(1).has_value());
+  std::vector<StampedPose> own_nodes;
+  for (const auto& [stamp, pose] : run.nodes()) own_nodes.emplace_back(stamp, placed.inverse() * pose);
+  EXPECT_FALSE(m->addTrajectory(own_nodes, 1)) << "a trajectory of a robot not placed waits";
+  EXPECT_EQ(m->merger().keyframeCount(), first_keyframes);
+
+  ASSERT_TRUE(m->placeLane(1, placed));
+  EXPECT_EQ(m->merger().keyframeCount(), 2 * first_keyframes);
+  EXPECT_EQ(m->counters().replayed, 0u);
+  std::unordered_map<std::uint64_t, Pose2> second_robot;  // its keyframes: on the truth after its trajectory
+  for (const KeyframeInfo& k : m->merger().keyframes())
+    if (k.index >= first_keyframes)
+    {
+      const Pose2& t = run.truth[scanOf(run, k.stamp)];
+      EXPECT_NEAR(std::hypot(k.pose.x - t.x, k.pose.y - t.y), 0.0, kPosTol);
+      second_robot.emplace(k.index, k.pose);
+    }
+  EXPECT_EQ(second_robot.size(), first_keyframes);
+  EXPECT_GT(keyframeError(run, *m).first, 1.0) << "the first robot's keyframes are still on its odometry";
+
+  ASSERT_TRUE(m->addTrajectory(run.nodes(), 0));
+  expectKeyframesOnTheTruth(run, *m);
+  for (const KeyframeInfo& k : m->merger().keyframes())
+    if (const auto it = second_robot.find(k.index); it != second_robot.end())
+    {
+      EXPECT_EQ(k.pose.x, it->second.x);
+      EXPECT_EQ(k.pose.y, it->second.y);
+    }
+
+  // Placed again 0.1 m further along x: the second robot's keyframes move by that, the first's stay.
+  const Pose2 nudge(0.1, 0.0, 0.0);
+  ASSERT_TRUE(m->placeLane(1, nudge * placed));
+  for (const KeyframeInfo& k : m->merger().keyframes())
+  {
+    const Pose2& t = run.truth[scanOf(run, k.stamp)];
+    const double expected_dx = k.index >= first_keyframes ? 0.1 : 0.0;
+    EXPECT_NEAR(k.pose.x - t.x, expected_dx, kPosTol);
+  }
+}

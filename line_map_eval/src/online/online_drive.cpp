@@ -54,24 +54,31 @@ Pose2 sampleAt(const std::vector<std::pair<double, Pose2>>& samples, double t)
                               (t - before.first) / (after->first - before.first));
 }
 
+line_map_merging::StampedScan stampedScan(const Recording& rec, const BackEndSchedule& schedule,
+                                          const SegmentSource& segments, std::size_t index)
+{
+  const Pose2& mount = rec.base_to_laser;
+  const RecordedScan& scan = rec.scans.at(index);
+  line_map_merging::StampedScan s;
+  s.stamp = scan.stamp;
+  s.odom = scan.odom * mount;
+  s.laser = schedule.map_to_odom.empty() ? *s.odom : sampleAt(schedule.map_to_odom, scan.stamp) * *s.odom;
+  s.mount = mount;
+  s.segments = segments(index, *s.odom);
+  return s;
+}
+
 std::size_t driveOnline(line_map_merging::OnlineMapper& mapper, const Recording& rec,
                         const BackEndSchedule& schedule, const SegmentSource& segments,
                         const OnlineDriveHooks& hooks)
 {
-  const Pose2& mount = rec.base_to_laser;
   std::size_t next = 0;
   for (std::size_t i = 0; i < rec.scans.size(); ++i)
   {
-    const RecordedScan& scan = rec.scans[i];
-    line_map_merging::StampedScan s;
-    s.stamp = scan.stamp;
-    s.odom = scan.odom * mount;
-    s.laser = schedule.map_to_odom.empty() ? *s.odom : sampleAt(schedule.map_to_odom, scan.stamp) * *s.odom;
-    s.mount = mount;
-    s.segments = segments(i, *s.odom);
+    const line_map_merging::StampedScan s = stampedScan(rec, schedule, segments, i);
     mapper.addScan(s);
     if (hooks.scan) hooks.scan(i, s);
-    for (; next < schedule.trajectories.size() && schedule.trajectories[next].stamp <= scan.stamp; ++next)
+    for (; next < schedule.trajectories.size() && schedule.trajectories[next].stamp <= s.stamp; ++next)
     {
       if (hooks.before_trajectory) hooks.before_trajectory(next);
       mapper.addTrajectory(schedule.trajectories[next].poses);

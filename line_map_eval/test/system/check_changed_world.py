@@ -50,27 +50,6 @@ def sensor_bag(bag, out):
             o.write(topic, msg, t)
 
 
-def rigid_fit(pairs):
-    """(theta, tx, ty) mapping the first point of each pair onto the second, least squares (2D closed form)."""
-    n = float(len(pairs))
-    ax = sum(p[0][0] for p in pairs) / n
-    ay = sum(p[0][1] for p in pairs) / n
-    bx = sum(p[1][0] for p in pairs) / n
-    by = sum(p[1][1] for p in pairs) / n
-    cross = sum((p[0][0] - ax) * (p[1][1] - by) - (p[0][1] - ay) * (p[1][0] - bx) for p in pairs)
-    dot = sum((p[0][0] - ax) * (p[1][0] - bx) + (p[0][1] - ay) * (p[1][1] - by) for p in pairs)
-    theta = math.atan2(cross, dot)
-    c, s = math.cos(theta), math.sin(theta)
-    return theta, bx - (c * ax - s * ay), by - (s * ax + c * ay)
-
-
-def moved(segment, fit):
-    theta, tx, ty = fit
-    c, s = math.cos(theta), math.sin(theta)
-    x1, y1, x2, y2 = segment
-    return (c * x1 - s * y1 + tx, s * x1 + c * y1 + ty, c * x2 - s * y2 + tx, s * x2 + c * y2 + ty)
-
-
 def along(segments, walls, distance=0.15):
     """Metres of `segments` lying within `distance` of the centre lines `walls` (both ends) over their extent."""
     return sum(along_one(segments, wall, distance) for wall in walls)
@@ -111,9 +90,9 @@ class CheckChangedWorld(unittest.TestCase):
                 true_pose[round(p.header.stamp.to_sec(), 6)] = (p.pose.position.x, p.pose.position.y)
         pairs = [((x, y), true_pose[round(t, 6)]) for t, x, y in saved if round(t, 6) in true_pose]
         self.assertGreater(len(pairs), 20, "saved keyframes matched to true poses by stamp")
-        fit = rigid_fit(pairs)
+        fit = lt.rigid_fit(pairs)
         with open(os.path.join(work, "batch", "cae", "map.yaml")) as f:
-            first_map = [moved(tuple(s["segment"]), fit) for s in yaml.safe_load(f)["segments"]]
+            first_map = [lt.moved(tuple(s["segment"]), fit) for s in yaml.safe_load(f)["segments"]]
         for name, wall in REMOVED.items():
             self.assertGreater(along(first_map, wall), 1.5, "the first session's map holds the %s" % name)
 
@@ -139,7 +118,7 @@ class CheckChangedWorld(unittest.TestCase):
                           lambda: "%s segment sets handled" % merging.get("segment sets handled"), limit)
         finally:
             lt.stop(pipeline, 30)
-        live = [moved(s, fit) for s in lt.map_segments(maps[-1])]
+        live = [lt.moved(s, fit) for s in lt.map_segments(maps[-1])]
         summary = ["changed world: %s; %s originals retired; %d map segments" % (
             slam.get(key), merging.get(retired), len(live))]
         for name, wall in list(REMOVED.items()) + list(REPORTED.items()):

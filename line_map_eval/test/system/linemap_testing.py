@@ -315,6 +315,29 @@ class Collector:
 
 # ---- ground-truth wall coverage (independent of the C++ metrics) ----
 
+def rigid_fit(pairs):
+    """(theta, tx, ty) mapping the first point of each pair onto the second, least squares (2D closed form)."""
+    n = float(len(pairs))
+    ax = sum(p[0][0] for p in pairs) / n
+    ay = sum(p[0][1] for p in pairs) / n
+    bx = sum(p[1][0] for p in pairs) / n
+    by = sum(p[1][1] for p in pairs) / n
+    cross = sum((p[0][0] - ax) * (p[1][1] - by) - (p[0][1] - ay) * (p[1][0] - bx) for p in pairs)
+    dot = sum((p[0][0] - ax) * (p[1][0] - bx) + (p[0][1] - ay) * (p[1][1] - by) for p in pairs)
+    theta = math.atan2(cross, dot)
+    c, s = math.cos(theta), math.sin(theta)
+    return theta, bx - (c * ax - s * ay), by - (s * ax + c * ay)
+
+
+def moved(segment, fit):
+    """The segment (x1, y1, x2, y2) moved by `fit` (theta, tx, ty)."""
+    theta, tx, ty = fit
+    c, s = math.cos(theta), math.sin(theta)
+    x1, y1, x2, y2 = segment
+    return (c * x1 - s * y1 + tx, s * x1 + c * y1 + ty, c * x2 - s * y2 + tx, s * x2 + c * y2 + ty)
+
+
+
 def load_truth(path):
     with open(path) as f:
         return yaml.safe_load(f)

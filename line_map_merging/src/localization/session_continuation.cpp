@@ -83,24 +83,22 @@ SessionContinuation::State SessionContinuation::afterScan(const SlamScan& scan, 
   const LocalizerResult result = localizer_->addScan(in);
   if (!result.localized)
   {
-    candidate_.reset();
+    confirmation_.reset();
     return state_;
   }
-  // The same scan in both maps: the saved frame's pose in the SLAM's. Mapped apart, a wrong place found in
-  // a map with look-alike rooms would join two maps for good, so the place must hold while the robot drives
-  // on: tracked all along, the frame implied by each scan staying where the first put it.
+  // The same scan in both maps: the saved frame's pose in the SLAM's.
   const linemap::Pose2 implied = slam.currentPose() * result.pose.inverse();
-  const double travelled = slam.keyframes().back().path;
-  if (!candidate_ || result.outcome == LocalizerOutcome::kRecovered)
-    candidate_ = Candidate{implied, travelled};
-  const linemap::Pose2 drift = candidate_->implied.inverse() * implied;
-  if (std::hypot(drift.x, drift.y) > confirm_xy || std::fabs(drift.theta) > confirm_theta)
+  switch (confirmation_.add(implied, slam.keyframes().back().path,
+                            result.outcome == LocalizerOutcome::kRecovered))
   {
-    candidate_.reset();
-    localizer_->startGlobalLocalization();
-    return state_;
+    case PlaceConfirmation::Verdict::kBroken:
+      localizer_->startGlobalLocalization();
+      return state_;
+    case PlaceConfirmation::Verdict::kHolding:
+      return state_;
+    case PlaceConfirmation::Verdict::kConfirmed:
+      break;
   }
-  if (travelled - candidate_->path < confirm_path) return state_;
   joined_ = implied;
   slam.joinSession(session_, *joined_, sigma_xy_, sigma_theta_);
   state_ = State::kJoined;

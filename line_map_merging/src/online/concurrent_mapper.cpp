@@ -54,29 +54,37 @@ ScanOutcome ConcurrentMapper::addScan(const StampedScan& scan)
   return outcome;
 }
 
-bool ConcurrentMapper::addTrajectory(const std::vector<StampedPose>& base_poses)
+bool ConcurrentMapper::addTrajectory(const std::vector<StampedPose>& base_poses, std::size_t lane)
 {
   if (job_.valid())
   {
-    log_.push_back({nullptr, base_poses});
+    log_.push_back({nullptr, base_poses, lane});
     queued_max_ = std::max(queued_max_, queuedTrajectories());
     return false;
   }
-  if (background_ && start(base_poses)) return false;
-  return live_->addTrajectory(base_poses);
+  if (background_ && start(base_poses, lane)) return false;
+  return live_->addTrajectory(base_poses, lane);
 }
 
-bool ConcurrentMapper::start(const std::vector<StampedPose>& nodes)
+bool ConcurrentMapper::placeLane(std::size_t lane, const linemap::Pose2& lane_in_map)
+{
+  const bool changed = live_->placeLane(lane, lane_in_map);
+  if (job_.valid())
+    log_.push_back({[lane, lane_in_map](OnlineMapper& m) { m.placeLane(lane, lane_in_map); }, {}});
+  return changed;
+}
+
+bool ConcurrentMapper::start(const std::vector<StampedPose>& nodes, std::size_t lane)
 {
   const auto t0 = Clock::now();
   std::unique_ptr<OnlineMapper> copy = live_->clone();
   if (!copy) return false;
   last_copy_ms_ = linemap::millisecondsSince(t0);
   job_ = std::async(std::launch::async,
-                    [copy = std::move(copy), nodes]() mutable -> Adjusted
+                    [copy = std::move(copy), nodes, lane]() mutable -> Adjusted
                     {
                       const auto w0 = Clock::now();
-                      copy->addTrajectory(nodes);
+                      copy->addTrajectory(nodes, lane);
                       return {std::move(copy), linemap::millisecondsSince(w0)};
                     });
   return true;
@@ -120,14 +128,15 @@ bool ConcurrentMapper::takeResult()
   if (next < events.size())
   {
     const std::vector<StampedPose> nodes = std::move(events[next].trajectory);
-    if (!start(nodes)) live_->addTrajectory(nodes);
+    const std::size_t lane = events[next].lane;
+    if (!start(nodes, lane)) live_->addTrajectory(nodes, lane);
     for (++next; next < events.size(); ++next)
     {
       if (events[next].apply && swapped) events[next].apply(*live_);
       if (job_.valid())
         log_.push_back(std::move(events[next]));
       else if (!events[next].apply)
-        live_->addTrajectory(events[next].trajectory);
+        live_->addTrajectory(events[next].trajectory, events[next].lane);
     }
   }
   last_swap_ms_ = linemap::millisecondsSince(t0);

@@ -42,25 +42,41 @@ OnlineMapperParams OnlineMapperParams::fromParams(const linemap::ParamSet& param
   return p;
 }
 
+OnlineMapper::Lane::Lane(const OnlineMapperParams& params)
+    : gate(params.gate), nodes(params.gate, params.stamp_tolerance, params.keyframe_buffer)
+{
+  if (params.keyframe_source == KeyframeSource::kTrajectory) nodes.activate(-INFINITY, std::nullopt);
+}
+
 OnlineMapper::OnlineMapper(std::unique_ptr<Merger> merger, const OnlineMapperParams& params)
-    : merger_(std::move(merger)),
-      params_(params),
-      gate_(params.gate),
-      nodes_(params.gate, params.stamp_tolerance, params.keyframe_buffer),
-      time_jumps_(params.time_jump_tolerance, {"scan"})
+    : merger_(std::move(merger)), params_(params), time_jumps_(params.time_jump_tolerance, {"scan"})
 {
   if (!merger_) throw std::invalid_argument("OnlineMapper: no merger");
-  if (params_.keyframe_source == KeyframeSource::kTrajectory) nodes_.activate(-INFINITY, std::nullopt);
+  lane(0).placement = linemap::Pose2();
 }
 
-double OnlineMapper::newestKeyframeStamp() const
+OnlineMapper::Lane& OnlineMapper::lane(std::size_t index)
 {
-  return keyframe_order_.empty() ? -INFINITY
-                                 : *std::max_element(keyframe_order_.begin(), keyframe_order_.end());
+  auto it = lanes_.find(index);
+  if (it == lanes_.end()) it = lanes_.emplace(index, Lane(params_)).first;
+  return it->second;
 }
 
-bool OnlineMapper::merge(double stamp, const linemap::Pose2& laser, const linemap::Pose2& continuous,
-                         const linemap::Pose2& mount, const std::vector<linemap::Segment2>& segments)
+const OnlineMapper::Lane& OnlineMapper::lane(std::size_t index) const
+{
+  return lanes_.at(index);
+}
+
+double OnlineMapper::newestKeyframeStamp(std::size_t lane) const
+{
+  double newest = -INFINITY;
+  for (const double stamp : this->lane(lane).keyframe_stamps) newest = std::max(newest, stamp);
+  return newest;
+}
+
+bool OnlineMapper::merge(std::size_t lane, double stamp, const linemap::Pose2& laser,
+                         const linemap::Pose2& continuous, const linemap::Pose2& mount,
+                         const std::vector<linemap::Segment2>& segments)
 {
   Keyframe keyframe;
   keyframe.index = next_index_;
@@ -84,23 +100,26 @@ bool OnlineMapper::merge(double stamp, const linemap::Pose2& laser, const linema
   counters_.retired += result.retired;
   ++counters_.keyframes_added;
   continuous_[keyframe.index] = continuous;
-  keyframe_stamps_.insert(stamp);
+  lane_of_[keyframe.index] = lane;
+  this->lane(lane).keyframe_stamps.insert(stamp);
   keyframe_order_.push_back(stamp);
   ++next_index_;
   afterMapChange();
   return true;
 }
 
-bool OnlineMapper::mergeNodes(std::vector<NodeKeyframes<HeldScan>::Ready> ready)
+bool OnlineMapper::mergeNodes(std::size_t lane, std::vector<NodeKeyframes<HeldScan>::Ready> ready)
 {
+  Lane& l = this->lane(lane);
   bool merged = false;
   for (auto& r : ready)
   {
-    if (keyframe_stamps_.count(r.stamp)) continue;
-    if (!merge(r.stamp, r.pose * r.payload.mount, r.payload.continuous, r.payload.mount, r.payload.segments))
+    if (l.keyframe_stamps.count(r.stamp)) continue;
+    if (!merge(lane, r.stamp, r.pose * r.payload.mount, r.payload.continuous, r.payload.mount,
+               r.payload.segments))
       continue;
     ++counters_.node_keyframes;
-    gate_.setReference(r.pose);
+    l.gate.setReference(r.pose);
     merged = true;
   }
   return merged;
@@ -120,38 +139,64 @@ ScanOutcome OnlineMapper::addScan(const StampedScan& scan)
     ++counters_.dropped;
     return ScanOutcome::kRejected;
   }
+  Lane& l = lane(scan.lane);
+  if (!l.placement)
+  {
+    holdUnplaced(l, scan);
+    return ScanOutcome::kHeld;
+  }
+  StampedScan placed = scan;
+  placed.laser = *l.placement * scan.laser;
+  return addPlacedScan(placed);
+}
+
+void OnlineMapper::holdUnplaced(Lane& l, const StampedScan& scan)
+{
+  l.unplaced.push_back(scan);
+  const double horizon = scan.stamp - params_.keyframe_buffer;
+  const auto kept = std::find_if(l.unplaced.begin(), l.unplaced.end(),
+                                 [&](const StampedScan& s) { return s.stamp >= horizon; });
+  counters_.unplaced_dropped += static_cast<std::size_t>(kept - l.unplaced.begin());
+  l.unplaced.erase(l.unplaced.begin(), kept);
+}
+
+ScanOutcome OnlineMapper::addPlacedScan(const StampedScan& scan)
+{
+  Lane& l = lane(scan.lane);
   const linemap::Pose2 laser_to_base = scan.mount.inverse();
   const linemap::Pose2 base = scan.laser * laser_to_base;
   // A scan with the stamp of a keyframe is that keyframe again (a bag replayed with --loop):
   // merging it twice would only add duplicate leaves. The gate moves on from it as from a
   // keyframe, so a replay takes no keyframes in between.
-  if (keyframe_stamps_.count(scan.stamp))
+  if (l.keyframe_stamps.count(scan.stamp))
   {
     ++counters_.replayed;
-    gate_.setReference(base);
+    l.gate.setReference(base);
     return ScanOutcome::kReplayed;
   }
   // Every scan, keyframe or not, may be a node of the back end's trajectory.
   const linemap::Pose2 continuous = scan.odom ? *scan.odom : scan.laser;
-  history_.add(scan.stamp, continuous * laser_to_base);
+  l.history.add(scan.stamp, continuous * laser_to_base);
   if (params_.keyframe_source != KeyframeSource::kTf)
   {
     // Held for the trajectory that may name it a node (before the first one too: its nodes after
     // the newest keyframe are among these scans).
-    const bool merged = mergeNodes(nodes_.addScan(scan.stamp, {continuous, scan.mount, scan.segments}));
-    if (nodes_.active()) return merged ? ScanOutcome::kKeyframe : ScanOutcome::kHeld;
+    const bool merged =
+        mergeNodes(scan.lane, l.nodes.addScan(scan.stamp, {continuous, scan.mount, scan.segments}));
+    if (l.nodes.active()) return merged ? ScanOutcome::kKeyframe : ScanOutcome::kHeld;
   }
-  if (!gate_.wouldAccept(base))
+  if (!l.gate.wouldAccept(base))
   {
     ++counters_.below_gate;
     return ScanOutcome::kBelowGate;
   }
-  if (!merge(scan.stamp, scan.laser, continuous, scan.mount, scan.segments)) return ScanOutcome::kRejected;
-  gate_.accept(base);
+  if (!merge(scan.lane, scan.stamp, scan.laser, continuous, scan.mount, scan.segments))
+    return ScanOutcome::kRejected;
+  l.gate.accept(base);
   return ScanOutcome::kKeyframe;
 }
 
-bool OnlineMapper::addTrajectory(const std::vector<StampedPose>& base_poses)
+bool OnlineMapper::addTrajectory(const std::vector<StampedPose>& base_poses, std::size_t lane)
 {
   ++counters_.trajectories;
   std::vector<StampedPose> nodes;
@@ -168,37 +213,104 @@ bool OnlineMapper::addTrajectory(const std::vector<StampedPose>& base_poses)
     ++counters_.ignored_trajectories;
     return false;
   }
+  Lane& l = this->lane(lane);
+  if (!l.placement)
+  {
+    l.unplaced_trajectory = std::move(nodes);
+    return false;
+  }
+  for (auto& node : nodes) node.second = *l.placement * node.second;
+  return addPlacedTrajectory(std::move(nodes), lane);
+}
+
+bool OnlineMapper::addPlacedTrajectory(std::vector<StampedPose> nodes, std::size_t lane)
+{
+  Lane& l = this->lane(lane);
   // A back end is present: its nodes choose the keyframes (NodeKeyframes' policy).
   const bool names_scans =
-      params_.keyframe_source != KeyframeSource::kTf && !nodes_.active() &&
+      params_.keyframe_source != KeyframeSource::kTf && !l.nodes.active() &&
       std::any_of(nodes.begin(), nodes.end(),
                   [&](const StampedPose& n)
-                  { return history_.at(n.first, params_.stamp_tolerance, 0.0).has_value(); });
-  const std::optional<double> oldest =
-      keyframe_order_.empty()
-          ? std::nullopt
-          : std::optional<double>(*std::min_element(keyframe_order_.begin(), keyframe_order_.end()));
-  const bool rebuilt = nodes_.rebuildAtFirstTrajectory(names_scans, oldest);
+                  { return l.history.at(n.first, params_.stamp_tolerance, 0.0).has_value(); });
+  // The map is made again from the nodes only when it holds this lane's keyframes alone.
+  const bool alone =
+      std::all_of(lane_of_.begin(), lane_of_.end(), [&](const auto& entry) { return entry.second == lane; });
+  std::optional<double> oldest;
+  for (const double stamp : l.keyframe_stamps) oldest = std::min(oldest.value_or(INFINITY), stamp);
+  const bool rebuilt = alone && l.nodes.rebuildAtFirstTrajectory(names_scans, oldest);
   if (rebuilt)
   {
     clearKeyframes();
     ++counters_.rebuilds;
   }
-  const bool adjusted = adjustTo(nodes);
+  const bool adjusted = adjustTo(lane, nodes);
   if (params_.keyframe_source == KeyframeSource::kTf) return adjusted;
-  nodes_.takeOver(names_scans, newestKeyframeStamp(), gate_.reference());
-  if (!nodes_.active()) return adjusted;
-  const bool merged = mergeNodes(nodes_.addTrajectory(nodes));
+  l.nodes.takeOver(names_scans, newestKeyframeStamp(lane), l.gate.reference());
+  if (!l.nodes.active()) return adjusted;
+  const bool merged = mergeNodes(lane, l.nodes.addTrajectory(nodes));
   return merged || adjusted || rebuilt;
 }
 
-bool OnlineMapper::adjustTo(const std::vector<StampedPose>& nodes)
+bool OnlineMapper::placeLane(std::size_t lane, const linemap::Pose2& lane_in_map)
 {
-  const NodeCorrections nc = nodeCorrections(history_, nodes, params_.stamp_tolerance, params_.max_gap);
+  if (!finite(lane_in_map)) throw std::invalid_argument("OnlineMapper::placeLane: a non-finite placement");
+  Lane& l = this->lane(lane);
+  if (l.placement)
+  {
+    // Placed again: its keyframes move by the change, the rest of the map stays.
+    const linemap::Pose2 change = lane_in_map * l.placement->inverse();
+    l.placement = lane_in_map;
+    std::vector<std::pair<std::uint64_t, linemap::Pose2>> poses;
+    for (const KeyframeInfo& k : merger_->keyframes())
+      if (lane_of_.count(k.index) && lane_of_.at(k.index) == lane)
+        poses.emplace_back(k.index, change * k.pose);
+    if (poses.empty()) return false;
+    merger_->adjust(poses);
+    ++counters_.adjustments;
+    afterMapChange();
+    return true;
+  }
+  l.placement = lane_in_map;
+  std::vector<StampedScan> waiting = std::move(l.unplaced);
+  l.unplaced.clear();
+  std::optional<std::vector<StampedPose>> trajectory = std::move(l.unplaced_trajectory);
+  l.unplaced_trajectory.reset();
+  bool changed = false;
+  for (StampedScan& scan : waiting)
+  {
+    scan.laser = lane_in_map * scan.laser;
+    changed = addPlacedScan(scan) == ScanOutcome::kKeyframe || changed;
+  }
+  if (trajectory)
+  {
+    for (auto& node : *trajectory) node.second = lane_in_map * node.second;
+    changed = addPlacedTrajectory(std::move(*trajectory), lane) || changed;
+  }
+  return changed;
+}
+
+std::optional<linemap::Pose2> OnlineMapper::lanePlacement(std::size_t lane) const
+{
+  const auto it = lanes_.find(lane);
+  return it == lanes_.end() ? std::nullopt : it->second.placement;
+}
+
+bool OnlineMapper::adjustTo(std::size_t lane, const std::vector<StampedPose>& nodes)
+{
+  Lane& l = this->lane(lane);
+  const NodeCorrections nc = nodeCorrections(l.history, nodes, params_.stamp_tolerance, params_.max_gap);
   counters_.unmatched_poses += nc.unmatched;
   if (nc.corrections.empty() || merger_->keyframeCount() == 0) return false;
 
-  const std::vector<KeyframeInfo> keyframes = merger_->keyframes();
+  std::vector<KeyframeInfo> keyframes = merger_->keyframes();
+  keyframes.erase(std::remove_if(keyframes.begin(), keyframes.end(),
+                                 [&](const KeyframeInfo& k)
+                                 {
+                                   const auto it = lane_of_.find(k.index);
+                                   return (it == lane_of_.end() ? 0 : it->second) != lane;
+                                 }),
+                  keyframes.end());
+  if (keyframes.empty()) return false;
   std::vector<std::pair<std::uint64_t, linemap::Pose2>> poses;
   poses.reserve(keyframes.size());
   for (const KeyframeInfo& k : keyframes)
@@ -219,12 +331,12 @@ bool OnlineMapper::adjustTo(const std::vector<StampedPose>& nodes)
   }
   counters_.last_gma_ms = linemap::millisecondsSince(t0);
   ++counters_.adjustments;
-  // The gate measures motion from the last keyframe where it now is.
+  // The gate measures motion from the lane's last keyframe where it now is.
   const auto last =
       std::max_element(keyframes.begin(), keyframes.end(),
                        [](const KeyframeInfo& a, const KeyframeInfo& b) { return a.index < b.index; });
   for (const auto& [index, pose] : poses)
-    if (index == last->index) gate_.setReference(pose * last->mount.inverse());
+    if (index == last->index) l.gate.setReference(pose * last->mount.inverse());
   afterMapChange();
   return true;
 }
@@ -233,7 +345,7 @@ bool OnlineMapper::observeTime(double clock, double stamp)
 {
   if (!time_jumps_.observe(clock, stamp)) return false;
   ++counters_.time_jumps;
-  gate_.reset();
+  for (auto& [index, l] : lanes_) l.gate.reset();
   return true;
 }
 
@@ -241,7 +353,8 @@ void OnlineMapper::clearKeyframes()
 {
   merger_->reset();
   continuous_.clear();
-  keyframe_stamps_.clear();
+  lane_of_.clear();
+  for (auto& [index, l] : lanes_) l.keyframe_stamps.clear();
   keyframe_order_.clear();
   next_index_ = 0;
   afterMapChange();
@@ -250,10 +363,15 @@ void OnlineMapper::clearKeyframes()
 void OnlineMapper::reset()
 {
   clearKeyframes();
-  gate_.reset();
   const double last_stamp = time_jumps_.lastStamp();
-  nodes_.clear(last_stamp > 0.0 ? last_stamp : -INFINITY);  // no node of the past is waited for
-  history_.clear();
+  for (auto& [index, l] : lanes_)
+  {
+    l.gate.reset();
+    l.nodes.clear(last_stamp > 0.0 ? last_stamp : -INFINITY);  // no node of the past is waited for
+    l.history.clear();
+    l.unplaced.clear();
+    l.unplaced_trajectory.reset();
+  }
 }
 
 void OnlineMapper::load(const std::string& path)
@@ -283,13 +401,14 @@ std::size_t OnlineMapper::appendText(const std::string& text, const std::string&
   std::vector<KeyframeInfo> keyframes = saved->keyframes();
   std::sort(keyframes.begin(), keyframes.end(),
             [](const KeyframeInfo& a, const KeyframeInfo& b) { return a.stamp < b.stamp; });
+  Lane& l = lane(0);
   std::size_t added = 0;
   for (const KeyframeInfo& k : keyframes)
   {
-    if (keyframe_stamps_.count(k.stamp)) continue;
+    if (l.keyframe_stamps.count(k.stamp)) continue;
     const linemap::Pose2 laser = placed * k.pose;
-    if (!merge(k.stamp, laser, laser, k.mount, originals[k.index])) continue;
-    history_.add(k.stamp, laser * k.mount.inverse());
+    if (!merge(0, k.stamp, laser, laser, k.mount, originals[k.index])) continue;
+    l.history.add(k.stamp, laser * k.mount.inverse());
     ++added;
   }
   return added;
@@ -297,21 +416,28 @@ std::size_t OnlineMapper::appendText(const std::string& text, const std::string&
 
 void OnlineMapper::adoptLoadedMap()
 {
-  gate_.reset();
-  history_.clear();
+  // The loaded keyframes are lane 0's: a saved map keeps no robots apart.
+  for (auto& [index, l] : lanes_)
+  {
+    l.gate.reset();
+    l.history.clear();
+    l.keyframe_stamps.clear();
+  }
   continuous_.clear();
-  keyframe_stamps_.clear();
+  lane_of_.clear();
   keyframe_order_.clear();
   next_index_ = 0;
+  Lane& l = lane(0);
   for (const KeyframeInfo& k : merger_->keyframes())
   {
     next_index_ = std::max(next_index_, k.index + 1);
-    keyframe_stamps_.insert(k.stamp);
+    l.keyframe_stamps.insert(k.stamp);
     keyframe_order_.push_back(k.stamp);
-    history_.add(k.stamp, k.pose * k.mount.inverse());
+    l.history.add(k.stamp, k.pose * k.mount.inverse());
     continuous_[k.index] = k.pose;
+    lane_of_[k.index] = 0;
   }
-  nodes_.clear(newestKeyframeStamp());
+  l.nodes.clear(newestKeyframeStamp(0));
   afterMapChange();
 }
 
@@ -325,11 +451,9 @@ std::shared_ptr<const Merger> OnlineMapper::snapshot() const
 OnlineMapper::OnlineMapper(const OnlineMapper& other, std::unique_ptr<Merger> merger)
     : merger_(std::move(merger)),
       params_(other.params_),
-      gate_(other.gate_),
-      nodes_(other.nodes_),
-      history_(other.history_),
+      lanes_(other.lanes_),
       continuous_(other.continuous_),
-      keyframe_stamps_(other.keyframe_stamps_),
+      lane_of_(other.lane_of_),
       keyframe_order_(other.keyframe_order_),
       next_index_(other.next_index_),
       time_jumps_(other.time_jumps_),
@@ -429,35 +553,46 @@ std::vector<std::pair<std::string, std::string>> OnlineMapper::diagnostics() con
 {
   const MapperCounters& c = counters_;
   auto n = [](std::size_t v) { return std::to_string(v); };
-  return {{"method", merger_->name()},
-          {"keyframes", n(merger_->keyframeCount())},
-          {"leaves", n(merger_->leafCount())},
-          {"map segments", n(merger_->segmentCount())},
-          {"last OTM time [ms]", text(c.last_otm_ms)},
-          {"last GMA time [ms]", text(c.last_gma_ms)},
-          {"scans", n(c.scans)},
-          {"segment sets handled", n(c.handled)},
-          {"trajectories", n(c.trajectories)},
-          {"adjustments", n(c.adjustments)},
-          {"failed adjustments", n(c.adjustment_failures)},
-          {"dropped scans", n(c.dropped)},
-          {"scans below the keyframe gate", n(c.below_gate)},
-          {"keyframes chosen by", nodes_.active() ? "trajectory nodes" : "keyframe gate (tf)"},
-          {"node keyframes", n(c.node_keyframes)},
-          {"maps rebuilt from the nodes", n(c.rebuilds)},
-          {"scans held for a trajectory", n(nodes_.held())},
-          {"nodes waiting for their scan", n(nodes_.waiting())},
-          {"nodes without a scan", n(nodes_.unmatched())},
-          {"originals retired (seen through)", n(c.retired)},
-          {"bad segments", n(c.bad_segments)},
-          {"bad trajectory poses", n(c.bad_poses)},
-          {"unmatched trajectory poses", n(c.unmatched_poses)},
-          {"ignored trajectories", n(c.ignored_trajectories)},
-          {"zero-stamp segments", n(c.zero_stamps)},
-          {"replayed scans skipped", n(c.replayed)},
-          {"time jumps", n(c.time_jumps)},
-          {"autosaves", n(c.autosaves)},
-          {"autosave failures", n(c.autosave_failures)}};
+  auto sum = [this](auto of)
+  {
+    std::size_t total = 0;
+    for (const auto& [index, l] : lanes_) total += of(l);
+    return total;
+  };
+  return {
+      {"method", merger_->name()},
+      {"keyframes", n(merger_->keyframeCount())},
+      {"leaves", n(merger_->leafCount())},
+      {"map segments", n(merger_->segmentCount())},
+      {"last OTM time [ms]", text(c.last_otm_ms)},
+      {"last GMA time [ms]", text(c.last_gma_ms)},
+      {"scans", n(c.scans)},
+      {"segment sets handled", n(c.handled)},
+      {"trajectories", n(c.trajectories)},
+      {"adjustments", n(c.adjustments)},
+      {"failed adjustments", n(c.adjustment_failures)},
+      {"dropped scans", n(c.dropped)},
+      {"scans below the keyframe gate", n(c.below_gate)},
+      {"keyframes chosen by", nodesChoose() ? "trajectory nodes" : "keyframe gate (tf)"},
+      {"node keyframes", n(c.node_keyframes)},
+      {"maps rebuilt from the nodes", n(c.rebuilds)},
+      {"scans held for a trajectory", n(sum([](const Lane& l) { return l.nodes.held(); }))},
+      {"nodes waiting for their scan", n(sum([](const Lane& l) { return l.nodes.waiting(); }))},
+      {"nodes without a scan", n(sum([](const Lane& l) { return l.nodes.unmatched(); }))},
+      {"robots", n(lanes_.size())},
+      {"robots not placed yet", n(sum([](const Lane& l) -> std::size_t { return l.placement ? 0 : 1; }))},
+      {"scans waiting for their robot's placement", n(sum([](const Lane& l) { return l.unplaced.size(); }))},
+      {"scans of unplaced robots forgotten", n(c.unplaced_dropped)},
+      {"originals retired (seen through)", n(c.retired)},
+      {"bad segments", n(c.bad_segments)},
+      {"bad trajectory poses", n(c.bad_poses)},
+      {"unmatched trajectory poses", n(c.unmatched_poses)},
+      {"ignored trajectories", n(c.ignored_trajectories)},
+      {"zero-stamp segments", n(c.zero_stamps)},
+      {"replayed scans skipped", n(c.replayed)},
+      {"time jumps", n(c.time_jumps)},
+      {"autosaves", n(c.autosaves)},
+      {"autosave failures", n(c.autosave_failures)}};
 }
 
 }  // namespace line_map_merging

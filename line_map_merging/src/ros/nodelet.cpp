@@ -1,5 +1,8 @@
 // ROS wrapper of the online mapper (concurrent_mapper.hpp): line_segments (+ tf) and optimized_trajectory
-// in; line_map, its markers and its occupancy grid (grid_publisher.hpp) out.
+// in; line_map, its markers and its occupancy grid (grid_publisher.hpp) out. With ~robots, one map of several
+// robots: each robot's <robot>/line_segments and <robot>/optimized_trajectory in its own frames
+// (<robot>/map ...), every robot but the first placed in the first's map by FleetPlacement, and the
+// placements published as tf map -> <robot>/map.
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <line_map_msgs/AppendMap.h>
 #include <line_map_msgs/LoadMap.h>
@@ -7,6 +10,7 @@
 #include <line_map_msgs/SaveMap.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <cmath>
@@ -16,6 +20,7 @@
 #include <string>
 
 #include "grid_publisher.hpp"
+#include "line_map_merging/localization/fleet_placement.hpp"
 #include "line_map_merging/online/concurrent_mapper.hpp"
 #include "linemap_ros/param_loader.hpp"
 #include "linemap_ros/tf_wait_queue.hpp"
@@ -34,12 +39,20 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     poll_timer_.stop();
     if (grid_) grid_->stop();
     tf_listener_.reset();  // its thread calls into the wait
-    waiting_.reset();
+    robots_.clear();
     if (mapper_) autosave(INFINITY);  // the changes since the last autosave
   }
 
  private:
   using SegmentsEvent = ros::MessageEvent<const line_map_msgs::LineSegmentArray>;
+  /// One robot's inputs (the only one's without ~robots): its segments wait for tf into its own map frame.
+  struct Robot
+  {
+    std::size_t lane = 0;
+    std::string name, map_frame, base_frame, odom_frame;
+    std::unique_ptr<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>> waiting;
+    ros::Subscriber trajectory_sub;
+  };
 
   void onInit() override
   {
@@ -69,17 +82,24 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
     const int queue = std::max(1, pnh.param("queue_size", 1000));
-    waiting_ = std::make_unique<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>>(
-        *tf_, map_frame_, queue, ros::Duration(tf_timeout_), nh,
-        [this](const SegmentsEvent& e) { onSegments(e); },
-        [this](const SegmentsEvent&, const std::string& why)
-        {
-          std::lock_guard<std::mutex> lock(mutex_);
-          drop(why);
-        });
-    waiting_->subscribe(nh, "line_segments", queue, [this](const SegmentsEvent& e) { return arrive(e); });
-    trajectory_sub_ =
-        nh.subscribe("optimized_trajectory", 10, &LineMapMergingNodelet::onTrajectory, this, hints);
+    const auto names = pnh.param("robots", std::vector<std::string>{});
+    if (names.empty()) addRobot(nh, "", queue);
+    for (const std::string& name : names) addRobot(nh, name, queue);
+    if (names.size() > 1)
+    {
+      try
+      {
+        placement_ = std::make_unique<FleetPlacement>(
+            LocalizerParams::fromParams(linemap_ros::loadParamSet(ros::NodeHandle(pnh, "placement"))));
+      }
+      catch (const std::exception& e)
+      {
+        NODELET_FATAL("line_map_merging: ~placement: %s", e.what());
+        throw;
+      }
+      placements_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
+    }
+    publishPlacements();
     advertiseServices(pnh);
     const double period = mapper_->mapper().params().autosave_period;
     if (period > 0.0 && !autosave_path_.empty())
@@ -109,11 +129,11 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   }
 
   /// Before the tf wait (false: turned away, ConcurrentMapper::admit). The map frame needs no tf.
-  bool arrive(const SegmentsEvent& event)
+  bool arrive(const SegmentsEvent& event, const Robot& robot)
   {
     const std_msgs::Header& header = event.getConstMessage()->header;
     const std::string frame = linemap_ros::stripLeadingSlash(header.frame_id);
-    const bool known = !frame.empty() && (frame == map_frame_ || tf_->_frameExists(frame));
+    const bool known = !frame.empty() && (frame == robot.map_frame || tf_->_frameExists(frame));
     std::lock_guard<std::mutex> lock(mutex_);
     bool jumped = false;
     const std::string why = mapper_->admit(ros::Time::now().toSec(), header.stamp.toSec(), known, jumped);
@@ -127,46 +147,118 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   void forgetTimeLine()
   {
     tf_->clear();
-    mapper_->countDropped(waiting_->clear());
+    for (const auto& robot : robots_) mapper_->countDropped(robot->waiting->clear());
     newest_ = ros::Time();  // the old time line's stamps are ahead of every new one
     NODELET_WARN_THROTTLE(5.0,
                           "line_map_merging: time jumped back: tf buffer cleared, gate reset, map kept (%zu)",
                           counters().time_jumps);
   }
 
-  void onSegments(const SegmentsEvent& event)
+  void addRobot(ros::NodeHandle& nh, const std::string& name, int queue)
+  {
+    auto robot = std::make_unique<Robot>();
+    robot->lane = robots_.size();
+    robot->name = name;
+    const std::string prefix = name.empty() ? "" : name + "/";
+    robot->map_frame = prefix + map_frame_;
+    robot->base_frame = prefix + base_frame_;
+    robot->odom_frame = prefix + odom_frame_;
+    Robot& r = *robot;
+    r.waiting = std::make_unique<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>>(
+        *tf_, r.map_frame, queue, ros::Duration(tf_timeout_), nh,
+        [this, &r](const SegmentsEvent& e) { onSegments(e, r); },
+        [this](const SegmentsEvent&, const std::string& why)
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          drop(why);
+        });
+    r.waiting->subscribe(nh, prefix + "line_segments", queue,
+                         [this, &r](const SegmentsEvent& e) { return arrive(e, r); });
+    r.trajectory_sub = nh.subscribe<nav_msgs::Path>(
+        prefix + "optimized_trajectory", 10,
+        [this, &r](const nav_msgs::Path::ConstPtr& p) { onTrajectory(p, r); }, ros::VoidConstPtr(),
+        linemap_ros::noDelay());
+    robots_.push_back(std::move(robot));
+  }
+
+  void onSegments(const SegmentsEvent& event, const Robot& robot)
   {
     const auto& msg = event.getConstMessage();
     const std::string frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
     bool mount_found = true;
-    const auto scan = toStampedScan(*tf_, *msg, frame, map_frame_, base_frame_, odom_frame_, mount_found);
+    auto scan =
+        toStampedScan(*tf_, *msg, frame, robot.map_frame, robot.base_frame, robot.odom_frame, mount_found);
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!scan) return drop("no valid transform " + map_frame_ + " -> " + frame);
+    if (!scan) return drop("no valid transform " + robot.map_frame + " -> " + frame);
     if (!mount_found)  // a bag without it lacks it for good: once is enough
       NODELET_WARN_ONCE("line_map_merging: no %s -> %s transform; taking them as the same frame",
-                        base_frame_.c_str(), frame.c_str());
+                        robot.base_frame.c_str(), frame.c_str());
     newest_ = std::max(newest_, msg->header.stamp);
+    scan->lane = robot.lane;
     const bool adjusted = mapper_->poll();
-    if (mapper_->addScan(*scan) == ScanOutcome::kKeyframe || adjusted) publish(msg->header.stamp);
+    const bool placed = place(*scan, robot);
+    if (mapper_->addScan(*scan) == ScanOutcome::kKeyframe || adjusted || placed) publish(msg->header.stamp);
   }
 
-  void onTrajectory(const nav_msgs::Path::ConstPtr& path)
+  /// A scan of a robot not placed yet is looked for in the fleet's map; whether it placed the robot. Lock
+  /// held.
+  bool place(const StampedScan& scan, const Robot& robot)
+  {
+    if (!placement_ || mapper_->mapper().lanePlacement(robot.lane)) return false;
+    if (mapper_->mapper().revision() != searched_revision_)
+    {
+      std::vector<linemap::Segment2> map;
+      for (const MapSegment& s : merger().map()) map.push_back(s.segment);
+      placement_->setMap(map);
+      searched_revision_ = mapper_->mapper().revision();
+    }
+    const auto found = placement_->addScan(robot.lane, scan.stamp, scan.segments, scan.laser, scan.mount);
+    if (!found) return false;
+    NODELET_INFO("line_map_merging: robot '%s' placed in the map after %zu scans at (%.2f, %.2f, %.3f)",
+                 robot.name.c_str(), placement_->searched(robot.lane), found->x, found->y, found->theta);
+    const bool changed = mapper_->placeLane(robot.lane, *found);
+    publishPlacements();
+    return changed;
+  }
+
+  /// tf map -> <robot>/map of every placed robot (with ~robots). Lock held, or in onInit.
+  void publishPlacements()
+  {
+    if (!placement_) return;
+    std::vector<geometry_msgs::TransformStamped> placed;
+    for (const auto& robot : robots_)
+      if (const auto pose = robot->lane == 0 ? linemap::Pose2() : placement_->placement(robot->lane))
+      {
+        geometry_msgs::TransformStamped t;
+        t.header.stamp = ros::Time::now();
+        t.header.frame_id = map_frame_;
+        t.child_frame_id = robot->map_frame;
+        t.transform.translation.x = pose->x;
+        t.transform.translation.y = pose->y;
+        t.transform.rotation.z = std::sin(0.5 * pose->theta);
+        t.transform.rotation.w = std::cos(0.5 * pose->theta);
+        placed.push_back(t);
+      }
+    placements_->sendTransform(placed);
+  }
+
+  void onTrajectory(const nav_msgs::Path::ConstPtr& path, const Robot& robot)
   {
     std::lock_guard<std::mutex> lock(mutex_);
     std::size_t bad = 0;
-    const auto nodes = toNodes(*path, map_frame_, bad);
+    const auto nodes = toNodes(*path, robot.map_frame, bad);
     if (!nodes)
     {
       mapper_->countIgnoredTrajectory();
       NODELET_WARN_THROTTLE(5.0, "line_map_merging: optimized_trajectory in frame '%s', not '%s'; ignored",
-                            path->header.frame_id.c_str(), map_frame_.c_str());
+                            path->header.frame_id.c_str(), robot.map_frame.c_str());
       return;
     }
     mapper_->countBadPoses(bad);
     if (bad > 0)
       NODELET_WARN_THROTTLE(5.0, "line_map_merging: %zu invalid optimized_trajectory poses ignored", bad);
     newest_ = std::max(newest_, path->header.stamp.isZero() ? ros::Time::now() : path->header.stamp);
-    if (mapper_->addTrajectory(*nodes)) publish(newest_);
+    if (mapper_->addTrajectory(*nodes, robot.lane)) publish(newest_);
   }
 
   void autosave(double now)  // infinite `now`: the last save, at shutdown
@@ -238,6 +330,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
                  dropped ? "scans dropped (no transform)" : "merging");
     for (const auto& [key, value] : mapper_->diagnostics()) stat.add(key, value);
     for (const auto& [key, value] : grid_->diagnostics()) stat.add(key, value);
+    if (placement_)
+      for (const auto& [key, value] : placement_->diagnostics()) stat.add(key, value);
   }
 
   const Merger& merger() const { return mapper_->mapper().merger(); }
@@ -252,8 +346,10 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   std::unique_ptr<GridPublisher> grid_;
   std::unique_ptr<tf2_ros::Buffer> tf_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  std::unique_ptr<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>> waiting_;
-  ros::Subscriber trajectory_sub_;
+  std::vector<std::unique_ptr<Robot>> robots_;
+  std::unique_ptr<FleetPlacement> placement_;  ///< with two robots or more
+  std::uint64_t searched_revision_ = ~std::uint64_t{0};
+  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> placements_;
   ros::Publisher map_pub_, marker_pub_;
   ros::ServiceServer save_srv_, load_srv_, append_srv_, reset_srv_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;

@@ -56,6 +56,11 @@ struct OnlineDriveHooks
 /// per scan, in order (an extractor with state, e.g. the submap, may run inside).
 using SegmentSource = std::function<std::vector<linemap::Segment2>(std::size_t index, const Pose2& odom)>;
 
+/// Scan `index` of `rec` as the merging nodelet receives it: its segments (`segments`) posed by map -> odom
+/// (the schedule's samples) -> odom -> base_link -> laser.
+line_map_merging::StampedScan stampedScan(const Recording& rec, const BackEndSchedule& schedule,
+                                          const SegmentSource& segments, std::size_t index);
+
 /// Feeds every scan of `rec` in order: its segments posed by map -> odom (the schedule's samples) ->
 /// odom -> base_link -> laser, then each trajectory stamped at or before it. Returns the number of
 /// trajectories fed.

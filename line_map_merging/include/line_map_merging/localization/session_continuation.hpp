@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "line_map_merging/localization/line_map_localizer.hpp"
+#include "line_map_merging/localization/place_confirmation.hpp"
 #include "line_map_merging/slam/laser_slam.hpp"
 
 namespace line_map_merging
@@ -78,17 +79,7 @@ class SessionContinuation
   std::optional<linemap::Pose2> given_start_, found_;
   std::vector<SlamScan> held_;
   double sigma_xy_, sigma_theta_;
-  /// A place found after giving up, being confirmed: the saved frame's pose it implies, and the SLAM's path
-  /// when it was found.
-  struct Candidate
-  {
-    linemap::Pose2 implied;
-    double path = 0.0;
-  };
-  std::optional<Candidate> candidate_;
-  /// The confirmation: a path this long [m] tracked with every scan's implied frame within these of the
-  /// first.
-  static constexpr double confirm_path = 5.0, confirm_xy = 0.3, confirm_theta = 0.05;
+  PlaceConfirmation confirmation_;  ///< of a place found after giving up
   State state_ = State::kSearching;
   std::size_t searched_ = 0, searched_apart_ = 0;
   std::optional<linemap::Pose2> joined_;

@@ -41,8 +41,10 @@ class ConcurrentMapper
 
   ScanOutcome addScan(const StampedScan& scan);
   /// Starts adjusting a copy to the trajectory (or queues it behind the one in progress). Returns
-  /// whether the live map changed now: only without background adjustment.
-  bool addTrajectory(const std::vector<StampedPose>& base_poses);
+  /// whether the live map changed now: only without background adjustment. `lane`: whose (OnlineMapper).
+  bool addTrajectory(const std::vector<StampedPose>& base_poses, std::size_t lane = 0);
+  /// OnlineMapper::placeLane on the live mapper (and on the copy being adjusted, after it).
+  bool placeLane(std::size_t lane, const linemap::Pose2& lane_in_map);
   /// Replaces the live mapper by a finished adjustment (and starts the next queued trajectory).
   /// Returns whether the map changed. Cheap when nothing is finished: call it often.
   bool poll();
@@ -85,11 +87,12 @@ class ConcurrentMapper
   {
     std::function<void(OnlineMapper&)> apply;  ///< null for a trajectory
     std::vector<StampedPose> trajectory;
+    std::size_t lane = 0;  ///< the trajectory's
   };
   void apply(std::function<void(OnlineMapper&)> call);
   /// Clones the live mapper and adjusts the clone to `nodes` on a worker thread; false when the
   /// merger cannot be copied.
-  bool start(const std::vector<StampedPose>& nodes);
+  bool start(const std::vector<StampedPose>& nodes, std::size_t lane);
   /// Takes the finished adjustment (waiting for it); whether the map changed.
   bool takeResult();
   std::size_t queuedTrajectories() const;

@@ -5,12 +5,16 @@
 // bookkeeping, matching trajectory nodes to scans by stamp, correcting keyframes between nodes
 // (trajectory_anchor.hpp), the adjustments, replay and time-jump handling, the autosave policy
 // (when to save; the file is written by the merger's save()) and every counter of the diagnostics.
+// Several robots feed one map as lanes (StampedScan::lane): each lane has its own keyframe gate, scan
+// history, node keyframes and trajectories, in its own map frame, placed in this map's frame by placeLane
+// (lane 0, the first robot's, defines it); a lane's scans and trajectory wait until it is placed.
 // Not thread-safe: the caller serialises the calls.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <future>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -55,6 +59,8 @@ struct StampedScan
   std::optional<linemap::Pose2> odom;       ///< laser in the odometry frame, when there is one
   linemap::Pose2 mount;                     ///< base -> laser
   std::vector<linemap::Segment2> segments;  ///< laser frame
+  /// The robot (OnlineMapper's lanes): `laser` is then in that robot's own map frame.
+  std::size_t lane = 0;
 };
 
 /// A trajectory node: base pose in the map frame at a stamp.
@@ -80,8 +86,9 @@ struct MapperCounters
   std::size_t trajectories = 0, ignored_trajectories = 0, bad_poses = 0, unmatched_poses = 0;
   std::size_t adjustments = 0, adjustment_failures = 0;
   std::size_t time_jumps = 0, autosaves = 0, autosave_failures = 0;
-  std::size_t node_keyframes = 0;  ///< keyframes a trajectory node chose (at the node's pose)
-  std::size_t rebuilds = 0;        ///< maps made again from the nodes of the first trajectory
+  std::size_t node_keyframes = 0;    ///< keyframes a trajectory node chose (at the node's pose)
+  std::size_t unplaced_dropped = 0;  ///< scans of a lane not placed within keyframe_buffer, forgotten
+  std::size_t rebuilds = 0;          ///< maps made again from the nodes of the first trajectory
   std::size_t handled =
       0;  ///< segment sets finished with: given to addScan, or counted dropped by the caller
   double last_otm_ms = 0.0, last_gma_ms = 0.0;
@@ -106,8 +113,17 @@ class OnlineMapper
   /// held scans as keyframes at the nodes' poses (base pose * mount), through the keyframe gate. At
   /// the first trajectory (auto), when every scan since the first keyframe is held, the map is made
   /// again from the nodes alone.
-  /// Non-finite poses are counted and skipped. Returns whether the map changed.
-  bool addTrajectory(const std::vector<StampedPose>& base_poses);
+  /// Non-finite poses are counted and skipped. Returns whether the map changed. `lane`: whose
+  /// trajectory (in its own map frame); one of a lane not placed yet waits for its placement.
+  bool addTrajectory(const std::vector<StampedPose>& base_poses, std::size_t lane = 0);
+
+  /// Places `lane`'s map frame at `lane_in_map` in this map's frame (lane 0 is at the identity unless
+  /// placed otherwise). At the first placement the lane's waiting scans are merged, then its newest
+  /// trajectory applied; a lane placed again moves its keyframes by the change. Returns whether the map
+  /// changed.
+  bool placeLane(std::size_t lane, const linemap::Pose2& lane_in_map);
+  /// Where `lane`'s map frame is in this map's frame; nothing before it is placed.
+  std::optional<linemap::Pose2> lanePlacement(std::size_t lane) const;
 
   /// The clock reading and/or a message stamp (NaN or 0: not known). Returns true when time jumped
   /// back by more than the tolerance (rosbag play --loop): the gate is reset, the map kept, and
@@ -141,8 +157,8 @@ class OnlineMapper
   /// The caller saved `revision` (of revision(), taken when it took the snapshot) at `now`, or failed.
   void autosaved(std::uint64_t revision, double now, bool ok);
 
-  /// Whether the trajectory's nodes choose the keyframes now.
-  bool nodesChoose() const { return nodes_.active(); }
+  /// Whether the trajectory's nodes choose lane 0's keyframes now.
+  bool nodesChoose() const { return lane(0).nodes.active(); }
 
   /// Counts a scan the caller could not pose (no transform) or that came stamped zero.
   void countDropped()
@@ -194,26 +210,46 @@ class OnlineMapper
     linemap::Pose2 continuous, mount;
     std::vector<linemap::Segment2> segments;
   };
+  /// One robot's record: what is judged and matched by stamp per robot (two robots' scans may share
+  /// stamps), and where its map frame lies in this map's.
+  struct Lane
+  {
+    explicit Lane(const OnlineMapperParams& params);
+    KeyframeGate gate;
+    NodeKeyframes<HeldScan> nodes;
+    OdometryHistory history;  ///< base pose of every scan seen, in the continuous frame
+    std::unordered_set<double> keyframe_stamps;
+    std::optional<linemap::Pose2> placement;
+    std::vector<StampedScan> unplaced;  ///< scans waiting for the placement, oldest first
+    std::optional<std::vector<StampedPose>> unplaced_trajectory;  ///< the newest, waiting too
+  };
+  Lane& lane(std::size_t index);
+  const Lane& lane(std::size_t index) const;
   /// Merges one keyframe (laser pose in the map frame); false when the merger refused it.
-  bool merge(double stamp, const linemap::Pose2& laser, const linemap::Pose2& continuous,
+  bool merge(std::size_t lane, double stamp, const linemap::Pose2& laser, const linemap::Pose2& continuous,
              const linemap::Pose2& mount, const std::vector<linemap::Segment2>& segments);
-  bool mergeNodes(std::vector<NodeKeyframes<HeldScan>::Ready> ready);
-  double newestKeyframeStamp() const;
+  bool mergeNodes(std::size_t lane, std::vector<NodeKeyframes<HeldScan>::Ready> ready);
+  /// addScan for a scan of a placed lane, its laser pose in this map's frame.
+  ScanOutcome addPlacedScan(const StampedScan& scan);
+  /// Holds a scan of a lane not placed yet (dropping those older than keyframe_buffer).
+  void holdUnplaced(Lane& lane, const StampedScan& scan);
+  double newestKeyframeStamp(std::size_t lane) const;
   /// After the merger loaded a map: its keyframes become the mapper's, their map poses standing in for the
   /// odometry.
   void adoptLoadedMap();
   /// Empties the map and the keyframe records (not the scan history, nor the held scans).
   void clearKeyframes();
-  /// Moves every keyframe to the trajectory (anchored on the nodes); whether the map changed.
-  bool adjustTo(const std::vector<StampedPose>& nodes);
+  /// Moves `lane`'s keyframes to the trajectory (anchored on the nodes, in this map's frame); whether the
+  /// map changed.
+  bool adjustTo(std::size_t lane, const std::vector<StampedPose>& nodes);
+  /// addTrajectory for a placed lane, the poses in this map's frame.
+  bool addPlacedTrajectory(std::vector<StampedPose> nodes, std::size_t lane);
 
   std::unique_ptr<Merger> merger_;
   OnlineMapperParams params_;
-  KeyframeGate gate_;
-  NodeKeyframes<HeldScan> nodes_;
-  OdometryHistory history_;  ///< base pose of every scan seen, in the continuous frame
+  std::map<std::size_t, Lane> lanes_;
   std::unordered_map<std::uint64_t, linemap::Pose2> continuous_;  ///< keyframe index -> laser, same frame
-  std::unordered_set<double> keyframe_stamps_;
+  std::unordered_map<std::uint64_t, std::size_t> lane_of_;        ///< keyframe index -> lane
   std::vector<double> keyframe_order_;
   std::uint64_t next_index_ = 0;
   linemap::TimeJumpDetector time_jumps_;  ///< the clock and the scans' stamps

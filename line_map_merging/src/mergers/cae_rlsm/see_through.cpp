@@ -11,6 +11,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "line_map_merging/map/free_space_witness.hpp"
 #include "line_map_merging/mergers/cae_rlsm.hpp"
 
 namespace line_map_merging
@@ -18,92 +19,6 @@ namespace line_map_merging
 namespace
 {
 namespace bgi = boost::geometry::index;
-
-double cross(const Vec2& a, const Vec2& b)
-{
-  return a.x() * b.y() - a.y() * b.x();
-}
-
-/// A half-plane h(x) = n.x - c >= 0.
-struct HalfPlane
-{
-  Vec2 n;
-  double c;
-};
-
-/// The bins of a leaf (CaeRlsm::kSeeThroughBins, by position along it) whose centres lie inside every
-/// half-plane (Liang-Barsky clipping), as a bit mask.
-std::uint32_t insideBins(const Segment2& s, const HalfPlane* planes, std::size_t count, std::size_t bins)
-{
-  const Vec2 d = s.end - s.start;
-  double lo = 0.0, hi = 1.0;
-  for (std::size_t i = 0; i < count && lo < hi; ++i)
-  {
-    const double at_start = planes[i].n.dot(s.start) - planes[i].c;
-    const double slope = planes[i].n.dot(d);
-    if (slope == 0.0)
-    {
-      if (at_start < 0.0) return 0;
-      continue;
-    }
-    const double t = -at_start / slope;
-    if (slope > 0.0)
-      lo = std::max(lo, t);
-    else
-      hi = std::min(hi, t);
-  }
-  std::uint32_t mask = 0;
-  for (std::size_t b = 0; b < bins; ++b)
-  {
-    const double centre = (static_cast<double>(b) + 0.5) / static_cast<double>(bins);
-    if (centre >= lo && centre <= hi) mask |= 1u << b;
-  }
-  return mask;
-}
-
-/// What one extracted segment shows: the free triangle before it, and the band along it.
-struct Witness
-{
-  HalfPlane free[3];          // inside both sides' rays and before the segment, each by the margin
-  HalfPlane band[4];          // within the rays, and within the margin of the segment's line
-  std::array<double, 4> box;  // min x, min y, max x, max y of the triangle
-};
-
-/// The witness of `segment` (map frame) seen from `laser`; false when it shows nothing (a segment
-/// through the laser, or too short to leave a free triangle after the erosion).
-bool makeWitness(const Vec2& laser, Segment2 segment, double margin, Witness& w)
-{
-  Vec2 a = segment.start - laser, b = segment.end - laser;
-  if (cross(a, b) < 0.0) std::swap(a, b);  // counter-clockwise: the inside is left of o->a, right of o->b
-  const double na = a.norm(), nb = b.norm(), ab = (b - a).norm();
-  if (na == 0.0 || nb == 0.0 || ab <= 2.0 * margin) return false;
-  const Vec2 ua = a / na, ub = b / nb;
-  // Outward normal of the segment's side (away from the laser) and the laser's distance from its line.
-  const Vec2 outward = Vec2((b - a).y(), -(b - a).x()) / ab;
-  const double distance = outward.dot(a);
-  if (distance <= margin) return false;
-  // In laser-relative coordinates x' = x - laser: n.x' - c >= 0  <=>  n.x - (c + n.laser) >= 0.
-  const HalfPlane left{Vec2(-ua.y(), ua.x()), 0.0};   // cross(ua, x') >= 0
-  const HalfPlane right{Vec2(ub.y(), -ub.x()), 0.0};  // cross(x', ub) >= 0
-  const HalfPlane before{-outward, -distance};        // outward.x' <= distance
-  const HalfPlane behind{outward, distance};          // outward.x' >= distance
-  const auto shifted = [&](const HalfPlane& h, double by) {
-    return HalfPlane{h.n, h.c + by + h.n.dot(laser)};
-  };
-  w.free[0] = shifted(left, margin);
-  w.free[1] = shifted(right, margin);
-  w.free[2] = shifted(before, margin);
-  w.band[0] = shifted(left, 0.0);
-  w.band[1] = shifted(right, 0.0);
-  w.band[2] = shifted(before, -margin);
-  w.band[3] = shifted(behind, -margin);
-  w.box = {std::min({laser.x(), segment.start.x(), segment.end.x()}),
-           std::min({laser.y(), segment.start.y(), segment.end.y()}),
-           std::max({laser.x(), segment.start.x(), segment.end.x()}),
-           std::max({laser.y(), segment.start.y(), segment.end.y()})};
-  return true;
-}
-
 }  // namespace
 
 std::size_t CaeRlsm::retireSeenThrough(std::uint32_t slot, const std::vector<Segment2>& local,
@@ -111,13 +26,13 @@ std::size_t CaeRlsm::retireSeenThrough(std::uint32_t slot, const std::vector<Seg
 {
   const Transform& t = transforms_[slot];
   const Vec2 laser = t.col(2);
-  std::vector<Witness> witnesses;
+  std::vector<FreeSpaceWitness> witnesses;
   witnesses.reserve(local.size());
   for (const Segment2& s : local)
   {
     if (!isValidSegment(s)) continue;
     const Segment2 world{t.leftCols<2>() * s.start + t.col(2), t.leftCols<2>() * s.end + t.col(2)};
-    Witness w;
+    FreeSpaceWitness w;
     if (makeWitness(laser, world, params_.see_through_margin, w)) witnesses.push_back(w);
   }
   if (witnesses.empty()) return 0;
@@ -129,7 +44,7 @@ std::size_t CaeRlsm::retireSeenThrough(std::uint32_t slot, const std::vector<Seg
   };
   std::unordered_map<std::uint32_t, Seen> seen;
   std::vector<std::uint64_t> near;
-  for (const Witness& w : witnesses)
+  for (const FreeSpaceWitness& w : witnesses)
   {
     near.clear();
     if (params_.spatial_index)
