@@ -44,3 +44,41 @@ TEST(FleetPlacement, AWallInsideTheFreeSpaceASightCrossedIsSeenThrough)
   EXPECT_EQ(placement.seenThroughLength(1, Pose2(), seen), 0.0);
   EXPECT_EQ(placement.seenThroughLength(2, Pose2(), fleet), 0.0) << "a robot never seen saw nothing";
 }
+
+namespace
+{
+/// The four walls of a 10 x 4 m room (corner at the origin) and, with `box`, a 1 m square crate at (7.5..8.5,
+/// 0.5..1.5): the room alone looks the same turned half a turn about its centre, the crate tells the two
+/// apart.
+std::vector<Segment2> room(bool box)
+{
+  std::vector<Segment2> out{Segment2(Vec2(0, 0), Vec2(10, 0)), Segment2(Vec2(10, 0), Vec2(10, 4)),
+                            Segment2(Vec2(10, 4), Vec2(0, 4)), Segment2(Vec2(0, 4), Vec2(0, 0))};
+  if (box)
+    for (const auto& [a, b] : {std::pair{Vec2(7.5, 0.5), Vec2(8.5, 0.5)},
+                               {Vec2(8.5, 0.5), Vec2(8.5, 1.5)},
+                               {Vec2(8.5, 1.5), Vec2(7.5, 1.5)},
+                               {Vec2(7.5, 1.5), Vec2(7.5, 0.5)}})
+      out.emplace_back(a, b);
+  return out;
+}
+}  // namespace
+
+// A robot that has seen the whole room from (2, 2), its map frame the fleet's: placed at the identity, the
+// same room turned half a turn about (5, 2) explains its scans as well, so the place is ambiguous. With the
+// crate in the room and in its scans (4 m of faces, 80 points) the turned room misses the crate: no longer
+// ambiguous. A wrong placement (the turned one) is ambiguous against the right one.
+TEST(FleetPlacement, ALookAlikePlacementHalfATurnAwayLeavesThePlaceOpen)
+{
+  LocalizerParams params;
+  const Pose2 laser(2.0, 2.0, 0.0);
+  for (const bool box : {false, true})
+  {
+    FleetPlacement placement(params);
+    std::vector<Segment2> seen;
+    for (const Segment2& s : room(box)) seen.push_back(s.transformed(laser.inverse()));
+    placement.addScan(1, 1.0, seen, laser, Pose2());
+    EXPECT_EQ(placement.ambiguous(1, Pose2(), room(box)), !box) << (box ? "with" : "without") << " the crate";
+    EXPECT_TRUE(placement.ambiguous(1, Pose2(10.0, 4.0, M_PI), room(box)));
+  }
+}

@@ -10,22 +10,17 @@ namespace line_map_merging
 std::vector<linemap::Vec2> segmentPoints(const std::vector<linemap::Segment2>& segments,
                                          const linemap::Pose2& pose, double spacing)
 {
-  std::vector<linemap::Vec2> out;
-  for (const linemap::Segment2& s : segments)
-  {
-    const double length = s.length();
-    if (!std::isfinite(length)) continue;
-    const int steps = std::max(1, static_cast<int>(std::ceil(length / spacing)));
-    for (int i = 0; i <= steps; ++i)
-      out.push_back(pose.apply(s.start + (s.end - s.start) * (static_cast<double>(i) / steps)));
-  }
-  return out;
+  std::vector<linemap::Segment2> moved;
+  moved.reserve(segments.size());
+  for (const linemap::Segment2& s : segments) moved.push_back(s.transformed(pose));
+  return sampleSegments(moved, spacing);
 }
 
-FleetPlacement::FleetPlacement(const LocalizerParams& params, double point_spacing)
-    : params_(params), point_spacing_(point_spacing)
+FleetPlacement::FleetPlacement(const LocalizerParams& params, double confirm_path, double point_spacing)
+    : params_(params), confirm_path_(confirm_path), point_spacing_(point_spacing)
 {
   if (!(point_spacing_ > 0.0)) throw std::invalid_argument("fleet placement: point_spacing must be positive");
+  if (!(confirm_path_ >= 0.0)) throw std::invalid_argument("fleet placement: confirm_path must be >= 0");
   // Searched beside the merging: the global searches are repeated as seldom as for a SLAM mapping apart.
   params_.research_every = params_.research_every_apart;
 }
@@ -42,7 +37,7 @@ std::optional<linemap::Pose2> FleetPlacement::addScan(std::size_t robot, double 
                                                       const linemap::Pose2& laser,
                                                       const linemap::Pose2& mount)
 {
-  Search& search = searches_[robot];
+  Search& search = searches_.try_emplace(robot, confirm_path_).first->second;
   if (search.placed) return std::nullopt;
   if (!search.localizer) search.localizer = std::make_unique<LineMapLocalizer>(map_, params_);
   ++search.scans;
@@ -84,30 +79,87 @@ std::optional<linemap::Pose2> FleetPlacement::addScan(std::size_t robot, double 
     search.localizer->startGlobalLocalization();
     return std::nullopt;
   }
-  search.placed = refined(search, implied);
+  const std::vector<linemap::Vec2> points = sightPoints(search);
+  const linemap::Pose2 placed = refined(points, implied);
+  if (ambiguous(points, placed, map_))
+  {
+    ++search.ambiguous;
+    search.confirmation.reset();
+    return std::nullopt;
+  }
+  search.placed = placed;
   search.localizer.reset();
   return search.placed;
 }
 
-linemap::Pose2 FleetPlacement::refined(const Search& search, const linemap::Pose2& placed) const
+std::vector<linemap::Vec2> FleetPlacement::sightPoints(const Search& search) const
 {
-  // Every sight at once, in the robot's own map frame: the whole way it came, not one scan, pins the
-  // rotation down.
   std::vector<linemap::Vec2> points;
   for (const Sight& sight : search.sights)
   {
     const std::vector<linemap::Vec2> seen = segmentPoints(sight.segments, sight.laser, point_spacing_);
     points.insert(points.end(), seen.begin(), seen.end());
   }
+  return points;
+}
+
+SegmentMatch FleetPlacement::matchSights(const LocalizationSegmentIndex& index,
+                                         const std::vector<linemap::Vec2>& points,
+                                         const linemap::Pose2& from) const
+{
   SegmentMatchParams match = params_.match;
   match.check_free_side = false;  // the points come from many places
-  const LocalizationSegmentIndex index(map_, params_.index_cell, match.max_distance);
-  const SegmentMatch m = matchToSegments(index, points, placed, std::nullopt, match);
+  return matchToSegments(index, points, from, std::nullopt, match);
+}
+
+linemap::Pose2 FleetPlacement::refined(const std::vector<linemap::Vec2>& points,
+                                       const linemap::Pose2& placed) const
+{
+  // Every sight at once, in the robot's own map frame: the whole way it came, not one scan, pins the
+  // rotation down.
+  const SegmentMatch m = matchSights(
+      LocalizationSegmentIndex(map_, params_.index_cell, params_.match.max_distance), points, placed);
   if (!m.valid) return placed;
   const linemap::Pose2 change = placed.inverse() * m.pose;
   const bool near = std::hypot(change.x, change.y) <= PlaceConfirmation::max_xy &&
                     std::fabs(change.theta) <= PlaceConfirmation::max_theta;
   return near ? m.pose : placed;
+}
+
+bool FleetPlacement::ambiguous(std::size_t robot, const linemap::Pose2& placed,
+                               const std::vector<linemap::Segment2>& map) const
+{
+  const auto it = searches_.find(robot);
+  return it != searches_.end() && ambiguous(sightPoints(it->second), placed, map);
+}
+
+bool FleetPlacement::ambiguous(const std::vector<linemap::Vec2>& points, const linemap::Pose2& placed,
+                               const std::vector<linemap::Segment2>& map) const
+{
+  // The way the robot came searched for over the whole map: a rival placement elsewhere that explains it
+  // about as well (a building alike half a turn away) leaves the place open until the robot has seen what
+  // tells them apart. Evidence is counted in points explained, not as a share: what differs is a few pieces
+  // of furniture among metres of look-alike walls.
+  const LocalizationGlobalSearch global(map, params_.global);
+  const SegmentMatchParams& match = params_.match;
+  const LocalizationSegmentIndex index(map, params_.index_cell, match.max_distance);
+  const auto explained = [&](const linemap::Pose2& pose)
+  { return evaluateOnSegments(index, points, pose, match).score * static_cast<double>(points.size()); };
+  const double own = explained(placed);
+  const double needed = min_evidence / point_spacing_;
+  const auto distinct = [&](const linemap::Pose2& pose)
+  {
+    const linemap::Pose2 apart = placed.inverse() * pose;
+    return std::hypot(apart.x, apart.y) >= params_.global.separation ||
+           std::fabs(linemap::normalizeAngle(apart.theta)) >= params_.global.separation_angle;
+  };
+  for (const MatchResult& candidate : global.search(points))
+  {
+    if (!distinct(candidate.pose)) continue;
+    const SegmentMatch rival = matchSights(index, points, candidate.pose);  // may slide back onto `placed`
+    if (rival.valid && distinct(rival.pose) && explained(rival.pose) > own - needed) return true;
+  }
+  return false;
 }
 
 double FleetPlacement::seenThroughLength(std::size_t robot, const linemap::Pose2& placed,
@@ -176,7 +228,8 @@ std::vector<std::pair<std::string, std::string>> FleetPlacement::diagnostics() c
               std::to_string(search.placed->theta) + ")";
     else
       state = "looked for in the fleet's map: " + std::to_string(search.scans) + " scans, " +
-              std::to_string(search.refused) + " places refused as seeing through its walls";
+              std::to_string(search.refused) + " places refused as seeing through its walls, " +
+              std::to_string(search.ambiguous) + " as ambiguous";
     out.emplace_back("robot " + std::to_string(robot), state);
   }
   return out;

@@ -18,7 +18,7 @@ PlaceConfirmation::Verdict PlaceConfirmation::add(const linemap::Pose2& implied,
     started_ = false;
     return Verdict::kBroken;
   }
-  return travelled - start_path_ >= path ? Verdict::kConfirmed : Verdict::kHolding;
+  return travelled - start_path_ >= path_ ? Verdict::kConfirmed : Verdict::kHolding;
 }
 
 }  // namespace line_map_merging

@@ -90,7 +90,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       try
       {
         placement_ = std::make_unique<FleetPlacement>(
-            LocalizerParams::fromParams(linemap_ros::loadParamSet(ros::NodeHandle(pnh, "placement"))));
+            LocalizerParams::fromParams(linemap_ros::loadParamSet(ros::NodeHandle(pnh, "placement"))),
+            pnh.param("placement_confirm_path", 10.0));
       }
       catch (const std::exception& e)
       {

@@ -26,8 +26,10 @@ namespace line_map_merging
 class FleetPlacement
 {
  public:
+  /// `confirm_path` [m]: how far a robot must drive with a found place holding before it is placed there;
   /// `point_spacing` [m]: the distance between the points sampled along a segment.
-  explicit FleetPlacement(const LocalizerParams& params, double point_spacing = 0.05);
+  explicit FleetPlacement(const LocalizerParams& params, double confirm_path = 10.0,
+                          double point_spacing = 0.05);
 
   /// The fleet's map (segments in the fleet's frame) changed: every search goes on in it.
   void setMap(const std::vector<linemap::Segment2>& segments);
@@ -43,6 +45,11 @@ class FleetPlacement
   /// see through and nowhere see in place.
   double seenThroughLength(std::size_t robot, const linemap::Pose2& placed,
                            const std::vector<linemap::Segment2>& map) const;
+
+  /// Whether a placement of `robot`'s map frame apart from `placed` explains its scans so far within
+  /// min_evidence of as well as `placed` does (against `map`, the fleet's).
+  bool ambiguous(std::size_t robot, const linemap::Pose2& placed,
+                 const std::vector<linemap::Segment2>& map) const;
 
   /// Where robot `robot`'s map frame was placed; nothing before.
   std::optional<linemap::Pose2> placement(std::size_t robot) const;
@@ -60,6 +67,7 @@ class FleetPlacement
   };
   struct Search
   {
+    explicit Search(double confirm_path) : confirmation(confirm_path) {}
     std::vector<Sight> sights;  ///< one per sight_spacing of path or sight_turn
     std::unique_ptr<LineMapLocalizer> localizer;
     PlaceConfirmation confirmation;
@@ -67,18 +75,29 @@ class FleetPlacement
     double travelled = 0.0;
     std::size_t scans = 0;
     std::optional<linemap::Pose2> placed;
-    std::size_t refused = 0;  ///< confirmed places refused as seeing through the fleet's walls
+    std::size_t refused = 0;    ///< confirmed places refused as seeing through the fleet's walls
+    std::size_t ambiguous = 0;  ///< confirmed places refused as a rival explained the way about as well
   };
   /// Sights kept every this much path [m] or turn [rad]; the free-space margin [m] (placement and
   /// registration error); the length seen through [m] that refuses a placement.
   static constexpr double sight_spacing = 0.5, sight_turn = 0.5, see_through_margin = 0.3,
                           max_seen_through = 1.0;
+  /// [m] of points (at point_spacing) the placement must explain better than every rival placement.
+  static constexpr double min_evidence = 1.0;
 
+  /// Every sight's segments sampled into points, in the robot's own map frame.
+  std::vector<linemap::Vec2> sightPoints(const Search& search) const;
+  /// Those points (the robot's own map frame) matched against `index` from `from`.
+  SegmentMatch matchSights(const LocalizationSegmentIndex& index, const std::vector<linemap::Vec2>& points,
+                           const linemap::Pose2& from) const;
   /// `placed` refined by matching every sight of the search at once against the fleet's map.
-  linemap::Pose2 refined(const Search& search, const linemap::Pose2& placed) const;
+  linemap::Pose2 refined(const std::vector<linemap::Vec2>& points, const linemap::Pose2& placed) const;
+  /// Whether a placement apart from `placed` explains the sights' points within min_evidence of as well.
+  bool ambiguous(const std::vector<linemap::Vec2>& points, const linemap::Pose2& placed,
+                 const std::vector<linemap::Segment2>& map) const;
 
   LocalizerParams params_;
-  double point_spacing_;
+  double confirm_path_, point_spacing_;
   std::vector<linemap::Segment2> map_;
   std::map<std::size_t, Search> searches_;
 };

@@ -19,6 +19,9 @@ class PlaceConfirmation
     kConfirmed,  ///< held over the whole path: implied() is the other map's frame
   };
 
+  /// `path` [m]: how far the robot must drive with the place holding.
+  explicit PlaceConfirmation(double path = 5.0) : path_(path) {}
+
   /// One scan tracked in the other map: `implied` is the other map's frame in the robot's own as this scan
   /// puts it, `travelled` [m] the robot's path so far, `fresh` whether the localizer has just accepted a new
   /// place (it starts the confirmation again).
@@ -28,10 +31,11 @@ class PlaceConfirmation
   /// The frame the first scan of the confirmation implied.
   const linemap::Pose2& implied() const { return implied_; }
 
-  /// The path [m] a place must hold over, and how far each scan's implied frame may lie from the first's.
-  static constexpr double path = 5.0, max_xy = 0.3, max_theta = 0.05;
+  /// How far each scan's implied frame may lie from the first's.
+  static constexpr double max_xy = 0.3, max_theta = 0.05;
 
  private:
+  double path_;
   bool started_ = false;
   linemap::Pose2 implied_;
   double start_path_ = 0.0;
