@@ -68,6 +68,12 @@ struct Pose2
   }
 };
 
+/// The z component of a x b: positive when b lies counter-clockwise of a.
+inline double cross(const Vec2& a, const Vec2& b)
+{
+  return a.x() * b.y() - a.y() * b.x();
+}
+
 /// Linear interpolation of translation and shortest-arc interpolation of heading, t in [0, 1].
 inline Pose2 interpolate(const Pose2& a, const Pose2& b, double t)
 {

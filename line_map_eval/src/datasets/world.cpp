@@ -42,10 +42,7 @@ std::string readFile(const std::string& path, const char* what)
   return text.str();
 }
 
-double cross(const Vec2& a, const Vec2& b)
-{
-  return a.x() * b.y() - a.y() * b.x();
-}
+using linemap::cross;
 
 /// Shortest distance between the closed segments [p1, p2] and [q1, q2] (0 when they cross).
 double segmentDistance(const Vec2& p1, const Vec2& p2, const Vec2& q1, const Vec2& q2)

@@ -1,5 +1,5 @@
 // The evaluator nodelet: keyframe scans (scan + tf) and original segments in, re-registered on each
-// optimized_trajectory; every new line_map scored against them. Reads the parameters, converts
+// optimized_trajectory; every new line_map scored against them. With ~robots, several robots' scans. Reads the parameters, converts
 // messages, looks up tf, calls the core (online_evaluator.hpp), publishes.
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <line_map_msgs/Evaluate.h>
@@ -14,6 +14,8 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
+#include <vector>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "eval_messages.hpp"
@@ -52,30 +54,17 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     quality_pub_ = nh.advertise<line_map_msgs::MapQuality>("map_quality", 1, true);
     grid_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("lookup_table", 1, true);
     const auto queue = static_cast<std::uint32_t>(std::max(1, pnh.param("queue_size", 1000)));
-    // Held until tf places them (no time limit: the evaluator has no tf_timeout), each frame in order.
-    scan_wait_ = std::make_unique<Wait<sensor_msgs::LaserScan>>(
-        *tf_, map_frame_, queue, ros::Duration(), nh, [this](const ScanEvent& e) { onScan(e.getMessage()); },
-        [this](const ScanEvent& e, const std::string& why)
-        {
-          std::lock_guard<std::mutex> lock(mutex_);
-          core_->countDroppedScan();
-          NODELET_WARN_THROTTLE(10.0, "line_map_eval: scan at %.3f dropped: %s",
-                                e.getConstMessage()->header.stamp.toSec(), why.c_str());
-        });
-    segment_wait_ = std::make_unique<Wait<line_map_msgs::LineSegmentArray>>(
-        *tf_, map_frame_, queue, ros::Duration(), nh,
-        [this](const SegmentsEvent& e) { onSegments(e.getMessage()); },
-        [this](const SegmentsEvent&, const std::string& why)
-        { NODELET_WARN_THROTTLE(10.0, "line_map_eval: segments dropped: %s", why.c_str()); });
-    scan_wait_->subscribe(nh, "scan", queue,
-                          [this](const ScanEvent& e) { return arrive(e, OnlineEvaluator::kScans); });
-    segment_wait_->subscribe(nh, "line_segments", queue,
-                             [this](const SegmentsEvent& e)
-                             { return arrive(e, OnlineEvaluator::kSegments); });
+    // With ~robots, every robot's scans and segments (their frames placed in the map by the fleet's merger);
+    // each robot's trajectory is in its own map frame and names its own stamps: the scans stay where tf put
+    // them.
+    const auto robots = pnh.param("robots", std::vector<std::string>{});
+    if (robots.empty()) subscribeRobot(nh, "", queue);
+    for (const std::string& robot : robots) subscribeRobot(nh, robot + "/", queue);
     map_sub_ = nh.subscribe("line_map", 1, &LineMapEvalNodelet::onMap, this, linemap_ros::noDelay());
     // Every trajectory counts: its new nodes choose the stored scans (map_evaluator.hpp).
-    trajectory_sub_ = nh.subscribe("optimized_trajectory", 10, &LineMapEvalNodelet::onTrajectory, this,
-                                   linemap_ros::noDelay());
+    if (robots.empty())
+      trajectory_sub_ = nh.subscribe("optimized_trajectory", 10, &LineMapEvalNodelet::onTrajectory, this,
+                                     linemap_ros::noDelay());
     evaluate_srv_ = pnh.advertiseService("evaluate", &LineMapEvalNodelet::onEvaluate, this);
     diagnostics_ = std::make_unique<linemap_ros::WallDiagnostics>(nh, pnh, "evaluator", this,
                                                                   &LineMapEvalNodelet::diagnose);
@@ -86,6 +75,31 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     arena_ = std::make_unique<tbb::task_arena>(threads > 0 ? threads : tbb::info::default_concurrency());
     publish_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.05, pnh.param("min_period", 1.0))),
                                         [this](const ros::WallTimerEvent&) { publish(); });
+  }
+
+  /// One robot's scan and line_segments (`prefix`: its namespace and a slash, or nothing), held until tf
+  /// places them (no time limit: the evaluator has no tf_timeout), each frame in order.
+  void subscribeRobot(ros::NodeHandle& nh, const std::string& prefix, std::uint32_t queue)
+  {
+    scan_waits_.push_back(std::make_unique<Wait<sensor_msgs::LaserScan>>(
+        *tf_, map_frame_, queue, ros::Duration(), nh, [this](const ScanEvent& e) { onScan(e.getMessage()); },
+        [this](const ScanEvent& e, const std::string& why)
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          core_->countDroppedScan();
+          NODELET_WARN_THROTTLE(10.0, "line_map_eval: scan at %.3f dropped: %s",
+                                e.getConstMessage()->header.stamp.toSec(), why.c_str());
+        }));
+    segment_waits_.push_back(std::make_unique<Wait<line_map_msgs::LineSegmentArray>>(
+        *tf_, map_frame_, queue, ros::Duration(), nh,
+        [this](const SegmentsEvent& e) { onSegments(e.getMessage()); },
+        [this](const SegmentsEvent&, const std::string& why)
+        { NODELET_WARN_THROTTLE(10.0, "line_map_eval: segments dropped: %s", why.c_str()); }));
+    scan_waits_.back()->subscribe(nh, prefix + "scan", queue,
+                                  [this](const ScanEvent& e) { return arrive(e, OnlineEvaluator::kScans); });
+    segment_waits_.back()->subscribe(nh, prefix + "line_segments", queue,
+                                     [this](const SegmentsEvent& e)
+                                     { return arrive(e, OnlineEvaluator::kSegments); });
   }
 
   /// The laser pose in `target` at `stamp` (identity in its own frame), after noting the time.
@@ -110,8 +124,9 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     NODELET_WARN_THROTTLE(10.0, "line_map_eval: time jumped backwards (%s); tf buffer cleared",
                           core_->timeJumpCause().c_str());
     tf_->clear();
-    segment_wait_->clear();
-    for (std::size_t n = scan_wait_->clear(); n > 0; --n) core_->countDroppedScan();
+    for (const auto& wait : segment_waits_) wait->clear();
+    for (const auto& wait : scan_waits_)
+      for (std::size_t n = wait->clear(); n > 0; --n) core_->countDroppedScan();
     return true;
   }
 
@@ -234,8 +249,8 @@ class LineMapEvalNodelet : public nodelet::Nodelet
   std::shared_ptr<tf2_ros::Buffer> tf_;
   using ScanEvent = ros::MessageEvent<const sensor_msgs::LaserScan>;
   using SegmentsEvent = ros::MessageEvent<const line_map_msgs::LineSegmentArray>;
-  std::unique_ptr<Wait<sensor_msgs::LaserScan>> scan_wait_;
-  std::unique_ptr<Wait<line_map_msgs::LineSegmentArray>> segment_wait_;
+  std::vector<std::unique_ptr<Wait<sensor_msgs::LaserScan>>> scan_waits_;
+  std::vector<std::unique_ptr<Wait<line_map_msgs::LineSegmentArray>>> segment_waits_;
   std::shared_ptr<tf2_ros::TransformListener> tf_listener_;  // after the waits: its thread calls into them
   ros::Subscriber map_sub_, trajectory_sub_;
   ros::Publisher quality_pub_, grid_pub_;

@@ -16,10 +16,7 @@ namespace
 {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-double cross(const Vec2& a, const Vec2& b)
-{
-  return a.x() * b.y() - a.y() * b.x();
-}
+using linemap::cross;
 }  // namespace
 
 Random::Random(std::uint32_t seed, std::uint32_t stream)

@@ -22,10 +22,7 @@ constexpr double kInside = 1e-9;  // [m] depth below which a point counts as on 
 constexpr double kLength =
     1e-6;  // [m] shorter face pieces (slivers kInside long where a face enters a solid) are dropped
 
-double cross(const Vec2& a, const Vec2& b)
-{
-  return a.x() * b.y() - a.y() * b.x();
-}
+using linemap::cross;
 
 // A wall's solid: a rectangle, or a trapezoid where an arc's chords meet in a mitre; convex, corners in
 // clockwise order (the solid is on each edge's right).

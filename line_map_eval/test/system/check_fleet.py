@@ -17,7 +17,7 @@ import rosbag
 import rospy
 import rostest
 import tf2_ros
-from line_map_msgs.msg import LineMap
+from line_map_msgs.msg import LineMap, MapQuality
 from nav_msgs.msg import Path
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
@@ -126,6 +126,7 @@ class CheckFleet(unittest.TestCase):
                              lambda m, r=robot: paths.__setitem__(r, m), queue_size=10)
         maps = []
         rospy.Subscriber("/line_map", LineMap, lambda m: maps.append(m), queue_size=10)
+        qualities = lt.Collector("/map_quality", MapQuality)
         merging = lt.component_diagnostics(merging="line map merging")["merging"]
         tf = tf2_ros.Buffer()
         tf2_ros.TransformListener(tf)
@@ -155,14 +156,16 @@ class CheckFleet(unittest.TestCase):
         placed = (t.translation.x, t.translation.y, yaw(t.rotation))
         error = compose(inverse(expected), placed)
         live = [lt.moved(s, fits["robot1"]) for s in lt.map_segments(maps[-1])]
+        quality = lt.wait_for_quality_of(qualities, maps[-1], "the last map", limit)
         # The faces an extractor can map (as test/office_pipeline.test counts them), within 0.1 m: the map is
         # registered by the SLAM, not the truth.
         walls = lt.seen_walls(lt.load_truth(truth_file), 1.0, 10, 0.4, 0.3)
         total = sum(sum(b - a for a, b in iv) for _, _, iv in walls)
         covered = sum(lt.coverage(w, iv, live, 0.1) * sum(b - a for a, b in iv) for _, w, iv in walls) / total
         summary = "fleet: %s; placement %.3f m, %.4f rad from the truth; %d map segments cover %.1f %% of the " \
-                  "seen faces; merger: %s keyframes, %s dropped scans, %s scans of unplaced robots forgotten" % (
+                  "seen faces, q %.2f %%; merger: %s keyframes, %s dropped scans, %s scans of unplaced robots forgotten" % (
                       merging.get("robot 1"), math.hypot(error[0], error[1]), error[2], len(live), 100.0 * covered,
+                      quality.quality,
                       merging.get("keyframes"), merging.get("dropped scans"),
                       merging.get("scans of unplaced robots forgotten"))
         print(summary)
@@ -171,6 +174,7 @@ class CheckFleet(unittest.TestCase):
         self.assertLess(math.hypot(error[0], error[1]), 0.2)
         self.assertLess(abs(math.remainder(error[2], 2.0 * math.pi)), 0.05)
         self.assertGreater(covered, 0.85)
+        self.assertGreater(quality.quality, 85.0)
 
 
 if __name__ == "__main__":

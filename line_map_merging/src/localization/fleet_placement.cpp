@@ -221,15 +221,16 @@ std::vector<std::pair<std::string, std::string>> FleetPlacement::diagnostics() c
   std::vector<std::pair<std::string, std::string>> out;
   for (const auto& [robot, search] : searches_)
   {
+    const std::string refused = std::to_string(search.refused) +
+                                " places refused as seeing through its walls, " +
+                                std::to_string(search.ambiguous) + " as ambiguous";
     std::string state;
     if (search.placed)
       state = "placed after " + std::to_string(search.scans) + " scans at (" +
               std::to_string(search.placed->x) + ", " + std::to_string(search.placed->y) + ", " +
-              std::to_string(search.placed->theta) + ")";
+              std::to_string(search.placed->theta) + "); " + refused;
     else
-      state = "looked for in the fleet's map: " + std::to_string(search.scans) + " scans, " +
-              std::to_string(search.refused) + " places refused as seeing through its walls, " +
-              std::to_string(search.ambiguous) + " as ambiguous";
+      state = "looked for in the fleet's map: " + std::to_string(search.scans) + " scans; " + refused;
     out.emplace_back("robot " + std::to_string(robot), state);
   }
   return out;

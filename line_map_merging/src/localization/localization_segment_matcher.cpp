@@ -23,10 +23,7 @@ Vec2 closestOnSegment(const Vec2& p, const Vec2& a, const Vec2& b)
   return a + t * d;
 }
 
-double cross(const Vec2& a, const Vec2& b)
-{
-  return a.x() * b.y() - a.y() * b.x();
-}
+using linemap::cross;
 }  // namespace
 
 LocalizationSegmentIndex::LocalizationSegmentIndex(std::vector<Segment2> segments, double cell_size,

@@ -16,10 +16,7 @@ using linemap::Vec2;
 
 namespace
 {
-double cross(const Vec2& a, const Vec2& b)
-{
-  return a.x() * b.y() - a.y() * b.x();
-}
+using linemap::cross;
 
 }  // namespace
 
