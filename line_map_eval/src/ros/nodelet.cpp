@@ -1,6 +1,6 @@
 // The evaluator nodelet: keyframe scans (scan + tf) and original segments in, re-registered on each
-// optimized_trajectory; every new line_map scored against them. With ~robots, several robots' scans. Reads the parameters, converts
-// messages, looks up tf, calls the core (online_evaluator.hpp), publishes.
+// optimized_trajectory; every new line_map scored against them. With ~robots, several robots' scans. Reads
+// the parameters, converts messages, looks up tf, calls the core (online_evaluator.hpp), publishes.
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <line_map_msgs/Evaluate.h>
 #include <nodelet/nodelet.h>
@@ -14,9 +14,9 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <pluginlib/class_list_macros.hpp>
 #include <string>
 #include <vector>
-#include <pluginlib/class_list_macros.hpp>
 
 #include "eval_messages.hpp"
 #include "line_map_eval/online/online_evaluator.hpp"
