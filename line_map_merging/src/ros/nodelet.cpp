@@ -82,25 +82,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
     const int queue = std::max(1, pnh.param("queue_size", 1000));
-    const auto names = pnh.param("robots", std::vector<std::string>{});
-    if (names.empty()) addRobot(nh, "", queue);
-    for (const std::string& name : names) addRobot(nh, name, queue);
-    if (names.size() > 1)
-    {
-      try
-      {
-        placement_ = std::make_unique<FleetPlacement>(
-            LocalizerParams::fromParams(linemap_ros::loadParamSet(ros::NodeHandle(pnh, "placement"))),
-            pnh.param("placement_confirm_path", 10.0));
-      }
-      catch (const std::exception& e)
-      {
-        NODELET_FATAL("line_map_merging: ~placement: %s", e.what());
-        throw;
-      }
-      placements_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
-    }
-    publishPlacements();
+    addRobots(nh, pnh, queue);
     advertiseServices(pnh);
     const double period = mapper_->mapper().params().autosave_period;
     if (period > 0.0 && !autosave_path_.empty())
@@ -153,6 +135,28 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     NODELET_WARN_THROTTLE(5.0,
                           "line_map_merging: time jumped back: tf buffer cleared, gate reset, map kept (%zu)",
                           counters().time_jumps);
+  }
+
+  /// The robots of ~robots (or the one robot in the map frame), and with two or more their placement.
+  void addRobots(ros::NodeHandle& nh, ros::NodeHandle& pnh, int queue)
+  {
+    const auto names = pnh.param("robots", std::vector<std::string>{});
+    if (names.empty()) addRobot(nh, "", queue);
+    for (const std::string& name : names) addRobot(nh, name, queue);
+    if (names.size() < 2) return;
+    try
+    {
+      placement_ = std::make_unique<FleetPlacement>(
+          LocalizerParams::fromParams(linemap_ros::loadParamSet(ros::NodeHandle(pnh, "placement"))),
+          pnh.param("placement_confirm_path", 10.0));
+    }
+    catch (const std::exception& e)
+    {
+      NODELET_FATAL("line_map_merging: ~placement: %s", e.what());
+      throw;
+    }
+    placements_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
+    publishPlacements();
   }
 
   void addRobot(ros::NodeHandle& nh, const std::string& name, int queue)
