@@ -27,7 +27,7 @@ PACKAGES = ["line_map_msgs", "line_extraction", "line_map_merging", "line_map_ev
 PLUGIN_PACKAGES = ["line_extraction", "line_map_merging", "line_map_eval"]
 TOOLS = ["linemap_batch", "linemap_relations", "linemap_export", "carmen_to_bag", "simulate_world"]
 # Launch arguments without a default.
-LAUNCH_ARGS = {"replay.launch": ["bag:=/nonexistent.bag"]}
+LAUNCH_ARGS = {"replay.launch": ["bag:=/nonexistent.bag"], "robot.launch": ["robot:=robot1"]}
 # Parameter files loaded into each nodelet's namespace before it loads (as linemap.launch does).
 NODELET_CONFIG = {"line_extraction/LineExtractionNodelet": "line_extraction.yaml",
                   "line_map_merging/LineMapMergingNodelet": "line_map_merging.yaml",
