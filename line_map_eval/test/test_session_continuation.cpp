@@ -144,6 +144,37 @@ TEST(SessionContinuation, TheRobotIsFoundInTheSavedMapThenTheSlamMapsOn)
   EXPECT_GE(between, 5u) << "the new keyframes close loops to the saved ones";
 }
 
+// The loop world is its own image half a turn about its centre but for four crates: one scan, or metres of
+// corridor, fit both places alike. Searched without a start, the second part must not be placed at the
+// look-alike place: a place the localizer accepts is taken only once the way the robot came tells it from
+// every rival (PlacementJudge). It may be placed where the truth has it (within 0.3 m and 0.05 rad) or not at
+// all within its 120 scans (then it maps apart; the localizer must have offered the look-alike place, and the
+// judge refused it). Before the judge it was placed half a turn away, 21.5 m off.
+TEST(SessionContinuation, ALookAlikePlaceIsNotTakenForTheRobots)
+{
+  const Drive& d = drive();
+  line_map_merging::LaserSlam slam(d.slam);
+  SessionContinuation continuation(d.saved, d.localizer, 120);
+  std::size_t i = 0;
+  for (; i < d.second.scans.size(); ++i)
+    if (continuation.addScan(slamScan(d.second, i), d.second.base_to_laser.translation(), slam) !=
+        SessionContinuation::State::kSearching)
+      break;
+  std::printf("%s\n", continuation.summary().c_str());
+  if (continuation.state() != SessionContinuation::State::kPlaced)
+  {
+    EXPECT_GE(continuation.refusedAsAmbiguous(), 1u);
+    return;
+  }
+  const Pose2& found = *continuation.found();
+  const double off = distance(found, d.second_truth.at(i)),
+               turn = std::abs(linemap::normalizeAngle(found.theta - d.second_truth.at(i).theta));
+  std::printf("placed at scan %zu of %zu, %.3f m and %.4f rad from the truth\n", i, d.second.scans.size(),
+              off, turn);
+  EXPECT_LT(off, 0.3);
+  EXPECT_LT(turn, 0.05);
+}
+
 // A session the robot is not in (here: an empty one) is given up after the set number of scans; the SLAM then
 // maps a new map in its own frame from the first scan searched on (none is lost), its first keyframe at the
 // origin.

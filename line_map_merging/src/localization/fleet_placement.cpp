@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "line_map_merging/map/free_space_witness.hpp"
+#include "line_map_merging/localization/placement_judge.hpp"
 
 namespace line_map_merging
 {
@@ -44,10 +44,7 @@ std::optional<linemap::Pose2> FleetPlacement::addScan(std::size_t robot, double 
   const linemap::Pose2 base = laser * mount.inverse();
   if (search.last_base) search.travelled += (base.translation() - search.last_base->translation()).norm();
   search.last_base = base;
-  if (search.sights.empty() ||
-      (search.sights.back().laser.translation() - laser.translation()).norm() >= sight_spacing ||
-      std::fabs(linemap::normalizeAngle(search.sights.back().laser.theta - laser.theta)) >= sight_turn)
-    search.sights.push_back({laser, segments});
+  if (search.way.move(laser)) search.way.add(segmentSight(laser, segments, point_spacing_));
 
   LocalizerScan scan;
   scan.stamp = stamp;
@@ -72,136 +69,47 @@ std::optional<linemap::Pose2> FleetPlacement::addScan(std::size_t robot, double 
     case PlaceConfirmation::Verdict::kConfirmed:
       break;
   }
-  if (seenThroughLength(robot, implied, map_) > max_seen_through)
+  const PlacementJudge::Verdict verdict = PlacementJudge(map_, params_, see_through_margin, max_seen_through)
+                                              .judge(search.way, implied, minEvidencePoints());
+  switch (verdict.outcome)
   {
-    ++search.refused;
-    search.confirmation.reset();
-    search.localizer->startGlobalLocalization();
-    return std::nullopt;
+    case PlacementJudge::Outcome::kSeenThrough:
+      ++search.refused;
+      search.confirmation.reset();
+      search.localizer->startGlobalLocalization();
+      return std::nullopt;
+    case PlacementJudge::Outcome::kAmbiguous:
+      ++search.ambiguous;
+      search.confirmation.reset();
+      return std::nullopt;
+    case PlacementJudge::Outcome::kPlaced:
+      break;
   }
-  const std::vector<linemap::Vec2> points = sightPoints(search);
-  const linemap::Pose2 placed = refined(points, implied);
-  if (ambiguous(points, placed, map_))
-  {
-    ++search.ambiguous;
-    search.confirmation.reset();
-    return std::nullopt;
-  }
-  search.placed = placed;
+  search.placed = verdict.place;
   search.localizer.reset();
   return search.placed;
-}
-
-std::vector<linemap::Vec2> FleetPlacement::sightPoints(const Search& search) const
-{
-  std::vector<linemap::Vec2> points;
-  for (const Sight& sight : search.sights)
-  {
-    const std::vector<linemap::Vec2> seen = segmentPoints(sight.segments, sight.laser, point_spacing_);
-    points.insert(points.end(), seen.begin(), seen.end());
-  }
-  return points;
-}
-
-SegmentMatch FleetPlacement::matchSights(const LocalizationSegmentIndex& index,
-                                         const std::vector<linemap::Vec2>& points,
-                                         const linemap::Pose2& from) const
-{
-  SegmentMatchParams match = params_.match;
-  match.check_free_side = false;  // the points come from many places
-  return matchToSegments(index, points, from, std::nullopt, match);
-}
-
-linemap::Pose2 FleetPlacement::refined(const std::vector<linemap::Vec2>& points,
-                                       const linemap::Pose2& placed) const
-{
-  // Every sight at once, in the robot's own map frame: the whole way it came, not one scan, pins the
-  // rotation down.
-  const SegmentMatch m = matchSights(
-      LocalizationSegmentIndex(map_, params_.index_cell, params_.match.max_distance), points, placed);
-  if (!m.valid) return placed;
-  const linemap::Pose2 change = placed.inverse() * m.pose;
-  const bool near = std::hypot(change.x, change.y) <= PlaceConfirmation::max_xy &&
-                    std::fabs(change.theta) <= PlaceConfirmation::max_theta;
-  return near ? m.pose : placed;
 }
 
 bool FleetPlacement::ambiguous(std::size_t robot, const linemap::Pose2& placed,
                                const std::vector<linemap::Segment2>& map) const
 {
   const auto it = searches_.find(robot);
-  return it != searches_.end() && ambiguous(sightPoints(it->second), placed, map);
-}
-
-bool FleetPlacement::ambiguous(const std::vector<linemap::Vec2>& points, const linemap::Pose2& placed,
-                               const std::vector<linemap::Segment2>& map) const
-{
-  // The way the robot came searched for over the whole map: a rival placement elsewhere that explains it
-  // about as well (a building alike half a turn away) leaves the place open until the robot has seen what
-  // tells them apart. Evidence is counted in points explained, not as a share: what differs is a few pieces
-  // of furniture among metres of look-alike walls.
-  const LocalizationGlobalSearch global(map, params_.global);
-  const SegmentMatchParams& match = params_.match;
-  const LocalizationSegmentIndex index(map, params_.index_cell, match.max_distance);
-  const auto explained = [&](const linemap::Pose2& pose)
-  { return evaluateOnSegments(index, points, pose, match).score * static_cast<double>(points.size()); };
-  const double own = explained(placed);
-  const double needed = min_evidence / point_spacing_;
-  const auto distinct = [&](const linemap::Pose2& pose)
-  {
-    const linemap::Pose2 apart = placed.inverse() * pose;
-    return std::hypot(apart.x, apart.y) >= params_.global.separation ||
-           std::fabs(linemap::normalizeAngle(apart.theta)) >= params_.global.separation_angle;
-  };
-  for (const MatchResult& candidate : global.search(points))
-  {
-    if (!distinct(candidate.pose)) continue;
-    const SegmentMatch rival = matchSights(index, points, candidate.pose);  // may slide back onto `placed`
-    if (rival.valid && distinct(rival.pose) && explained(rival.pose) > own - needed) return true;
-  }
-  return false;
+  if (it == searches_.end()) return false;
+  const PlacementJudge::Verdict verdict = PlacementJudge(map, params_, see_through_margin, max_seen_through)
+                                              .judge(it->second.way, placed, minEvidencePoints());
+  const linemap::Pose2 apart = placed.inverse() * verdict.place;
+  return verdict.outcome != PlacementJudge::Outcome::kPlaced ||
+         std::hypot(apart.x, apart.y) >= params_.global.separation ||
+         std::fabs(linemap::normalizeAngle(apart.theta)) >= params_.global.separation_angle;
 }
 
 double FleetPlacement::seenThroughLength(std::size_t robot, const linemap::Pose2& placed,
                                          const std::vector<linemap::Segment2>& map) const
 {
   const auto it = searches_.find(robot);
-  if (it == searches_.end()) return 0.0;
-  std::vector<FreeSpaceWitness> witnesses;
-  for (const Sight& sight : it->second.sights)
-  {
-    const linemap::Pose2 laser = placed * sight.laser;
-    for (const linemap::Segment2& s : sight.segments)
-    {
-      FreeSpaceWitness w;
-      if (makeWitness(laser.translation(), s.transformed(laser), see_through_margin, w))
-        witnesses.push_back(w);
-    }
-  }
-  // Per map segment, bins of about 0.1 m: seen through by some witness and in place by none.
-  constexpr double bin = 0.1;
-  constexpr std::size_t max_bins = 32;
-  double length = 0.0;
-  for (const linemap::Segment2& m : map)
-  {
-    const double segment_length = m.length();
-    if (!(segment_length > 0.0)) continue;
-    const std::size_t bins = std::min(
-        max_bins, std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(segment_length / bin))));
-    std::uint32_t through = 0, in_place = 0;
-    const double min_x = std::min(m.start.x(), m.end.x()), max_x = std::max(m.start.x(), m.end.x());
-    const double min_y = std::min(m.start.y(), m.end.y()), max_y = std::max(m.start.y(), m.end.y());
-    for (const FreeSpaceWitness& w : witnesses)
-    {
-      if (max_x < w.box[0] || min_x > w.box[2] || max_y < w.box[1] || min_y > w.box[3]) continue;
-      through |= insideBins(m, w.free, 3, bins);
-      in_place |= insideBins(m, w.band, 4, bins);
-    }
-    const std::uint32_t seen_through = through & ~in_place;
-    length +=
-        segment_length * static_cast<double>(__builtin_popcount(seen_through)) / static_cast<double>(bins);
-  }
-  return length;
+  return it == searches_.end() ? 0.0
+                               : PlacementJudge(map, params_, see_through_margin, max_seen_through)
+                                     .seenThroughLength(it->second.way, placed);
 }
 
 std::optional<linemap::Pose2> FleetPlacement::placement(std::size_t robot) const

@@ -15,6 +15,15 @@ std::vector<linemap::Segment2> sessionSurfaces(const SlamSession& session)
   return out;
 }
 
+std::vector<Sighting> sessionSightings(const SlamSession& session)
+{
+  std::vector<Sighting> out;
+  for (std::size_t k = 0; k < session.keyframes.size() && k < session.nodes.size(); ++k)
+    for (const auto& s : session.keyframes[k].joins)
+      out.push_back({session.nodes[k].translation(), s.transformed(session.nodes[k])});
+  return out;
+}
+
 SessionContinuation::SessionContinuation(SlamSession session, const LocalizerParams& localizer,
                                          std::size_t search_scans, const std::optional<linemap::Pose2>& start,
                                          double sigma_xy, double sigma_theta)
@@ -44,7 +53,21 @@ SessionContinuation::State SessionContinuation::addScan(const SlamScan& scan, co
     in.odom = scan.odom;
     in.sensor = sensor;
     const LocalizerResult result = localizer_->addScan(in);
-    if (result.outcome == LocalizerOutcome::kRecovered) found_ = result.pose;
+    // The way in the odometry's frame; without odometry, in the tracked place's, only while it is tracked.
+    std::optional<linemap::Pose2> own = scan.odom;
+    if (!own)
+    {
+      if (!result.localized || result.outcome == LocalizerOutcome::kRecovered) way_.clear();
+      if (result.localized) own = result.pose;
+    }
+    if (own) keep(scan, sensor, *own);
+    // Judged at the place accepted and at every scan kept on the way while it is tracked: a place the way
+    // cannot yet tell from a look-alike one may be told apart a few metres on.
+    if (result.outcome == LocalizerOutcome::kRecovered)
+    {
+      found_ = judged(result.pose, *own);
+      if (!found_) localizer_->startGlobalLocalization();
+    }
   }
   if (found_)
   {
@@ -54,11 +77,14 @@ SessionContinuation::State SessionContinuation::addScan(const SlamScan& scan, co
     slam.continueFrom(session_, *found_, sigma_xy_, sigma_theta_);
     state_ = State::kPlaced;
     localizer_.reset();
+    judge_.reset();
     session_ = SlamSession();  // the SLAM holds it now
   }
   else if (searched_ >= search_scans_)
   {
     state_ = State::kGaveUp;
+    way_.clear();
+    rivals_.clear();
     // The search goes on from the SLAM's own poses (the held scans' odometry is a different frame's), its
     // global searches repeated less often: the SLAM maps in the same thread meanwhile.
     LocalizerParams apart = localizer_->params();
@@ -103,8 +129,53 @@ SessionContinuation::State SessionContinuation::afterScan(const SlamScan& scan, 
   slam.joinSession(session_, *joined_, sigma_xy_, sigma_theta_);
   state_ = State::kJoined;
   localizer_.reset();
+  judge_.reset();
   session_ = SlamSession();  // the SLAM holds it now
   return state_;
+}
+
+void SessionContinuation::keep(const SlamScan& scan, const linemap::Vec2& sensor, const linemap::Pose2& own)
+{
+  const linemap::Pose2 laser = own * linemap::Pose2(sensor.x(), sensor.y(), 0.0);
+  if (!way_.move(laser)) return;
+  std::vector<linemap::Vec2> returns;
+  returns.reserve(scan.points.size());
+  for (const linemap::Vec2& p : scan.points) returns.push_back(p - sensor);
+  way_.add(scanSight(laser, returns, point_spacing));
+}
+
+std::optional<linemap::Pose2> SessionContinuation::judged(const linemap::Pose2& pose,
+                                                          const linemap::Pose2& own)
+{
+  if (!judge_)
+  {
+    judge_ = std::make_unique<PlacementJudge>(sessionSurfaces(session_), localizer_->params());
+    judge_->setMapFreeSpace(sessionSightings(session_));
+  }
+  // The robot's own frame in the saved map's, as this scan puts it.
+  const linemap::Pose2 frame = pose * own.inverse();
+  const PlacementJudge::Verdict verdict =
+      judge_->judge(way_, frame, min_evidence / point_spacing, rival_share, rivals_);
+  switch (verdict.outcome)
+  {
+    case PlacementJudge::Outcome::kAmbiguous:
+      ++ambiguous_;
+      rivals_ = verdict.rivals;
+      rivals_.push_back(verdict.place);
+      return std::nullopt;
+    case PlacementJudge::Outcome::kSeenThrough:
+      ++seen_through_;
+      return std::nullopt;
+    case PlacementJudge::Outcome::kPlaced:
+      break;
+  }
+  // The localizer's pose of this scan where the judge confirms its place: the way, kept along raw odometry,
+  // is bent by its drift, one scan is not.
+  const linemap::Pose2 change = frame.inverse() * verdict.place;
+  if (std::hypot(change.x, change.y) <= PlaceConfirmation::max_xy &&
+      std::fabs(linemap::normalizeAngle(change.theta)) <= PlaceConfirmation::max_theta)
+    return pose;
+  return verdict.place * own;
 }
 
 std::vector<SlamScan> SessionContinuation::takeHeld()
@@ -137,6 +208,9 @@ std::string SessionContinuation::summary() const
           << ") in this map";
       break;
   }
+  if (ambiguous_ + seen_through_ > 0)
+    out << "; places refused: " << ambiguous_ << " as ambiguous, " << seen_through_
+        << " as contradicting the saved map's free space";
   return out.str();
 }
 

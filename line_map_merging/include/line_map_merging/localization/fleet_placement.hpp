@@ -19,6 +19,7 @@
 
 #include "line_map_merging/localization/line_map_localizer.hpp"
 #include "line_map_merging/localization/place_confirmation.hpp"
+#include "line_map_merging/localization/placement_judge.hpp"
 #include "linemap/geometry.hpp"
 
 namespace line_map_merging
@@ -59,16 +60,10 @@ class FleetPlacement
   std::vector<std::pair<std::string, std::string>> diagnostics() const;
 
  private:
-  /// A scan kept to judge placements by: the laser in the robot's own map frame, its segments.
-  struct Sight
-  {
-    linemap::Pose2 laser;
-    std::vector<linemap::Segment2> segments;
-  };
   struct Search
   {
-    explicit Search(double confirm_path) : confirmation(confirm_path) {}
-    std::vector<Sight> sights;  ///< one per sight_spacing of path or sight_turn
+    explicit Search(double confirm_path) : way(sight_spacing, sight_turn), confirmation(confirm_path) {}
+    Way way;  ///< a sight per sight_spacing of path or sight_turn, the laser in the robot's own map frame
     std::unique_ptr<LineMapLocalizer> localizer;
     PlaceConfirmation confirmation;
     std::optional<linemap::Pose2> last_base;  ///< in the robot's own map frame
@@ -84,17 +79,7 @@ class FleetPlacement
                           max_seen_through = 1.0;
   /// [m] of points (at point_spacing) the placement must explain better than every rival placement.
   static constexpr double min_evidence = 1.0;
-
-  /// Every sight's segments sampled into points, in the robot's own map frame.
-  std::vector<linemap::Vec2> sightPoints(const Search& search) const;
-  /// Those points (the robot's own map frame) matched against `index` from `from`.
-  SegmentMatch matchSights(const LocalizationSegmentIndex& index, const std::vector<linemap::Vec2>& points,
-                           const linemap::Pose2& from) const;
-  /// `placed` refined by matching every sight of the search at once against the fleet's map.
-  linemap::Pose2 refined(const std::vector<linemap::Vec2>& points, const linemap::Pose2& placed) const;
-  /// Whether a placement apart from `placed` explains the sights' points within min_evidence of as well.
-  bool ambiguous(const std::vector<linemap::Vec2>& points, const linemap::Pose2& placed,
-                 const std::vector<linemap::Segment2>& map) const;
+  double minEvidencePoints() const { return min_evidence / point_spacing_; }
 
   LocalizerParams params_;
   double confirm_path_, point_spacing_;

@@ -1,7 +1,9 @@
 // Continuing a saved session from an unknown start (ROS-free; the SLAM nodelet's ~session parameter, and
 // line_map_eval's runSlam / runSessions offline, so both make the same map): the robot is first found in the
 // saved keyframes' surfaces by global localization, scan after scan, the scans held meanwhile. At the first
-// pose the localizer accepts, the SLAM continues the session (LaserSlam::continueFrom) from that scan; the
+// pose the localizer accepts that the way the robot came (its scans kept along the odometry) tells from every
+// look-alike place (placement_judge.hpp), the SLAM continues the session (LaserSlam::continueFrom) from that
+// scan; the
 // scans searched before it are not mapped (carried back to them by the odometry, the start would take on the
 // odometry's drift over the whole search). A start given up front (an initial pose) skips the search. When no
 // pose is accepted within a number of scans the session is given up: the SLAM maps a new map in its own frame
@@ -19,12 +21,18 @@
 
 #include "line_map_merging/localization/line_map_localizer.hpp"
 #include "line_map_merging/localization/place_confirmation.hpp"
+#include "line_map_merging/localization/placement_judge.hpp"
+#include "line_map_merging/map/occupancy_grid.hpp"
 #include "line_map_merging/slam/laser_slam.hpp"
 
 namespace line_map_merging
 {
 /// The saved keyframes' surfaces (scan_surfaces) in the session's map frame: a line map to localize in.
 std::vector<linemap::Segment2> sessionSurfaces(const SlamSession& session);
+
+/// The saved keyframes' surfaces, each with the point it was seen from, in the session's map frame (the laser
+/// taken at the base: the free-space margin covers the mounting).
+std::vector<Sighting> sessionSightings(const SlamSession& session);
 
 class SessionContinuation
 {
@@ -53,13 +61,18 @@ class SessionContinuation
   /// searched for in the saved map with the SLAM's front-end pose as its odometry; at the pose accepted the
   /// SLAM joins the saved session (kJoined) once the place has held while the robot drove 5 m on (tracked
   /// throughout, each scan implying the same saved frame within 0.3 m and 0.05 rad): a place looking like
-  /// another would otherwise join two maps for good. Otherwise nothing happens. Returns the state.
+  /// another would otherwise join two maps for good (not judged by the way: PlacementJudge kept the changed
+  /// office's look-alike place as a rival for good). Otherwise nothing happens. Returns the state.
   State afterScan(const SlamScan& scan, const linemap::Vec2& sensor, LaserSlam& slam);
   /// The scans held during the search that the SLAM is to take before the current one: after kGaveUp every
   /// scan searched, after kPlaced none; emptied.
   std::vector<SlamScan> takeHeld();
 
   State state() const { return state_; }
+  /// Places the localizer accepted that the way the robot came did not tell from a rival place.
+  std::size_t refusedAsAmbiguous() const { return ambiguous_; }
+  /// Places the localizer accepted where, as at every rival place, the way saw through saved walls.
+  std::size_t refusedAsSeenThrough() const { return seen_through_; }
   /// Scans searched so far (the one placed at included).
   std::size_t searched() const { return searched_; }
   /// Scans searched after giving up, up to the one the SLAM joined at (kJoined).
@@ -73,8 +86,28 @@ class SessionContinuation
   std::string summary() const;
 
  private:
+  /// The scan at `own` (base pose in the robot's own frame) kept on the way when one is due.
+  void keep(const SlamScan& scan, const linemap::Vec2& sensor, const linemap::Pose2& own);
+  /// The base pose `pose` the localizer gives in the saved map, `own` the same scan's in the robot's own
+  /// frame: the base pose in the saved map at the place the whole way kept is judged to be
+  /// (PlacementJudge), or nothing when it is not told from a look-alike place, or every place sees through
+  /// the saved walls.
+  std::optional<linemap::Pose2> judged(const linemap::Pose2& pose, const linemap::Pose2& own);
+
+  /// [m]: the points of a sight thinned to this spacing; the way kept over this much path (the robot's own
+  /// frame drifts: raw odometry during the search); points [m of wall at point_spacing] a place must explain
+  /// better than every rival place.
+  static constexpr double point_spacing = 0.1, way_window = 10.0, min_evidence = 1.0;
+  /// The share of the best place's explained points an uncontradicted rival place needs to leave it open
+  /// (PlacementJudge::judge).
+  static constexpr double rival_share = 0.5;
+
   SlamSession session_;
   std::unique_ptr<LineMapLocalizer> localizer_;  ///< null with a given start
+  std::unique_ptr<PlacementJudge> judge_;        ///< made at the first place found
+  Way way_{0.5, 0.5, way_window};                ///< the robot's, in the frame the localizer's odometry is in
+  std::size_t ambiguous_ = 0, seen_through_ = 0;
+  std::vector<linemap::Pose2> rivals_;  ///< the places the last ambiguous verdict weighed
   std::size_t search_scans_;
   std::optional<linemap::Pose2> given_start_, found_;
   std::vector<SlamScan> held_;
