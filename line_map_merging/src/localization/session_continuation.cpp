@@ -140,7 +140,10 @@ void SessionContinuation::keep(const SlamScan& scan, const linemap::Vec2& sensor
   if (!way_.move(laser)) return;
   std::vector<linemap::Vec2> returns;
   returns.reserve(scan.points.size());
-  for (const linemap::Vec2& p : scan.points) returns.push_back(p - sensor);
+  // As the localizer takes them: farther returns (and no-return readings at the range limit) are dropped.
+  const double max_range = localizer_->params().max_range;
+  for (const linemap::Vec2& p : scan.points)
+    if ((p - sensor).norm() <= max_range) returns.push_back(p - sensor);
   way_.add(scanSight(laser, returns, point_spacing));
 }
 
@@ -164,8 +167,10 @@ std::optional<linemap::Pose2> SessionContinuation::judged(const linemap::Pose2& 
       rivals_.push_back(verdict.place);
       return std::nullopt;
     case PlacementJudge::Outcome::kSeenThrough:
+      // Every place contradicted, the localizer's too: the free-space evidence is not trusted (live on Intel
+      // it contradicted every place, offline none; the cause is not found yet), and its place is taken.
       ++seen_through_;
-      return std::nullopt;
+      return pose;
     case PlacementJudge::Outcome::kPlaced:
       break;
   }
@@ -210,7 +215,7 @@ std::string SessionContinuation::summary() const
   }
   if (ambiguous_ + seen_through_ > 0)
     out << "; places refused: " << ambiguous_ << " as ambiguous, " << seen_through_
-        << " as contradicting the saved map's free space";
+        << " as contradicted by the saved map's free space (taken all the same)";
   return out.str();
 }
 

@@ -71,7 +71,8 @@ class SessionContinuation
   State state() const { return state_; }
   /// Places the localizer accepted that the way the robot came did not tell from a rival place.
   std::size_t refusedAsAmbiguous() const { return ambiguous_; }
-  /// Places the localizer accepted where, as at every rival place, the way saw through saved walls.
+  /// Places the localizer accepted where, as at every rival place, the way contradicted the saved map's free
+  /// space: taken all the same (see judged()).
   std::size_t refusedAsSeenThrough() const { return seen_through_; }
   /// Scans searched so far (the one placed at included).
   std::size_t searched() const { return searched_; }
@@ -90,8 +91,8 @@ class SessionContinuation
   void keep(const SlamScan& scan, const linemap::Vec2& sensor, const linemap::Pose2& own);
   /// The base pose `pose` the localizer gives in the saved map, `own` the same scan's in the robot's own
   /// frame: the base pose in the saved map at the place the whole way kept is judged to be
-  /// (PlacementJudge), or nothing when it is not told from a look-alike place, or every place sees through
-  /// the saved walls.
+  /// (PlacementJudge), or nothing when it is not told from a look-alike place. When every place contradicts
+  /// the saved map's free space, the localizer's pose.
   std::optional<linemap::Pose2> judged(const linemap::Pose2& pose, const linemap::Pose2& own);
 
   /// [m]: the points of a sight thinned to this spacing; the way kept over this much path (the robot's own
