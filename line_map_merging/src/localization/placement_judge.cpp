@@ -183,13 +183,15 @@ PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pos
   std::stable_sort(places.begin(), places.end(),
                    [](const Place& l, const Place& r) { return l.score > r.score; });
   // The best place is the one explaining most points that neither sees through walls nor puts more than a
-  // tenth of the points (registration error, people) in the map's free space.
+  // tenth of the points (registration error, people) in the map's free space; one explaining less than half
+  // of what the foremost place explains is none (where everything that fits is contradicted, nothing is).
   Verdict verdict;
   const double allowed_in_free = std::max(min_evidence, 0.1 * static_cast<double>(points.size()));
   const Place* best = nullptr;
   std::size_t best_in_free = 0;
   for (const Place& place : places)
   {
+    if (place.score < 0.5 * places.front().score) break;
     const std::size_t in_free = pointsInFreeSpace(points, place.pose);
     if (seenThroughLength(way, place.pose) > max_seen_through_ ||
         static_cast<double>(in_free) > allowed_in_free)
