@@ -148,23 +148,17 @@ std::size_t PlacementJudge::pointsInFreeSpace(const std::vector<linemap::Vec2>& 
       [&](const linemap::Vec2& p) { return map_free_.valueAt(placed.apply(p)) == OccupancyGrid::kFree; }));
 }
 
-PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pose2& placed,
-                                              double min_evidence, double rival_share,
-                                              const std::vector<linemap::Pose2>& also) const
+bool PlacementJudge::apart(const linemap::Pose2& a, const linemap::Pose2& b) const
 {
-  const std::vector<linemap::Vec2> points = way.points();
-  const auto apart = [&](const linemap::Pose2& a, const linemap::Pose2& b)
-  {
-    const linemap::Pose2 d = a.inverse() * b;
-    return std::hypot(d.x, d.y) >= params_.global.separation ||
-           std::fabs(linemap::normalizeAngle(d.theta)) >= params_.global.separation_angle;
-  };
-  struct Place
-  {
-    double score;
-    linemap::Pose2 pose;
-    bool kept;  ///< one of `also`: a rival until contradicted, however little of the way it explains
-  };
+  const linemap::Pose2 d = a.inverse() * b;
+  return std::hypot(d.x, d.y) >= params_.global.separation ||
+         std::fabs(linemap::normalizeAngle(d.theta)) >= params_.global.separation_angle;
+}
+
+std::vector<PlacementJudge::Place> PlacementJudge::weigh(const std::vector<linemap::Vec2>& points,
+                                                         const linemap::Pose2& placed,
+                                                         const std::vector<linemap::Pose2>& also) const
+{
   std::vector<Place> places;
   const linemap::Pose2 own = refined(points, placed);
   places.push_back({explained(points, own), own, false});
@@ -182,6 +176,15 @@ PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pos
   }
   std::stable_sort(places.begin(), places.end(),
                    [](const Place& l, const Place& r) { return l.score > r.score; });
+  return places;
+}
+
+PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pose2& placed,
+                                              double min_evidence, double rival_share,
+                                              const std::vector<linemap::Pose2>& also) const
+{
+  const std::vector<linemap::Vec2> points = way.points();
+  const std::vector<Place> places = weigh(points, placed, also);
   // The best place is the one explaining most points that neither sees through walls nor puts more than a
   // tenth of the points (registration error, people) in the map's free space; one explaining less than half
   // of what the foremost place explains is none (where everything that fits is contradicted, nothing is).

@@ -112,7 +112,18 @@ class PlacementJudge
   double seenThroughLength(const Way& way, const linemap::Pose2& placed) const;
 
  private:
+  struct Place
+  {
+    double score;  ///< points explained
+    linemap::Pose2 pose;
+    bool kept;  ///< one of `also`: a rival until contradicted, however little of the way it explains
+  };
   SegmentMatch match(const std::vector<linemap::Vec2>& points, const linemap::Pose2& from) const;
+  /// Whether two places are distinct (the global search's separation).
+  bool apart(const linemap::Pose2& a, const linemap::Pose2& b) const;
+  /// `placed` refined, `also` and the global search's candidates, each refined and scored, best first.
+  std::vector<Place> weigh(const std::vector<linemap::Vec2>& points, const linemap::Pose2& placed,
+                           const std::vector<linemap::Pose2>& also) const;
 
   std::vector<linemap::Segment2> map_;
   OccupancyGrid map_free_;  ///< kFree: seen free beyond the margin from every wall; empty without
