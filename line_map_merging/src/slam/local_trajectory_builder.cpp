@@ -149,20 +149,41 @@ std::optional<Pose2> LocalTrajectoryBuilder::matchFrontEnd(const SlamScan& scan,
     if (prediction.jumped) attempt(*prediction.jumped, true);
     if (!prediction.jumped || !best || best->score < params_.min_score) attempt(predicted, true);
   }
+  if (!prediction.odometry_usable && (afterGap(scan) || velocity_across_pause_) &&
+      (!best || best->score < enough))
+  {
+    // Without odometry across a gap in the scans the robot may have turned any way (ACES turns in place
+    // during one): when the prediction finds no good match, every heading is searched around where the
+    // robot was, as far as it may have moved at its last speed. So too for the scan after: its velocity,
+    // the motion through the gap taken as one scan's, may predict a turn the robot no longer makes.
+    SearchWindow around = params_.window_no_odometry;
+    around.angular = M_PI;
+    around.rotation_penalty = 0.0;
+    const double periods = (scan.stamp - last_stamp_) / typical_period_;
+    around.linear += std::min(std::hypot(velocity_.x, velocity_.y) * periods, params_.max_odometry_step);
+    const auto found = correlativeSearch(local_map_, scan.points, last_local_, around, 1);
+    if (!found.empty())
+    {
+      const MatchResult refined =
+          refineMatch(local_map_, scan.points, found.front().pose, found.front().pose, params_.refinement);
+      if (!best || refined.score > best->score) best = refined;
+    }
+  }
   if (!best || best->score < params_.min_score)
   {
     ++counters.poor_matches;
     return std::nullopt;
   }
   typical_score_ = typical_score_ > 0.0 ? 0.9 * typical_score_ + 0.1 * best->score : best->score;
-  if (!prediction.odometry_usable) return best->pose;
-  return heldToOdometry(*best, predicted, weights, counters);
+  // Without odometry too: the constant velocity is the only information along a corridor's axis, and a
+  // match that lags there would slow the velocity it is predicted by.
+  return heldToPrediction(*best, predicted, weights, counters);
 }
 
-Pose2 LocalTrajectoryBuilder::heldToOdometry(const MatchResult& match, const Pose2& predicted,
-                                             Eigen::Matrix2d& weights, SlamCounters& counters) const
+Pose2 LocalTrajectoryBuilder::heldToPrediction(const MatchResult& match, const Pose2& predicted,
+                                               Eigen::Matrix2d& weights, SlamCounters& counters) const
 {
-  // The match's translation where it determines one, the odometry's elsewhere.
+  // The match's translation where it determines one, the prediction's elsewhere.
   const TranslationShape shape = matchShape(match, params_);
   weights = shape.weights;
   if (shape.degenerate) ++counters.degenerate_matches;
@@ -193,10 +214,13 @@ void LocalTrajectoryBuilder::advance(const SlamScan& scan, const Pose2& pose, Sl
     path_ += std::hypot(step.x, step.y);
     // Per-scan motion for the constant-velocity prediction (scans arrive at a steady rate): the motion
     // since the last match spread over the scans in between (taken whole, the motion across a run of
-    // poor matches would be extrapolated as one scan's, and the prediction would run away).
+    // poor matches would be extrapolated as one scan's, and the prediction would run away). The
+    // prediction stays one period's motion, not the time since the last scan's: logs also pause while the
+    // robot stands, and a motion extrapolated over such a pause runs away.
     ++scans_since_match_;
     if (outcome == SlamOutcome::kMatched)
     {
+      velocity_across_pause_ = pausedSinceMatch(scan);
       const Pose2 motion = last_matched_local_.inverse() * pose;
       const double n = static_cast<double>(scans_since_match_);
       velocity_ = Pose2(motion.x / n, motion.y / n, motion.theta / n);
@@ -207,11 +231,32 @@ void LocalTrajectoryBuilder::advance(const SlamScan& scan, const Pose2& pose, Sl
     last_matched_local_ = pose;
     last_matched_odom_ = scan.odom;
     scans_since_match_ = 0;
+    last_matched_stamp_ = scan.stamp;
+  }
+  if (have_scan_)
+  {
+    // The scans' usual period, by a running median-like update that a gap hardly moves.
+    const double dt = scan.stamp - last_stamp_;
+    if (typical_period_ <= 0.0)
+      typical_period_ = dt;
+    else
+      typical_period_ += 0.05 * typical_period_ * (dt > typical_period_ ? 1.0 : -1.0);
   }
   last_local_ = pose;
   last_odom_ = scan.odom;
   last_stamp_ = scan.stamp;
   have_scan_ = true;
+}
+
+bool LocalTrajectoryBuilder::afterGap(const SlamScan& scan) const
+{
+  return have_scan_ && typical_period_ > 0.0 && scan.stamp - last_stamp_ > kGapPeriods * typical_period_;
+}
+
+bool LocalTrajectoryBuilder::pausedSinceMatch(const SlamScan& scan) const
+{
+  return typical_period_ > 0.0 && scan.stamp - last_matched_stamp_ >
+                                      kGapPeriods * typical_period_ * static_cast<double>(scans_since_match_);
 }
 
 bool LocalTrajectoryBuilder::isKeyframe(const SlamScan& scan, const Pose2& pose) const

@@ -91,16 +91,20 @@ class LocalTrajectoryBuilder
   void countOutcome(SlamOutcome outcome, SlamCounters& counters);
   /// The front end's state after a scan posed at `pose`: path, velocity, last poses and stamp.
   void advance(const SlamScan& scan, const linemap::Pose2& pose, SlamOutcome outcome);
+  /// Whether the scan follows the last after several times the scans' usual period (a gap in the log).
+  bool afterGap(const SlamScan& scan) const;
+  /// Whether the time since the last match is several times the scans' usual period per scan.
+  bool pausedSinceMatch(const SlamScan& scan) const;
   /// A keyframe when the scan has enough points and moved far enough from the last keyframe.
   bool isKeyframe(const SlamScan& scan, const linemap::Pose2& pose) const;
   /// Adds the keyframe to the recent ones and rebuilds the local map from them.
   void addKeyframe(const linemap::Pose2& pose, const std::vector<linemap::Vec2>& points,
                    const std::vector<linemap::Segment2>& joins);
   void rebuildLocalMap();
-  /// A match made with usable odometry: its translation where it determines one, the prediction's along a
-  /// direction it leaves open; `weights` its translation shape.
-  linemap::Pose2 heldToOdometry(const MatchResult& match, const linemap::Pose2& predicted,
-                                Eigen::Matrix2d& weights, SlamCounters& counters) const;
+  /// A match's translation where it determines one, the prediction's (odometry or constant velocity)
+  /// along a direction it leaves open; `weights` its translation shape.
+  linemap::Pose2 heldToPrediction(const MatchResult& match, const linemap::Pose2& predicted,
+                                  Eigen::Matrix2d& weights, SlamCounters& counters) const;
 
   LaserSlamParams params_;
   double typical_score_ = 0.0;  ///< running mean of the accepted match scores
@@ -108,9 +112,13 @@ class LocalTrajectoryBuilder
   std::deque<RecentKeyframe> recent_;
   LikelihoodGrid local_map_;
   bool have_scan_ = false;
-  double last_stamp_ = 0.0;                                    ///< of the last accepted scan
+  double last_stamp_ = 0.0;      ///< of the last accepted scan
+  double typical_period_ = 0.0;  ///< [s] the scans' usual period (0: not known yet)
+  static constexpr double kGapPeriods = 5.0;
   linemap::Pose2 last_local_, last_matched_local_, velocity_;  ///< velocity: last matched motion per scan
-  std::size_t scans_since_match_ = 0;                          ///< scans since last_matched_local_
+  double last_matched_stamp_ = 0.0;                            ///< of the scan at last_matched_local_
+  bool velocity_across_pause_ = false;  ///< velocity_ was measured across a pause in the scans
+  std::size_t scans_since_match_ = 0;   ///< scans since last_matched_local_
   std::optional<linemap::Pose2> last_odom_, last_matched_odom_;
   double path_ = 0.0;
   bool chain_matched_ = true;                    ///< every scan since the last keyframe was matched
