@@ -152,22 +152,8 @@ std::optional<Pose2> LocalTrajectoryBuilder::matchFrontEnd(const SlamScan& scan,
   if (!prediction.odometry_usable && (afterGap(scan) || velocity_across_pause_) &&
       (!best || best->score < enough))
   {
-    // Without odometry across a gap in the scans the robot may have turned any way (ACES turns in place
-    // during one): when the prediction finds no good match, every heading is searched around where the
-    // robot was, as far as it may have moved at its last speed. So too for the scan after: its velocity,
-    // the motion through the gap taken as one scan's, may predict a turn the robot no longer makes.
-    SearchWindow around = params_.window_no_odometry;
-    around.angular = M_PI;
-    around.rotation_penalty = 0.0;
-    const double periods = (scan.stamp - last_stamp_) / typical_period_;
-    around.linear += std::min(std::hypot(velocity_.x, velocity_.y) * periods, params_.max_odometry_step);
-    const auto found = correlativeSearch(local_map_, scan.points, last_local_, around, 1);
-    if (!found.empty())
-    {
-      const MatchResult refined =
-          refineMatch(local_map_, scan.points, found.front().pose, found.front().pose, params_.refinement);
-      if (!best || refined.score > best->score) best = refined;
-    }
+    const auto found = searchEveryHeading(scan);
+    if (found && (!best || found->score > best->score)) best = found;
   }
   if (!best || best->score < params_.min_score)
   {
@@ -178,6 +164,22 @@ std::optional<Pose2> LocalTrajectoryBuilder::matchFrontEnd(const SlamScan& scan,
   // Without odometry too: the constant velocity is the only information along a corridor's axis, and a
   // match that lags there would slow the velocity it is predicted by.
   return heldToPrediction(*best, predicted, weights, counters);
+}
+
+std::optional<MatchResult> LocalTrajectoryBuilder::searchEveryHeading(const SlamScan& scan) const
+{
+  // Without odometry across a gap in the scans the robot may have turned any way (ACES turns in place
+  // during one): every heading around where the robot was, as far as it may have moved at its last speed.
+  // So too for the scan after: its velocity, the motion through the gap taken as one scan's, may predict a
+  // turn the robot no longer makes.
+  SearchWindow around = params_.window_no_odometry;
+  around.angular = M_PI;
+  around.rotation_penalty = 0.0;
+  const double periods = (scan.stamp - last_stamp_) / typical_period_;
+  around.linear += std::min(std::hypot(velocity_.x, velocity_.y) * periods, params_.max_odometry_step);
+  const auto found = correlativeSearch(local_map_, scan.points, last_local_, around, 1);
+  if (found.empty()) return std::nullopt;
+  return refineMatch(local_map_, scan.points, found.front().pose, found.front().pose, params_.refinement);
 }
 
 Pose2 LocalTrajectoryBuilder::heldToPrediction(const MatchResult& match, const Pose2& predicted,

@@ -88,6 +88,8 @@ class LocalTrajectoryBuilder
   /// match's translation shape in `weights`.
   std::optional<linemap::Pose2> matchFrontEnd(const SlamScan& scan, const Prediction& prediction,
                                               Eigen::Matrix2d& weights, SlamCounters& counters);
+  /// The scan matched at every heading around the last pose (after a gap in the scans, without odometry).
+  std::optional<MatchResult> searchEveryHeading(const SlamScan& scan) const;
   void countOutcome(SlamOutcome outcome, SlamCounters& counters);
   /// The front end's state after a scan posed at `pose`: path, velocity, last poses and stamp.
   void advance(const SlamScan& scan, const linemap::Pose2& pose, SlamOutcome outcome);
