@@ -95,12 +95,9 @@ bool FleetPlacement::ambiguous(std::size_t robot, const linemap::Pose2& placed,
 {
   const auto it = searches_.find(robot);
   if (it == searches_.end()) return false;
-  const PlacementJudge::Verdict verdict = PlacementJudge(map, params_, see_through_margin, max_seen_through)
-                                              .judge(it->second.way, placed, minEvidencePoints());
-  const linemap::Pose2 apart = placed.inverse() * verdict.place;
-  return verdict.outcome != PlacementJudge::Outcome::kPlaced ||
-         std::hypot(apart.x, apart.y) >= params_.global.separation ||
-         std::fabs(linemap::normalizeAngle(apart.theta)) >= params_.global.separation_angle;
+  const PlacementJudge judge(map, params_, see_through_margin, max_seen_through);
+  const PlacementJudge::Verdict verdict = judge.judge(it->second.way, placed, minEvidencePoints());
+  return verdict.outcome != PlacementJudge::Outcome::kPlaced || judge.apart(placed, verdict.place);
 }
 
 double FleetPlacement::seenThroughLength(std::size_t robot, const linemap::Pose2& placed,

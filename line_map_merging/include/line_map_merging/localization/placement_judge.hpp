@@ -110,6 +110,8 @@ class PlacementJudge
   /// The length [m] of the map that the sights, the robot's frame at `placed`, see through and nowhere see
   /// in place.
   double seenThroughLength(const Way& way, const linemap::Pose2& placed) const;
+  /// Whether two places are distinct (the global search's separation).
+  bool apart(const linemap::Pose2& a, const linemap::Pose2& b) const;
 
  private:
   struct Place
@@ -119,8 +121,6 @@ class PlacementJudge
     bool kept;  ///< one of `also`: a rival until contradicted, however little of the way it explains
   };
   SegmentMatch match(const std::vector<linemap::Vec2>& points, const linemap::Pose2& from) const;
-  /// Whether two places are distinct (the global search's separation).
-  bool apart(const linemap::Pose2& a, const linemap::Pose2& b) const;
   /// `placed` refined, `also` and the global search's candidates, each refined and scored, best first.
   std::vector<Place> weigh(const std::vector<linemap::Vec2>& points, const linemap::Pose2& placed,
                            const std::vector<linemap::Pose2>& also) const;
