@@ -115,24 +115,7 @@ std::optional<Pose2> LocalTrajectoryBuilder::matchFrontEnd(const SlamScan& scan,
   // The normal window first; a poor match (odometry off by more than the window) or a prediction
   // without usable odometry gets the wide window, around each prediction there is.
   std::optional<MatchResult> best;
-  auto attempt = [&](const Pose2& centre, bool wide)
-  {
-    const SearchWindow& window = wide ? params_.window_no_odometry : params_.window;
-    const auto found = correlativeSearch(local_map_, scan.points, centre, window, 1);
-    if (found.empty()) return false;
-    // Held towards the prediction, not the search's pick: where the scan fixes nothing (along a
-    // corridor) the search's choice is arbitrary, and it favours poses that keep every point
-    // on the local map, i.e. lags behind; the prediction is the information there. Not in heading
-    // after a wide search: the prediction's heading was what failed, and a scan fixes its heading.
-    Pose2 prior = centre;
-    if (wide) prior.theta = found.front().pose.theta;
-    const MatchResult refined =
-        refineMatch(local_map_, scan.points, found.front().pose, prior, params_.refinement);
-    if (!best || refined.score > best->score) best = refined;
-    // Whether the search's best heading is on the window's border: the true one may lie beyond it.
-    return std::fabs(linemap::normalizeAngle(found.front().pose.theta - centre.theta)) >=
-           window.angular - 0.5 * window.angular_step;
-  };
+  auto attempt = [&](const Pose2& centre, bool wide) { return searchNear(scan, centre, wide, best); };
   const Pose2& predicted = prediction.pose;
   const bool at_edge = prediction.odometry_usable && attempt(predicted, false);
   // Poor against this run's own recent matches (an absolute floor would pass a match far worse than
@@ -164,6 +147,26 @@ std::optional<Pose2> LocalTrajectoryBuilder::matchFrontEnd(const SlamScan& scan,
   // Without odometry too: the constant velocity is the only information along a corridor's axis, and a
   // match that lags there would slow the velocity it is predicted by.
   return heldToPrediction(*best, predicted, weights, counters);
+}
+
+bool LocalTrajectoryBuilder::searchNear(const SlamScan& scan, const Pose2& centre, bool wide,
+                                        std::optional<MatchResult>& best) const
+{
+  const SearchWindow& window = wide ? params_.window_no_odometry : params_.window;
+  const auto found = correlativeSearch(local_map_, scan.points, centre, window, 1);
+  if (found.empty()) return false;
+  // Held towards the prediction, not the search's pick: where the scan fixes nothing (along a
+  // corridor) the search's choice is arbitrary, and it favours poses that keep every point
+  // on the local map, i.e. lags behind; the prediction is the information there. Not in heading
+  // after a wide search: the prediction's heading was what failed, and a scan fixes its heading.
+  Pose2 prior = centre;
+  if (wide) prior.theta = found.front().pose.theta;
+  const MatchResult refined =
+      refineMatch(local_map_, scan.points, found.front().pose, prior, params_.refinement);
+  if (!best || refined.score > best->score) best = refined;
+  // Whether the search's best heading is on the window's border: the true one may lie beyond it.
+  return std::fabs(linemap::normalizeAngle(found.front().pose.theta - centre.theta)) >=
+         window.angular - 0.5 * window.angular_step;
 }
 
 std::optional<MatchResult> LocalTrajectoryBuilder::searchEveryHeading(const SlamScan& scan) const

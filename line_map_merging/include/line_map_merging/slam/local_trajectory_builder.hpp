@@ -88,6 +88,10 @@ class LocalTrajectoryBuilder
   /// match's translation shape in `weights`.
   std::optional<linemap::Pose2> matchFrontEnd(const SlamScan& scan, const Prediction& prediction,
                                               Eigen::Matrix2d& weights, SlamCounters& counters);
+  /// The scan matched in the normal (or, `wide`, the no-odometry) window around `centre`, kept in `best`
+  /// when it scores higher; whether the search's best heading lay on the window's border.
+  bool searchNear(const SlamScan& scan, const linemap::Pose2& centre, bool wide,
+                  std::optional<MatchResult>& best) const;
   /// The scan matched at every heading around the last pose (after a gap in the scans, without odometry).
   std::optional<MatchResult> searchEveryHeading(const SlamScan& scan) const;
   void countOutcome(SlamOutcome outcome, SlamCounters& counters);
