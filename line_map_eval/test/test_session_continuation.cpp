@@ -84,6 +84,33 @@ TEST(SessionContinuation, AGivenStartPlacesTheFirstScan)
   EXPECT_EQ(continuation.searched(), 1u);
 }
 
+// A start given while the search is under way (the nodelet's `initialpose`): the next scan is placed there
+// and the SLAM continues the session from it, the scans searched before not mapped; once placed, a start is
+// refused.
+TEST(SessionContinuation, AStartGivenDuringTheSearchPlacesTheNextScan)
+{
+  const Drive& d = drive();
+  line_map_merging::LaserSlam slam(d.slam);
+  SessionContinuation continuation(d.saved, d.localizer, 400);
+  const linemap::Vec2 sensor = d.second.base_to_laser.translation();
+  constexpr std::size_t kGivenAt = 3;
+  for (std::size_t i = 0; i < kGivenAt; ++i)
+    ASSERT_EQ(continuation.addScan(slamScan(d.second, i), sensor, slam),
+              SessionContinuation::State::kSearching)
+        << "the symmetric loop world placed scan " << i << ": " << continuation.summary();
+  EXPECT_TRUE(slam.keyframes().empty());
+  ASSERT_TRUE(continuation.giveStart(d.second_truth.at(kGivenAt)));
+  const auto scan = slamScan(d.second, kGivenAt);
+  ASSERT_EQ(continuation.addScan(scan, sensor, slam), SessionContinuation::State::kPlaced);
+  EXPECT_LT(distance(*continuation.found(), d.second_truth.at(kGivenAt)), 1e-12);
+  EXPECT_TRUE(continuation.takeHeld().empty());
+  slam.addScan(scan);
+  ASSERT_EQ(slam.keyframes().size(), d.saved.keyframes.size() + 1);
+  EXPECT_LT(distance(slam.graph().node(d.saved.keyframes.size()), d.second_truth.at(kGivenAt)), 0.1);
+  EXPECT_FALSE(continuation.giveStart(Pose2(5.0, 5.0, 1.0)));
+  EXPECT_EQ(continuation.state(), SessionContinuation::State::kPlaced);
+}
+
 // Searching scan by scan on Intel: the SLAM gets no scan until the pose is found, the pose found is the
 // corrected log's (moved into the first half's map frame by their keyframes around the cut: within 0.3 m and
 // 0.05 rad), and the SLAM then maps on in the saved graph, closing loops to the saved keyframes.

@@ -107,6 +107,7 @@ SlamRecordingResult runSlam(const Recording& recording, const line_map_merging::
     }
     add(scan, i);
   }
+  if (search) result.refused_as_ambiguous = search->refusedAsAmbiguous();
   result.cpu_seconds = cpu() - cpu_start;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   collectRun(slam, recording.scans.size(), continuation, accepted, result);

@@ -82,6 +82,7 @@ SessionsRun runSessions(const std::vector<Recording>& runs,
   out.keyframes.resize(n);
   out.localized_at.assign(n, std::nullopt);
   out.joined_at.assign(n, std::nullopt);
+  out.refused_as_ambiguous.assign(n, 0);
   out.closures_to_earlier.assign(n, 0);
   out.counters.assign(n, {});
   out.slam_cpu_seconds.assign(n, 0.0);
@@ -106,6 +107,7 @@ SessionsRun runSessions(const std::vector<Recording>& runs,
     out.cpu_seconds += result.cpu_seconds;
     out.localized_at[r] = result.placed_at;
     out.joined_at[r] = result.joined_at;
+    out.refused_as_ambiguous[r] = result.refused_as_ambiguous;
     if (!result.placed_at && !result.joined_at) continue;  // never found: left out
     out.counters[r] = result.counters;
     out.slam_cpu_seconds[r] = result.cpu_seconds - result.search_cpu_seconds;
@@ -232,6 +234,7 @@ TwoSessionRun runTwoSessions(const Recording& recording, std::size_t cut,
   out.scan_poses.insert(out.scan_poses.end(), run.scan_poses[1].begin(), run.scan_poses[1].end());
   out.localized_at = run.localized_at[1];
   out.joined_at = run.joined_at[1];
+  out.refused_as_ambiguous = run.refused_as_ambiguous[1];
   out.closures_between = run.closures_to_earlier[1];
   out.first_counters = run.counters[0];
   out.second_counters = run.counters[1];

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Rostest checker (test/session_continue.test): continuing a saved session live from an unknown start
-(linemap.launch slam:=true session:=F). The first 1500 scans of the Intel raw log are mapped offline
+(linemap.launch slam:=true, then the SLAM's ~load_session F with start SEARCH). The first 1500 scans of the Intel raw log are mapped offline
 (linemap_batch --slam --merger cae --save-session F); the pipeline is started with session:=F, and the
 next 1200 scans, converted to a bag of their own, are played. The SLAM must find the robot in the saved map
 (its diagnostics), then publish trajectories that hold every saved keyframe (by stamp, moved by the joined
@@ -92,7 +92,9 @@ class CheckSessionContinue(unittest.TestCase):
         session, saved, saved_map_keyframes, bag, bag_seconds = self.prepare("session_continue")
         paths = []
         rospy.Subscriber("/optimized_trajectory", Path, lambda m: paths.append(m), queue_size=100)
-        pipeline, slam, merging, key = lt.start_session_pipeline("session_continue", session)
+        # The session given through ~load_session (SEARCH) on a running pipeline: session_join.test and
+        # changed_world.test give theirs as ~session.
+        pipeline, slam, merging, key = lt.start_session_pipeline("session_continue", session, by_service=True)
         try:
             # Played at twice the log's speed: the scans searched wait for the global search, and the merger
             # drops those the SLAM has not posed within its tf_timeout once it is found (until it caught up).

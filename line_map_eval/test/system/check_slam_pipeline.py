@@ -15,7 +15,7 @@ import unittest
 import rospy
 import rostest
 import tf2_ros
-from line_map_msgs.srv import LoadMap, SaveMap
+from line_map_msgs.srv import LoadSession, LoadSessionRequest, SaveMap
 from nav_msgs.msg import Path
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
@@ -93,7 +93,9 @@ class CheckSlamPipeline(unittest.TestCase):
         path = os.path.join(work, "run.session")
         rospy.wait_for_service("/slam/save_session", 30.0)
         save = rospy.ServiceProxy("/slam/save_session", SaveMap)
-        load = rospy.ServiceProxy("/slam/load_session", LoadMap)
+        proxy = rospy.ServiceProxy("/slam/load_session", LoadSession)
+        load = lambda p: proxy(path=p, start=LoadSessionRequest.NEWEST_KEYFRAME)  # the bag is over: no scan to search
+
         answer = save(path)
         self.assertTrue(answer.success, answer.message)
         records = dict(lt.session_records(path))
@@ -105,6 +107,9 @@ class CheckSlamPipeline(unittest.TestCase):
         damaged = os.path.join(work, "damaged.session")
         with open(damaged, "wb") as f:
             f.write(data)
+        answer = proxy(path=path, start=7)
+        self.assertFalse(answer.success)
+        self.assertIn("start must be", answer.message)
         answer = load(damaged)
         self.assertFalse(answer.success)
         self.assertIn("record 'KEYF'", answer.message)

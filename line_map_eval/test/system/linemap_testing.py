@@ -586,19 +586,27 @@ def session_keyframes(session):
     return [(t, p[0], p[1]) for t, p in zip(stamps, poses)], map_keyframes
 
 
-def start_session_pipeline(name, session, search_scans=400):
+def start_session_pipeline(name, session, search_scans=400, by_service=False):
     """linemap.launch slam:=true session:=SESSION session_search_scans:=SEARCH_SCANS, its output in the artefact
-    NAME_roslaunch.log. Returns (the roslaunch process, the SLAM's and the merger's diagnostics as they arrive,
-    the SLAM's session key) once both report; the caller stops the process."""
+    NAME_roslaunch.log; BY_SERVICE: the pipeline starts without a session, which is then given through the SLAM's
+    ~load_session (start SEARCH). Returns (the roslaunch process, the SLAM's and the merger's diagnostics as they
+    arrive, the SLAM's session key) once both report; the caller stops the process."""
     diagnostics = component_diagnostics(slam="laser slam", merging="line map merging")
     slam, merging = diagnostics["slam"], diagnostics["merging"]
     launch_log = open(os.path.join(artifact_dir(), name + "_roslaunch.log"), "w")
-    pipeline = subprocess.Popen(["roslaunch", os.path.join(repo_root(), "launch", "linemap.launch"),
-                                 "slam:=true", "session:=" + session, "session_search_scans:=%d" % search_scans,
-                                 "evaluate:=false", "output:=log"],
+    pipeline = subprocess.Popen(["roslaunch", os.path.join(repo_root(), "launch", "linemap.launch"), "slam:=true"]
+                                + ([] if by_service else ["session:=" + session])
+                                + ["session_search_scans:=%d" % search_scans, "evaluate:=false", "output:=log"],
                                 stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
     key = "session " + session
     try:
+        if by_service:
+            from line_map_msgs.srv import LoadSession, LoadSessionRequest
+            rospy.wait_for_service("/slam/load_session", 120.0)
+            answer = rospy.ServiceProxy("/slam/load_session", LoadSession)(
+                path=session, start=LoadSessionRequest.SEARCH)
+            if not answer.success or "looking for the robot" not in answer.message:
+                raise AssertionError("~load_session (SEARCH) refused %s: %s" % (session, answer.message))
         wait_until(lambda: key in slam and "keyframes" in merging, "the SLAM's session diagnostics",
                    lambda: "slam %s, merging %s" % (sorted(slam)[:3], bool(merging)), 120.0)
     except BaseException:

@@ -96,6 +96,13 @@ SessionContinuation::State SessionContinuation::addScan(const SlamScan& scan, co
   return state_;
 }
 
+bool SessionContinuation::giveStart(const linemap::Pose2& start)
+{
+  if (state_ != State::kSearching) return false;
+  given_start_ = start;
+  return true;
+}
+
 SessionContinuation::State SessionContinuation::afterScan(const SlamScan& scan, const linemap::Vec2& sensor,
                                                           LaserSlam& slam)
 {
@@ -125,7 +132,13 @@ SessionContinuation::State SessionContinuation::afterScan(const SlamScan& scan, 
     case PlaceConfirmation::Verdict::kConfirmed:
       break;
   }
-  joined_ = implied;
+  joined_ = judgedJoin(slam, implied, sensor);
+  if (!joined_)
+  {
+    confirmation_.reset();
+    localizer_->startGlobalLocalization();
+    return state_;
+  }
   slam.joinSession(session_, *joined_, sigma_xy_, sigma_theta_);
   state_ = State::kJoined;
   localizer_.reset();
@@ -150,15 +163,20 @@ void SessionContinuation::keep(const SlamScan& scan, const linemap::Vec2& sensor
 std::optional<linemap::Pose2> SessionContinuation::judged(const linemap::Pose2& pose,
                                                           const linemap::Pose2& own)
 {
+  const auto frame = judgedFrame(way_, pose * own.inverse());
+  if (!frame) return std::nullopt;
+  return *frame * own;
+}
+
+std::optional<linemap::Pose2> SessionContinuation::judgedFrame(const Way& way, const linemap::Pose2& frame)
+{
   if (!judge_)
   {
     judge_ = std::make_unique<PlacementJudge>(sessionSurfaces(session_), localizer_->params());
     judge_->setMapFreeSpace(sessionSightings(session_));
   }
-  // The robot's own frame in the saved map's, as this scan puts it.
-  const linemap::Pose2 frame = pose * own.inverse();
   const PlacementJudge::Verdict verdict =
-      judge_->judge(way_, frame, min_evidence / point_spacing, rival_share, rivals_);
+      judge_->judge(way, frame, min_evidence / point_spacing, rival_share, rivals_);
   switch (verdict.outcome)
   {
     case PlacementJudge::Outcome::kAmbiguous:
@@ -170,17 +188,52 @@ std::optional<linemap::Pose2> SessionContinuation::judged(const linemap::Pose2& 
       // Every place contradicted, the localizer's too: the free-space evidence is not trusted (live on Intel
       // it contradicted every place, offline none; the cause is not found yet), and its place is taken.
       ++seen_through_;
-      return pose;
+      return frame;
     case PlacementJudge::Outcome::kPlaced:
       break;
   }
-  // The localizer's pose of this scan where the judge confirms its place: the way, kept along raw odometry,
-  // is bent by its drift, one scan is not.
+  // The localizer's place of this scan where the judge confirms it: the way, kept along raw odometry (or the
+  // SLAM's poses), is bent by its drift, one scan is not.
   const linemap::Pose2 change = frame.inverse() * verdict.place;
   if (std::hypot(change.x, change.y) <= PlaceConfirmation::max_xy &&
       std::fabs(linemap::normalizeAngle(change.theta)) <= PlaceConfirmation::max_theta)
-    return pose;
-  return verdict.place * own;
+    return frame;
+  return verdict.place;
+}
+
+std::optional<linemap::Pose2> SessionContinuation::judgedJoin(const LaserSlam& slam,
+                                                              const linemap::Pose2& implied,
+                                                              const linemap::Vec2& sensor)
+{
+  // The way: the SLAM's own keyframes at their optimised poses over the last join_window of path, more of the
+  // building than the few metres the place was confirmed over, and bent only by what the SLAM's closures
+  // left.
+  const auto& keyframes = slam.keyframes();
+  const double max_range = localizer_->params().max_range, from = keyframes.back().path - join_window;
+  Way way(sight_path, sight_turn);
+  std::vector<linemap::Vec2> recent;  // the points of the last way_window of path
+  for (std::size_t k = 0; k < keyframes.size(); ++k)
+  {
+    if (keyframes[k].path < from) continue;
+    const linemap::Pose2 laser = slam.graph().node(k) * linemap::Pose2(sensor.x(), sensor.y(), 0.0);
+    if (!way.move(laser)) continue;
+    std::vector<linemap::Vec2> returns;
+    returns.reserve(keyframes[k].points.size());
+    for (const linemap::Vec2& p : keyframes[k].points)
+      if ((p - sensor).norm() <= max_range) returns.push_back(p - sensor);
+    Sight sight = scanSight(laser, returns, point_spacing);
+    if (keyframes[k].path >= keyframes.back().path - way_window)
+      for (const linemap::Vec2& p : sight.points) recent.push_back(laser.apply(p));
+    way.add(std::move(sight));
+  }
+  const linemap::Pose2 tracked = implied.inverse();
+  const auto frame = judgedFrame(way, tracked);
+  if (!frame) return std::nullopt;
+  if (frame->x == tracked.x && frame->y == tracked.y && frame->theta == tracked.theta) return implied;
+  // Tracking held a look-alike place and the judge found the robot elsewhere: its place fits the whole way,
+  // bent by what drift the SLAM's closures left; the join ties the newest keyframe, so the place is refined
+  // on the recent way alone.
+  return judge_->refined(recent, *frame).inverse();
 }
 
 std::vector<SlamScan> SessionContinuation::takeHeld()
@@ -196,7 +249,12 @@ std::string SessionContinuation::summary() const
   switch (state_)
   {
     case State::kSearching:
-      out << "looking for the robot in the saved map: scan " << searched_ << " of at most " << search_scans_;
+      if (given_start_)
+        out << "the next scan is placed at the start given, (" << given_start_->x << ", " << given_start_->y
+            << ", " << given_start_->theta << ")";
+      else
+        out << "looking for the robot in the saved map: scan " << searched_ << " of at most "
+            << search_scans_;
       break;
     case State::kPlaced:
       out << "continuing the saved session: found at scan " << searched_ << " at (" << found_->x << ", "

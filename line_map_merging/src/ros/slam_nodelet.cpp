@@ -4,12 +4,14 @@
 // `optimized_trajectory` (nav_msgs/Path, each pose stamped with its scan's stamp) and diagnostics.
 // Services ~save_session and ~load_session write and read a session file (slam/session_file.hpp): the
 // SLAM's graph with the merging nodelet's map (its save_map/load_map services, parameter `merger`).
-// ~session names a session to continue from an unknown start (localization/session_continuation.hpp): the
-// scans search the saved map until the robot is found, then the SLAM maps on in it and the merger gets its
-// map.
+// ~session (or ~load_session with start SEARCH or GIVEN_POSE) continues a session from an unknown or given
+// start (localization/session_continuation.hpp): the scans search the saved map until the robot is found
+// (or `initialpose` places it), then the SLAM maps on in it and the merger gets its map.
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <line_map_msgs/AppendMap.h>
 #include <line_map_msgs/LoadMap.h>
+#include <line_map_msgs/LoadSession.h>
 #include <line_map_msgs/SaveMap.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
@@ -22,6 +24,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -87,17 +90,22 @@ class SlamNodelet : public nodelet::Nodelet
     merger_ = pnh.param<std::string>("merger", "line_map_merging");
     save_srv_ = pnh.advertiseService("save_session", &SlamNodelet::onSaveSession, this);
     load_srv_ = pnh.advertiseService("load_session", &SlamNodelet::onLoadSession, this);
+    initial_sub_ = nh.subscribe("initialpose", 1, &SlamNodelet::onInitialPose, this);
     continueSession(pnh);
   }
 
   /// ~session: the scans look for the robot in that session's map before the SLAM maps on in it.
   void continueSession(ros::NodeHandle& pnh)
   {
-    session_path_ = pnh.param<std::string>("session", "");
-    if (session_path_.empty()) return;
+    const std::string path = pnh.param<std::string>("session", "");
     try
     {
-      Session session = readSessionFile(session_path_);
+      const int search = pnh.param("session_search_scans", 400);
+      if (search < 1) throw std::invalid_argument("~session_search_scans must be >= 1");
+      search_scans_ = static_cast<std::size_t>(search);
+      localizer_ =
+          LocalizerParams::fromParams(linemap_ros::loadParamSet(ros::NodeHandle(pnh, "localization")));
+      if (path.empty()) return;
       std::optional<linemap::Pose2> start;
       std::vector<double> given;
       if (pnh.getParam("session_start", given))
@@ -107,21 +115,51 @@ class SlamNodelet : public nodelet::Nodelet
                                       std::to_string(given.size()) + " numbers");
         start = linemap::Pose2(given[0], given[1], given[2]);
       }
-      const int search = pnh.param("session_search_scans", 400);
-      if (search < 1) throw std::invalid_argument("~session_search_scans must be >= 1");
-      const auto localizer =
-          LocalizerParams::fromParams(linemap_ros::loadParamSet(ros::NodeHandle(pnh, "localization")));
-      session_map_ = std::move(session.line_map);
-      continuation_ = std::make_unique<SessionContinuation>(std::move(session.slam), localizer,
-                                                            static_cast<std::size_t>(search), start);
-      NODELET_INFO("slam: continuing the session %s: %s", session_path_.c_str(),
-                   continuation_->summary().c_str());
+      std::lock_guard<std::mutex> lock(mutex_);
+      const std::string summary = beginContinuation(path, readSessionFile(path), start);
+      NODELET_INFO("slam: continuing the session %s: %s", path.c_str(), summary.c_str());
     }
     catch (const std::exception& e)
     {
       NODELET_ERROR("slam: cannot continue the session (%s); mapping a new map", e.what());
-      continuation_.reset();
     }
+  }
+
+  /// The scans from now on look for the robot in `session` (or place it at `start`) before the SLAM maps on
+  /// in it; until then the SLAM keeps what it has. Returns the continuation's summary. Call under the mutex.
+  std::string beginContinuation(const std::string& path, Session session,
+                                const std::optional<linemap::Pose2>& start)
+  {
+    auto continuation =
+        std::make_unique<SessionContinuation>(std::move(session.slam), localizer_, search_scans_, start);
+    continuation_ = std::move(continuation);
+    session_path_ = path;
+    session_map_ = std::move(session.line_map);
+    return continuation_->summary();
+  }
+
+  /// RViz' 2D Pose Estimate while the robot is looked for in a session: it is there at the next scan.
+  void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto& p = msg->pose.pose.position;
+    const auto start = linemap_ros::toPose2(p.x, p.y, msg->pose.pose.orientation);
+    if (!start)
+    {
+      NODELET_WARN(
+          "slam: initialpose ignored: its position is not finite or its orientation not a unit quaternion");
+      return;
+    }
+    if (linemap_ros::stripLeadingSlash(msg->header.frame_id) != map_frame_)
+    {
+      NODELET_WARN("slam: initialpose ignored: it is in frame '%s', not '%s'", msg->header.frame_id.c_str(),
+                   map_frame_.c_str());
+      return;
+    }
+    if (!continuation_ || !continuation_->giveStart(*start))
+      NODELET_WARN("slam: initialpose ignored: no session is being looked for (see ~load_session)");
+    else
+      NODELET_INFO("slam: initialpose: the next scan continues the session there");
   }
 
   /// While the robot is looked for in the saved session: true when the SLAM is to take the scan.
@@ -134,13 +172,9 @@ class SlamNodelet : public nodelet::Nodelet
     if (state == SessionContinuation::State::kPlaced)
     {
       NODELET_INFO("slam: %s", continuation_->summary().c_str());
-      if (!session_map_.empty())  // the service call waits for the merger: not in the scan callback
-        merger_loader_ = std::thread(
-            [this, text = std::move(session_map_)]
-            {
-              const std::string note = loadMergerMap(session_path_, text);  // "; what happened"
-              NODELET_INFO("slam: %s", note.substr(2).c_str());
-            });
+      if (!session_map_.empty())
+        callMergerLater([this, path = session_path_, text = std::move(session_map_)]
+                        { return loadMergerMap(path, text); });
     }
     else
       NODELET_WARN("slam: %s", continuation_->summary().c_str());
@@ -156,14 +190,19 @@ class SlamNodelet : public nodelet::Nodelet
         continuation_->afterScan(scan, mount.translation(), *slam_) != SessionContinuation::State::kJoined)
       return outcome;
     NODELET_INFO("slam: %s", continuation_->summary().c_str());
-    if (!session_map_.empty())  // the service call waits for the merger: not in the scan callback
-      merger_loader_ = std::thread(
-          [this, text = std::move(session_map_), placed = *continuation_->joinedAt()]
-          {
-            const std::string note = appendMergerMap(session_path_, text, placed);  // "; what happened"
-            NODELET_INFO("slam: %s", note.substr(2).c_str());
-          });
+    if (!session_map_.empty())
+      callMergerLater([this, path = session_path_, text = std::move(session_map_),
+                       placed = *continuation_->joinedAt()] { return appendMergerMap(path, text, placed); });
     return outcome;
+  }
+
+  /// A call to the merger's services, which wait for the merger, on a thread of its own (not in the scan
+  /// callback); `call` returns "; what happened".
+  void callMergerLater(std::function<std::string()> call)
+  {
+    if (merger_loader_.joinable()) merger_loader_.join();  // an earlier session's, long done
+    merger_loader_ =
+        std::thread([this, call = std::move(call)] { NODELET_INFO("slam: %s", call().substr(2).c_str()); });
   }
 
   /// The merging nodelet's map through a file beside `path`: its text (empty: no merger answered).
@@ -206,21 +245,41 @@ class SlamNodelet : public nodelet::Nodelet
     return true;
   }
 
-  bool onLoadSession(line_map_msgs::LoadMap::Request& req, line_map_msgs::LoadMap::Response& res)
+  bool onLoadSession(line_map_msgs::LoadSession::Request& req, line_map_msgs::LoadSession::Response& res)
   {
+    using Request = line_map_msgs::LoadSession::Request;
     try
     {
-      const Session session = readSessionFile(req.path);  // everything checked before anything changes
+      if (req.start > Request::NEWEST_KEYFRAME)
+        throw std::invalid_argument("start must be SEARCH (0), GIVEN_POSE (1) or NEWEST_KEYFRAME (2), got " +
+                                    std::to_string(req.start));
+      Session session = readSessionFile(req.path);  // everything checked before anything changes
+      const std::string loaded =
+          "loaded " + std::to_string(session.slam.keyframes.size()) + " keyframes from ";
+      if (req.start != Request::NEWEST_KEYFRAME)
+      {
+        std::optional<linemap::Pose2> start;
+        if (req.start == Request::GIVEN_POSE)
+        {
+          if (!std::isfinite(req.pose.x) || !std::isfinite(req.pose.y) || !std::isfinite(req.pose.theta))
+            throw std::invalid_argument("pose must be finite for start GIVEN_POSE");
+          start = linemap::Pose2(req.pose.x, req.pose.y, req.pose.theta);
+        }
+        std::lock_guard<std::mutex> lock(mutex_);
+        res.message = loaded + req.path + ": " + beginContinuation(req.path, std::move(session), start);
+        res.success = true;
+        return true;
+      }
       {
         std::lock_guard<std::mutex> lock(mutex_);
         slam_->restore(session.slam);
+        continuation_.reset();
         publishPath(ros::Time::now());
       }
       std::string note;
       if (!session.line_map.empty()) note = loadMergerMap(req.path, session.line_map);
       res.success = true;
-      res.message =
-          "loaded " + std::to_string(session.slam.keyframes.size()) + " keyframes from " + req.path + note;
+      res.message = loaded + req.path + note;
     }
     catch (const std::exception& e)
     {
@@ -387,8 +446,11 @@ class SlamNodelet : public nodelet::Nodelet
   tf2_ros::TransformBroadcaster broadcaster_;
   ros::Publisher path_pub_;
   ros::ServiceServer save_srv_, load_srv_;
+  ros::Subscriber initial_sub_;
+  LocalizerParams localizer_;  ///< ~localization/*: the search for the robot in a session
+  std::size_t search_scans_ = 400;
   std::string merger_;
-  std::unique_ptr<SessionContinuation> continuation_;  ///< ~session: null without one
+  std::unique_ptr<SessionContinuation> continuation_;  ///< ~session, ~load_session: null without one
   std::string session_path_, session_map_;
   std::thread merger_loader_;
   std::unique_ptr<linemap_ros::WallDiagnostics> diagnostics_;

@@ -35,6 +35,8 @@ struct SlamRecordingResult
   /// Not found in time: the run was mapped apart, and joined the session at this scan, when found later
   /// (none: never found; the run's own map alone).
   std::optional<std::size_t> joined_at;
+  /// Continuing a session: places found that could not be told from a look-alike place (refused).
+  std::size_t refused_as_ambiguous = 0;
   double seconds = 0.0;  ///< front and back end, the whole recording (wall time)
   double cpu_seconds =
       0.0;  ///< the same in CPU time of this thread, the search for a continuation's start included

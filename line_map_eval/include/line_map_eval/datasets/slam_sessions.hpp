@@ -38,6 +38,8 @@ struct SessionsRun
   /// scan, and the map so far joined it there (the map frame is then this run's). A run neither placed nor
   /// joined is left out of the graph.
   std::vector<std::optional<std::size_t>> joined_at;
+  /// Per run: places found for it that could not be told from a look-alike place (refused).
+  std::vector<std::size_t> refused_as_ambiguous;
   /// The saved session's scans (if one was continued), in its order, as the joined graph left them.
   std::vector<Pose2> saved_scan_poses;
   /// Per run: the loop edges joining one of its keyframes to a keyframe of an earlier run or of the saved
@@ -94,7 +96,8 @@ struct TwoSessionRun
   std::optional<std::size_t> localized_at;
   /// Not localized in time: the second part's scan at which it was found later and joined (above).
   std::optional<std::size_t> joined_at;
-  std::size_t closures_between = 0;  ///< loop edges joining the two sessions' keyframes
+  std::size_t closures_between = 0;      ///< loop edges joining the two sessions' keyframes
+  std::size_t refused_as_ambiguous = 0;  ///< places the search found but could not tell from a look-alike one
   line_map_merging::SlamCounters first_counters, second_counters;
   double cpu_seconds = 0.0;  ///< both SLAM runs and the localization
 };

@@ -9,7 +9,8 @@
 // pose is accepted within a number of scans the session is given up: the SLAM maps a new map in its own frame
 // from the held scans on (none is lost), and the state says so. The search goes on meanwhile, on the SLAM's
 // own poses as odometry (afterScan): once the robot is found in the saved map the SLAM joins it
-// (LaserSlam::joinSession), in the frame it has been mapping in.
+// (LaserSlam::joinSession), in the frame it has been mapping in, once its own map tells the place from every
+// look-alike one.
 #pragma once
 
 #include <cstddef>
@@ -60,10 +61,15 @@ class SessionContinuation
   /// After the SLAM took `scan` (every scan, whatever the state): while the session is given up, the scan is
   /// searched for in the saved map with the SLAM's front-end pose as its odometry; at the pose accepted the
   /// SLAM joins the saved session (kJoined) once the place has held while the robot drove 5 m on (tracked
-  /// throughout, each scan implying the same saved frame within 0.3 m and 0.05 rad): a place looking like
-  /// another would otherwise join two maps for good (not judged by the way: PlacementJudge kept the changed
-  /// office's look-alike place as a rival for good). Otherwise nothing happens. Returns the state.
+  /// throughout, each scan implying the same saved frame within 0.3 m and 0.05 rad) and the SLAM's own
+  /// keyframes over the last join_window of path tell it from every look-alike place (PlacementJudge; a
+  /// place found elsewhere than tracking held is refined on the last way_window): a place looking like
+  /// another would otherwise join two maps for good. Otherwise nothing happens. Returns the state.
   State afterScan(const SlamScan& scan, const linemap::Vec2& sensor, LaserSlam& slam);
+  /// A start given while the search is under way (an initial pose: RViz' 2D Pose Estimate): the next scan is
+  /// placed at `start`, its base pose in the session's map frame, and the SLAM continues from it as with a
+  /// start given up front. Returns false, changing nothing, once the search is over.
+  bool giveStart(const linemap::Pose2& start);
   /// The scans held during the search that the SLAM is to take before the current one: after kGaveUp every
   /// scan searched, after kPlaced none; emptied.
   std::vector<SlamScan> takeHeld();
@@ -94,11 +100,22 @@ class SessionContinuation
   /// (PlacementJudge), or nothing when it is not told from a look-alike place. When every place contradicts
   /// the saved map's free space, the localizer's pose.
   std::optional<linemap::Pose2> judged(const linemap::Pose2& pose, const linemap::Pose2& own);
+  /// The same for `frame`, the robot's own frame in the saved map's as tracking put it, judged by `way` (kept
+  /// in that own frame): the frame judged to be right, or nothing when it is not told from a look-alike
+  /// place.
+  std::optional<linemap::Pose2> judgedFrame(const Way& way, const linemap::Pose2& frame);
+  /// A place confirmed after giving up (`implied`: the saved frame's pose in the SLAM's map frame), judged by
+  /// the SLAM's own keyframes over the last join_window of path: the saved frame's pose to join at, or
+  /// nothing.
+  std::optional<linemap::Pose2> judgedJoin(const LaserSlam& slam, const linemap::Pose2& implied,
+                                           const linemap::Vec2& sensor);
 
   /// [m]: the points of a sight thinned to this spacing; the way kept over this much path (the robot's own
   /// frame drifts: raw odometry during the search); points [m of wall at point_spacing] a place must explain
   /// better than every rival place.
   static constexpr double point_spacing = 0.1, way_window = 10.0, min_evidence = 1.0;
+  /// [m], [rad]: a sight kept per this much path or turn. [m]: the SLAM's own path a join is judged over.
+  static constexpr double sight_path = 0.5, sight_turn = 0.5, join_window = 50.0;
   /// The share of the best place's explained points an uncontradicted rival place needs to leave it open
   /// (PlacementJudge::judge).
   static constexpr double rival_share = 0.5;
@@ -106,7 +123,7 @@ class SessionContinuation
   SlamSession session_;
   std::unique_ptr<LineMapLocalizer> localizer_;  ///< null with a given start
   std::unique_ptr<PlacementJudge> judge_;        ///< made at the first place found
-  Way way_{0.5, 0.5, way_window};                ///< the robot's, in the frame the localizer's odometry is in
+  Way way_{sight_path, sight_turn, way_window};  ///< the robot's, in the frame the localizer's odometry is in
   std::size_t ambiguous_ = 0, seen_through_ = 0;
   std::vector<linemap::Pose2> rivals_;  ///< the places the last ambiguous verdict weighed
   std::size_t search_scans_;
