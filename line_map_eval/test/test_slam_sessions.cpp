@@ -119,10 +119,13 @@ TEST(SlamSessions, ARunNotFoundInTimeJoinsWhenFoundLater)
   const RelationsError both = errorOf(relations, recording, two.scan_poses);
   const auto [worst, compared] = worstAfterRigidFit(truth, two.scan_poses);
   std::printf(
-      "single run %.4f m; cut at scan %zu, the second part mapped apart and joined at its scan %zu, %zu "
-      "closures between them: %.4f m over %zu relations, worst keyframe %.3f m from the truth\n",
-      one.translation_mean, cut, *two.joined_at, two.closures_between, both.translation_mean, both.used,
-      worst);
+      "single run %.4f m; cut at scan %zu, the second part mapped apart and joined at its scan %zu (%zu "
+      "places "
+      "refused as ambiguous), %zu closures between them: %.4f m over %zu relations, worst keyframe %.3f m "
+      "from "
+      "the truth\n",
+      one.translation_mean, cut, *two.joined_at, two.refused_as_ambiguous, two.closures_between,
+      both.translation_mean, both.used, worst);
   EXPECT_GT(compared, truth.size() * 9 / 10);
   EXPECT_LE(worst, kJoinedWorst);
   EXPECT_GE(two.closures_between, 2u);  // the tie at the join and closures to the saved keyframes after it
@@ -146,8 +149,10 @@ TEST(SlamSessions, ARunMappedApartDoesNotJoinALookAlikePlace)
     return;
   }
   const auto [worst, compared] = worstAfterRigidFit(d.truth, two.scan_poses);
-  std::printf("joined at scan %zu of the second part; worst keyframe %.3f m from the truth over %zu\n",
-              *two.joined_at, worst, compared);
+  std::printf(
+      "joined at scan %zu of the second part (%zu places refused as ambiguous); worst keyframe %.3f m "
+      "from the truth over %zu\n",
+      *two.joined_at, two.refused_as_ambiguous, worst, compared);
   EXPECT_LE(worst, kJoinedWorst);
 }
 

@@ -186,8 +186,10 @@ std::optional<linemap::Pose2> SessionContinuation::judgedFrame(const Way& way, c
       return std::nullopt;
     case PlacementJudge::Outcome::kSeenThrough:
       // Every place contradicted, the localizer's too: the free-space evidence is not trusted (live on Intel
-      // it contradicted every place, offline none; the cause is not found yet), and its place is taken.
+      // it contradicted every place, offline none; the cause is not found yet), and its place is taken,
+      // unless a look-alike place was left open before: then the localizer may well track that one.
       ++seen_through_;
+      if (!rivals_.empty()) return std::nullopt;
       return frame;
     case PlacementJudge::Outcome::kPlaced:
       break;
@@ -273,7 +275,9 @@ std::string SessionContinuation::summary() const
   }
   if (ambiguous_ + seen_through_ > 0)
     out << "; places refused: " << ambiguous_ << " as ambiguous, " << seen_through_
-        << " as contradicted by the saved map's free space (taken all the same)";
+        << " as contradicted by the saved map's free space (taken all the same while no look-alike place was "
+           "left "
+           "open)";
   return out.str();
 }
 

@@ -78,7 +78,7 @@ class SessionContinuation
   /// Places the localizer accepted that the way the robot came did not tell from a rival place.
   std::size_t refusedAsAmbiguous() const { return ambiguous_; }
   /// Places the localizer accepted where, as at every rival place, the way contradicted the saved map's free
-  /// space: taken all the same (see judged()).
+  /// space: taken all the same while no look-alike place was left open before (see judgedFrame()).
   std::size_t refusedAsSeenThrough() const { return seen_through_; }
   /// Scans searched so far (the one placed at included).
   std::size_t searched() const { return searched_; }
