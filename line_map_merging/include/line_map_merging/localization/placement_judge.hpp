@@ -2,9 +2,9 @@
 // from a look-alike one (a ring corridor half a turn away, a symmetric atrium), the scans kept along the way,
 // in the robot's own frame, often do. Two kinds of evidence: the points a place explains, and the free space
 // the scans saw, which at a wrong place runs through the map's walls (free_space_witness.hpp). The placement
-// of a fleet's robots in one map (FleetPlacement) judges by it, and so does a SLAM looking for itself in a saved
-// session (SessionContinuation: the way along the odometry while searching, the SLAM's own keyframes before a
-// join after mapping apart).
+// of a fleet's robots in one map (FleetPlacement) judges by it, and so does a SLAM looking for itself in a
+// saved session (SessionContinuation: the way along the odometry while searching, the SLAM's own keyframes
+// before a join after mapping apart).
 #pragma once
 
 #include <cstddef>
