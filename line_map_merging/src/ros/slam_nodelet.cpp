@@ -273,7 +273,8 @@ class SlamNodelet : public nodelet::Nodelet
       {
         std::lock_guard<std::mutex> lock(mutex_);
         slam_->restore(session.slam);
-        continuation_.reset();
+        continuation_.reset();  // an earlier session's search, if any, is over
+        session_map_.clear();
         publishPath(ros::Time::now());
       }
       std::string note;
