@@ -276,8 +276,7 @@ std::string SessionContinuation::summary() const
   if (ambiguous_ + seen_through_ > 0)
     out << "; places refused: " << ambiguous_ << " as ambiguous, " << seen_through_
         << " as contradicted by the saved map's free space (taken all the same while no look-alike place was "
-           "left "
-           "open)";
+           "left open)";
   return out.str();
 }
 

@@ -130,9 +130,8 @@ class SlamNodelet : public nodelet::Nodelet
   std::string beginContinuation(const std::string& path, Session session,
                                 const std::optional<linemap::Pose2>& start)
   {
-    auto continuation =
+    continuation_ =
         std::make_unique<SessionContinuation>(std::move(session.slam), localizer_, search_scans_, start);
-    continuation_ = std::move(continuation);
     session_path_ = path;
     session_map_ = std::move(session.line_map);
     return continuation_->summary();
