@@ -54,6 +54,10 @@ class LatchedMerger : public Merger
   }
   const char* name() const override { return inner_->name(); }
   AddResult addKeyframe(const Keyframe& k) override { return inner_->addKeyframe(k); }
+  AddResult addOriginals(std::uint64_t k, const std::vector<linemap::Segment2>& s) override
+  {
+    return inner_->addOriginals(k, s);
+  }
   AdjustResult adjust(const std::vector<std::pair<std::uint64_t, Pose2>>& poses) override
   {
     latch_->pass();

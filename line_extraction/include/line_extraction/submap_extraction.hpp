@@ -6,9 +6,11 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "line_extraction/line_fit.hpp"
+#include "line_extraction/residual_lines.hpp"
 #include "line_extraction/sensor_model.hpp"
 #include "line_extraction/types.hpp"
 #include "linemap/params.hpp"
@@ -49,6 +51,8 @@ struct SubmapParams
 
   /// Reads the "submap/..." keys; throws linemap::ParameterError naming a bad one.
   static SubmapParams fromParams(const linemap::ParamSet& params);
+  /// The tests of a line, from the keys above.
+  ResidualLineParams lineParams() const;
 };
 
 class SubmapExtractor
@@ -83,71 +87,27 @@ class SubmapExtractor
   std::size_t linesFound() const { return lines_found_; }
 
  private:
-  struct WindowPoint
-  {
-    Vec2 p;                  ///< in the fixed frame
-    float sigma = 0.0f;      ///< range noise [m]
-    float gap = 0.0f;        ///< largest gap to a neighbour on one surface [m]
-    std::uint32_t scan = 0;  ///< sequence number of its scan
-    bool used = false;       ///< already part of a submap line
-  };
-  struct WindowScan
-  {
-    std::uint32_t id = 0;
-    Pose2 laser;
-    double path = 0.0;                   ///< path length travelled up to this scan [m]
-    std::vector<double> angles, ranges;  ///< of every valid return, in beam order
-  };
-  /// A window point on a line hypothesis and its position along it.
-  struct Candidate
-  {
-    std::uint32_t index;
-    double along;
-  };
-  struct FoundLine
-  {
-    Vec2 start, end;  ///< in the fixed frame, observers on the left
-    std::vector<Vec2> members;
-    double sigma = 0.0;
-  };
-
   bool admits(const Pose2& laser) const;
   void addResiduals(const PreparedScan& scan, const ExtractionResult& extracted, const Pose2& laser);
   void dropOldScans();
-  void buildGrid();
   void findLines(std::size_t first_new);
-  /// A line from an unused window point, its points marked used; false when none passes.
-  bool grow(std::size_t seed, FoundLine& line);
-  /// The line through the seed and a neighbour that holds most of the seed's neighbours.
-  bool seedLine(std::size_t seed, LineNormal& best) const;
-  /// The contiguous run of band points through the seed, on its observers' side, refitted twice.
-  bool growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const;
-  /// Whether the run is a wall (support, extent, fit, no bend, no clutter beside, not seen
-  /// through); fills the line's extent and sigma.
-  bool acceptRun(const std::vector<Candidate>& run, const LineNormal& fit_line, FoundLine& line) const;
-  /// Whether the residuals of `run` bend along the line (a chord of a curved wall).
-  bool curved(const std::vector<Candidate>& run, const LineNormal& line, double t0, double t1,
-              double sigma) const;
-  /// Whether the window's beams see through the segment a-b more often than max_through_share.
-  bool seenThrough(const Vec2& a, const Vec2& b, double band) const;
-  const WindowScan* scanById(std::uint32_t id) const;
   void emit(const Pose2& laser);
 
   SubmapParams params_;
   SensorModel sensor_;
-  std::vector<WindowScan> scans_;
-  std::vector<WindowPoint> points_;  ///< in scan order
+  std::vector<ResidualSource> scans_;  ///< of the window, oldest first
+  std::vector<double> scan_paths_;     ///< path length travelled up to each of scans_ [m]
+  std::vector<ResidualPoint> points_;  ///< in scan order
+  ResidualLineFinder finder_;
   std::uint32_t next_scan_id_ = 0;
   bool has_last_ = false;
   Pose2 last_admitted_;
   double path_ = 0.0;
-  std::vector<FoundLine> pending_;  ///< found when the last scan entered, in the fixed frame
+  /// Found when the last scan entered, in the fixed frame, with their points.
+  std::vector<std::pair<ResidualLine, std::vector<Vec2>>> pending_;
   std::vector<Segment> output_;
   std::size_t lines_found_ = 0;
   std::uint64_t last_stamp_ns_ = 0;
-  // Hash grid over the window points, cell = seed_radius.
-  std::vector<std::int64_t> cell_keys_;
-  std::vector<std::uint32_t> cell_order_;
 };
 
 }  // namespace line_extraction

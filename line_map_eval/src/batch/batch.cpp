@@ -323,7 +323,9 @@ void extractEveryScan(BatchSetup& setup, BatchResult& result)
 /// The keyframes of the online path (the OnlineMapper's gate and trajectory nodes), at their final poses.
 std::vector<Frame> chooseKeyframes(const BatchSetup& setup)
 {
-  line_map_merging::OnlineMapper mapper(std::make_unique<KeyframeRecorder>(), setup.mapper);
+  line_map_merging::OnlineMapperParams params = setup.mapper;
+  params.map_level.enabled = false;  // only the keyframes are wanted here
+  line_map_merging::OnlineMapper mapper(std::make_unique<KeyframeRecorder>(), params);
   driveOnline(mapper, setup.rec(), setup.schedule, setup.segmentSource());
   std::unordered_map<double, std::size_t> scan_of;
   for (std::size_t i = 0; i < setup.rec().scans.size(); ++i) scan_of.emplace(setup.rec().scans[i].stamp, i);
@@ -453,6 +455,17 @@ MergerHolder runOffline(const BatchSetup& setup, MergerRun& run)
     bar.update(k + 1);
   }
   bar.finish();
+  if (setup.mapper.map_level.enabled)
+  {
+    // The map-level lines over every keyframe at its final pose, as the online path's last pass.
+    const auto start = Clock::now();
+    line_map_merging::MapLevelLines map_level(setup.mapper.map_level);
+    for (const Frame& f : setup.frames)
+      map_level.addKeyframe(f.scan, *keyframeScan(rec, f.scan), setup.lines[f.scan].segments);
+    for (const auto& k : map_level.extract(holder.offline->keyframes(), holder.offline->map()))
+      holder.offline->addOriginals(k.keyframe, k.segments);
+    run.total_ms += linemap::millisecondsSince(start);
+  }
   return holder;
 }
 
@@ -465,14 +478,28 @@ void evaluateRun(const BatchSetup& setup, const SharedEvaluation& shared,
   ErrorAssignment provenance;
   if (run.provenance)
   {
-    std::map<std::uint64_t, Pose2> pose_of;
-    for (const auto& info : merger.keyframes()) pose_of[info.index] = info.pose;
+    // The extractor's originals only: a map-level line's parts lie on it by construction.
+    std::unordered_map<double, std::size_t> scan_of;
+    for (const Frame& f : setup.frames) scan_of.emplace(setup.rec().scans[f.scan].stamp, f.scan);
+    std::map<std::uint64_t, std::pair<Pose2, const std::vector<Segment2>*>> keyframe_of;
+    for (const auto& info : merger.keyframes())
+    {
+      const auto scan = scan_of.find(info.stamp);
+      keyframe_of[info.index] = {info.pose,
+                                 scan == scan_of.end() ? nullptr : &setup.lines[scan->second].segments};
+    }
+    const auto extracted = [](const Segment2& s, const std::vector<Segment2>* own)
+    {
+      return own == nullptr ||
+             std::any_of(own->begin(), own->end(),
+                         [&](const Segment2& o) { return o.start == s.start && o.end == s.end; });
+    };
     for (std::size_t i = 0; i < map.size(); ++i)
       for (const auto& leaf : merger.leaves(map[i].id))
       {
-        const auto it = pose_of.find(leaf.keyframe);
-        if (it == pose_of.end()) continue;
-        provenance.originals.push_back(leaf.segment.transformed(it->second));
+        const auto it = keyframe_of.find(leaf.keyframe);
+        if (it == keyframe_of.end() || !extracted(leaf.segment, it->second.second)) continue;
+        provenance.originals.push_back(leaf.segment.transformed(it->second.first));
         provenance.map_index.push_back(static_cast<int>(i));
       }
   }

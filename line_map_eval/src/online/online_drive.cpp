@@ -1,6 +1,7 @@
 #include "line_map_eval/online/online_drive.hpp"
 
 #include <algorithm>
+#include <memory>
 
 namespace line_map_eval
 {
@@ -54,6 +55,19 @@ Pose2 sampleAt(const std::vector<std::pair<double, Pose2>>& samples, double t)
                               (t - before.first) / (after->first - before.first));
 }
 
+std::shared_ptr<const line_map_merging::KeyframeScan> keyframeScan(const Recording& rec, std::size_t index)
+{
+  const RecordedScan& scan = rec.scans.at(index);
+  const ScanGeometry& g = rec.geometryOf(scan);
+  auto beams = std::make_shared<line_map_merging::KeyframeScan>();
+  beams->angle_min = g.angle_min;
+  beams->angle_increment = g.angle_increment;
+  beams->range_min = g.range_min;
+  beams->range_max = g.range_max;
+  beams->ranges = scan.ranges;
+  return beams;
+}
+
 line_map_merging::StampedScan stampedScan(const Recording& rec, const BackEndSchedule& schedule,
                                           const SegmentSource& segments, std::size_t index)
 {
@@ -65,6 +79,7 @@ line_map_merging::StampedScan stampedScan(const Recording& rec, const BackEndSch
   s.laser = schedule.map_to_odom.empty() ? *s.odom : sampleAt(schedule.map_to_odom, scan.stamp) * *s.odom;
   s.mount = mount;
   s.segments = segments(index, *s.odom);
+  s.beams = keyframeScan(rec, index);
   return s;
 }
 
@@ -85,6 +100,8 @@ std::size_t driveOnline(line_map_merging::OnlineMapper& mapper, const Recording&
       if (hooks.trajectory) hooks.trajectory(next, schedule.trajectories[next]);
     }
   }
+  // The input ends: the map-level lines of the keyframes since the last trajectory.
+  mapper.extractMapLevel();
   return next;
 }
 

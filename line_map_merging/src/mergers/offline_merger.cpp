@@ -50,6 +50,27 @@ AddResult OfflineMerger::addKeyframe(const Keyframe& keyframe)
   return result;
 }
 
+AddResult OfflineMerger::addOriginals(std::uint64_t keyframe, const std::vector<Segment2>& segments)
+{
+  const auto slot = slot_of_.find(keyframe);
+  if (slot == slot_of_.end())
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe) +
+                                ": no such keyframe for its originals");
+  AddResult result;
+  for (const Segment2& s : segments)
+  {
+    if (isValidSegment(s))
+      stored_[slot->second].segments.push_back(s);
+    else
+      ++result.rejected;
+  }
+  result.merged = segments.size() - result.rejected;
+  leaf_count_ += result.merged;
+  cache_.reset();
+  invalidate();
+  return result;
+}
+
 AdjustResult OfflineMerger::adjust(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses)
 {
   for (const auto& [index, pose] : poses)

@@ -40,6 +40,28 @@ AddResult OtoIlsm::addKeyframe(const Keyframe& keyframe)
   return result;
 }
 
+AddResult OtoIlsm::addOriginals(std::uint64_t keyframe, const std::vector<Segment2>& segments)
+{
+  const auto slot = slot_of_.find(keyframe);
+  if (slot == slot_of_.end())
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe) +
+                                ": no such keyframe for its originals");
+  const linemap::Pose2 pose = keyframes_[slot->second].pose;
+  AddResult result;
+  for (const Segment2& local : segments)
+  {
+    if (!isValidSegment(local))
+    {
+      ++result.rejected;
+      continue;
+    }
+    insertSegment(local.transformed(pose));
+    ++result.merged;
+  }
+  leaf_count_ += result.merged;
+  return result;
+}
+
 void OtoIlsm::insertSegment(const Segment2& world)
 {
   // A map segment meeting the conditions has its padded box intersecting the scan segment's box.

@@ -39,6 +39,7 @@ OnlineMapperParams OnlineMapperParams::fromParams(const linemap::ParamSet& param
   p.keyframe_source =
       keyframeSourceFromString("keyframe_source", params.getString("keyframe_source", "auto"));
   p.keyframe_buffer = params.getNonNegative("keyframe_buffer", p.keyframe_buffer);
+  p.map_level = MapLevelParams::fromParams(params);
   return p;
 }
 
@@ -53,6 +54,7 @@ OnlineMapper::OnlineMapper(std::unique_ptr<Merger> merger, const OnlineMapperPar
 {
   if (!merger_) throw std::invalid_argument("OnlineMapper: no merger");
   lane(0).placement = linemap::Pose2();
+  if (params_.map_level.enabled) map_level_.emplace(params_.map_level);
 }
 
 OnlineMapper::Lane& OnlineMapper::lane(std::size_t index)
@@ -76,7 +78,8 @@ double OnlineMapper::newestKeyframeStamp(std::size_t lane) const
 
 bool OnlineMapper::merge(std::size_t lane, double stamp, const linemap::Pose2& laser,
                          const linemap::Pose2& continuous, const linemap::Pose2& mount,
-                         const std::vector<linemap::Segment2>& segments)
+                         const std::vector<linemap::Segment2>& segments,
+                         const std::shared_ptr<const KeyframeScan>& beams)
 {
   Keyframe keyframe;
   keyframe.index = next_index_;
@@ -99,6 +102,7 @@ bool OnlineMapper::merge(std::size_t lane, double stamp, const linemap::Pose2& l
   counters_.bad_segments += result.rejected;
   counters_.retired += result.retired;
   ++counters_.keyframes_added;
+  if (map_level_ && beams) map_level_->addKeyframe(keyframe.index, *beams, segments);
   continuous_[keyframe.index] = continuous;
   lane_of_[keyframe.index] = lane;
   this->lane(lane).keyframe_stamps.insert(stamp);
@@ -116,7 +120,7 @@ bool OnlineMapper::mergeNodes(std::size_t lane, std::vector<NodeKeyframes<HeldSc
   {
     if (l.keyframe_stamps.count(r.stamp)) continue;
     if (!merge(lane, r.stamp, r.pose * r.payload.mount, r.payload.continuous, r.payload.mount,
-               r.payload.segments))
+               r.payload.segments, r.payload.beams))
       continue;
     ++counters_.node_keyframes;
     l.gate.setReference(r.pose);
@@ -181,8 +185,8 @@ ScanOutcome OnlineMapper::addPlacedScan(const StampedScan& scan)
   {
     // Held for the trajectory that may name it a node (before the first one too: its nodes after
     // the newest keyframe are among these scans).
-    const bool merged =
-        mergeNodes(scan.lane, l.nodes.addScan(scan.stamp, {continuous, scan.mount, scan.segments}));
+    const bool merged = mergeNodes(
+        scan.lane, l.nodes.addScan(scan.stamp, {continuous, scan.mount, scan.segments, scan.beams}));
     if (l.nodes.active()) return merged ? ScanOutcome::kKeyframe : ScanOutcome::kHeld;
   }
   if (!l.gate.wouldAccept(base))
@@ -190,7 +194,7 @@ ScanOutcome OnlineMapper::addPlacedScan(const StampedScan& scan)
     ++counters_.below_gate;
     return ScanOutcome::kBelowGate;
   }
-  if (!merge(scan.lane, scan.stamp, scan.laser, continuous, scan.mount, scan.segments))
+  if (!merge(scan.lane, scan.stamp, scan.laser, continuous, scan.mount, scan.segments, scan.beams))
     return ScanOutcome::kRejected;
   l.gate.accept(base);
   return ScanOutcome::kKeyframe;
@@ -338,6 +342,28 @@ bool OnlineMapper::adjustTo(std::size_t lane, const std::vector<StampedPose>& no
   for (const auto& [index, pose] : poses)
     if (index == last->index) l.gate.setReference(pose * last->mount.inverse());
   afterMapChange();
+  extractMapLevel();
+  return true;
+}
+
+bool OnlineMapper::extractMapLevel()
+{
+  if (!map_level_ || map_level_->keyframes() == 0) return false;
+  ++counters_.map_level_passes;
+  std::vector<linemap::Segment2> lines;
+  const std::vector<KeyframeOriginals> found =
+      map_level_->extract(merger_->keyframes(), merger_->map(), &lines);
+  counters_.map_level_lines += lines.size();
+  std::size_t merged = 0;
+  for (const KeyframeOriginals& k : found)
+  {
+    const AddResult result = merger_->addOriginals(k.keyframe, k.segments);
+    merged += result.merged;
+    counters_.bad_segments += result.rejected;
+  }
+  counters_.map_level_originals += merged;
+  if (merged == 0) return false;
+  afterMapChange();
   return true;
 }
 
@@ -352,6 +378,7 @@ bool OnlineMapper::observeTime(double clock, double stamp)
 void OnlineMapper::clearKeyframes()
 {
   merger_->reset();
+  if (map_level_) map_level_->clear();
   continuous_.clear();
   lane_of_.clear();
   for (auto& [index, l] : lanes_) l.keyframe_stamps.clear();
@@ -451,6 +478,7 @@ std::shared_ptr<const Merger> OnlineMapper::snapshot() const
 OnlineMapper::OnlineMapper(const OnlineMapper& other, std::unique_ptr<Merger> merger)
     : merger_(std::move(merger)),
       params_(other.params_),
+      map_level_(other.map_level_),
       lanes_(other.lanes_),
       continuous_(other.continuous_),
       lane_of_(other.lane_of_),
@@ -584,6 +612,9 @@ std::vector<std::pair<std::string, std::string>> OnlineMapper::diagnostics() con
       {"scans waiting for their robot's placement", n(sum([](const Lane& l) { return l.unplaced.size(); }))},
       {"scans of unplaced robots forgotten", n(c.unplaced_dropped)},
       {"originals retired (seen through)", n(c.retired)},
+      {"map-level passes", n(c.map_level_passes)},
+      {"map-level lines", n(c.map_level_lines)},
+      {"map-level originals", n(c.map_level_originals)},
       {"bad segments", n(c.bad_segments)},
       {"bad trajectory poses", n(c.bad_poses)},
       {"unmatched trajectory poses", n(c.unmatched_poses)},

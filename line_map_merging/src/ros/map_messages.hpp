@@ -8,10 +8,12 @@
 #include <line_map_msgs/LineSegmentArray.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Path.h>
+#include <sensor_msgs/LaserScan.h>
 #include <tf2_ros/buffer.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,6 +47,18 @@ inline std::optional<std::vector<std::pair<double, linemap::Pose2>>> toNodes(con
 /// A segment set with its poses from tf at its stamp: the laser in `map` (nothing without a valid
 /// transform), in `odom` (unless empty or `map`) and base -> laser (identity when tf has none or
 /// `base` is empty; `mount_found` says which).
+/// A scan's beams for the map-level lines.
+inline std::shared_ptr<const KeyframeScan> toKeyframeScan(const sensor_msgs::LaserScan& msg)
+{
+  auto scan = std::make_shared<KeyframeScan>();
+  scan->angle_min = msg.angle_min;
+  scan->angle_increment = msg.angle_increment;
+  scan->range_min = msg.range_min;
+  scan->range_max = msg.range_max;
+  scan->ranges = msg.ranges;
+  return scan;
+}
+
 inline std::optional<StampedScan> toStampedScan(const tf2_ros::Buffer& tf,
                                                 const line_map_msgs::LineSegmentArray& msg,
                                                 const std::string& frame, const std::string& map,

@@ -22,6 +22,7 @@
 #include "grid_publisher.hpp"
 #include "line_map_merging/localization/fleet_placement.hpp"
 #include "line_map_merging/online/concurrent_mapper.hpp"
+#include "line_map_merging/online/recent_scans.hpp"
 #include "linemap_ros/param_loader.hpp"
 #include "linemap_ros/tf_wait_queue.hpp"
 #include "linemap_ros/transport.hpp"
@@ -52,6 +53,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     std::string name, map_frame, base_frame, odom_frame;
     std::unique_ptr<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>> waiting;
     ros::Subscriber trajectory_sub;
+    ros::Subscriber scan_sub;  ///< with the map-level lines: the scans the segments come from
+    RecentScans scans;
   };
 
   void onInit() override
@@ -179,6 +182,15 @@ class LineMapMergingNodelet : public nodelet::Nodelet
         });
     r.waiting->subscribe(nh, prefix + "line_segments", queue,
                          [this, &r](const SegmentsEvent& e) { return arrive(e, r); });
+    if (mapper_->mapper().params().map_level.enabled)
+      r.scan_sub = nh.subscribe<sensor_msgs::LaserScan>(
+          prefix + "scan", queue,
+          [this, &r](const sensor_msgs::LaserScan::ConstPtr& s)
+          {
+            std::lock_guard<std::mutex> lock(mutex_);
+            r.scans.add(s->header.stamp.toSec(), toKeyframeScan(*s));
+          },
+          ros::VoidConstPtr(), linemap_ros::noDelay());
     r.trajectory_sub = nh.subscribe<nav_msgs::Path>(
         prefix + "optimized_trajectory", 10,
         [this, &r](const nav_msgs::Path::ConstPtr& p) { onTrajectory(p, r); }, ros::VoidConstPtr(),
@@ -186,7 +198,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     robots_.push_back(std::move(robot));
   }
 
-  void onSegments(const SegmentsEvent& event, const Robot& robot)
+  void onSegments(const SegmentsEvent& event, Robot& robot)
   {
     const auto& msg = event.getConstMessage();
     const std::string frame = linemap_ros::stripLeadingSlash(msg->header.frame_id);
@@ -200,6 +212,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
                         robot.base_frame.c_str(), frame.c_str());
     newest_ = std::max(newest_, msg->header.stamp);
     scan->lane = robot.lane;
+    scan->beams = robot.scans.take(msg->header.stamp.toSec());
     const bool adjusted = mapper_->poll();
     const bool placed = place(*scan, robot);
     if (mapper_->addScan(*scan) == ScanOutcome::kKeyframe || adjusted || placed) publish(msg->header.stamp);

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -55,6 +56,9 @@ struct OnlineDriveHooks
 /// The segments of scan `index` (laser frame), given its laser pose in the odometry frame. Called once
 /// per scan, in order (an extractor with state, e.g. the submap, may run inside).
 using SegmentSource = std::function<std::vector<linemap::Segment2>(std::size_t index, const Pose2& odom)>;
+
+/// The beams of scan `index` of `rec`, for the map-level lines.
+std::shared_ptr<const line_map_merging::KeyframeScan> keyframeScan(const Recording& rec, std::size_t index);
 
 /// Scan `index` of `rec` as the merging nodelet receives it: its segments (`segments`) posed by map -> odom
 /// (the schedule's samples) -> odom -> base_link -> laser.

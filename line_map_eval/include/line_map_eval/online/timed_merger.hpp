@@ -25,6 +25,8 @@ class TimedMerger : public line_map_merging::Merger
   /// [ms] of every adjust() together, and their number.
   double adjustTime() const { return adjust_ms_; }
   std::size_t adjustments() const { return adjustments_; }
+  /// [ms] of every addOriginals() together (the map-level lines).
+  double originalsTime() const { return originals_ms_; }
   const line_map_merging::Merger& inner() const { return *inner_; }
 
   const char* name() const override { return inner_->name(); }
@@ -34,6 +36,14 @@ class TimedMerger : public line_map_merging::Merger
     const auto start = std::chrono::steady_clock::now();
     auto result = inner_->addKeyframe(keyframe);
     add_ms_.push_back(linemap::millisecondsSince(start));
+    return result;
+  }
+  line_map_merging::AddResult addOriginals(std::uint64_t keyframe,
+                                           const std::vector<linemap::Segment2>& segments) override
+  {
+    const auto start = std::chrono::steady_clock::now();
+    auto result = inner_->addOriginals(keyframe, segments);
+    originals_ms_ += linemap::millisecondsSince(start);
     return result;
   }
   line_map_merging::AdjustResult adjust(
@@ -69,6 +79,7 @@ class TimedMerger : public line_map_merging::Merger
   std::unique_ptr<line_map_merging::Merger> inner_;
   std::vector<double> add_ms_;
   double adjust_ms_ = 0.0;
+  double originals_ms_ = 0.0;
   std::size_t adjustments_ = 0;
 };
 

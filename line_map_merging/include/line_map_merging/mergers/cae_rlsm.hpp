@@ -107,6 +107,7 @@ class CaeRlsm : public Merger
 
   const char* name() const override { return "cae"; }
   AddResult addKeyframe(const Keyframe& keyframe) override;
+  AddResult addOriginals(std::uint64_t keyframe, const std::vector<linemap::Segment2>& segments) override;
   AdjustResult adjust(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses) override;
   bool supportsAdjustment() const override { return true; }
   std::vector<MapSegment> map() const override;
@@ -205,6 +206,9 @@ class CaeRlsm : public Merger
   std::size_t mergeMapSegments(IdQueue pending, IdQueue* changed = nullptr);
   /// After a keyframe's originals are in (addKeyframe, regroup): the map merge and crossing resolution
   /// of what they touched. `offset` is the step of kKeyframeOtm to count the steps at.
+  /// The segments (laser frame) of the keyframe in `slot` as new leaves, placed at its pose.
+  void insertOriginals(std::uint32_t slot, const std::vector<Segment2>& segments, AddResult& result,
+                       IdQueue& touched);
   void finishKeyframe(const IdQueue& touched, std::size_t offset);
   /// Crossing resolution (crossing_resolution.cpp): resolves every crossing of the pending map segments,
   /// re-queueing what it changes, until none of them crosses another. Returns how many pairs it resolved.

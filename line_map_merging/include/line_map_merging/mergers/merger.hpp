@@ -95,6 +95,11 @@ class Merger
   /// and counted in the result.
   virtual AddResult addKeyframe(const Keyframe& keyframe) = 0;
 
+  /// Merges further original segments (laser frame) of a keyframe merged before, at its current
+  /// pose: lines found later in what the keyframe saw (MapLevelLines). Throws std::invalid_argument
+  /// for an unknown index; bad segments are skipped and counted.
+  virtual AddResult addOriginals(std::uint64_t keyframe, const std::vector<linemap::Segment2>& segments) = 0;
+
   /// Replaces the poses (laser in map) of the named keyframes and rebuilds the map from the
   /// provenance; keyframes not named keep their pose. Methods without provenance return
   /// moved == 0 and leave the map as it is (see supportsAdjustment()).

@@ -24,6 +24,7 @@ class OfflineMerger : public Merger
  public:
   bool isOnline() const override { return false; }
   AddResult addKeyframe(const Keyframe& keyframe) override;
+  AddResult addOriginals(std::uint64_t keyframe, const std::vector<linemap::Segment2>& segments) override;
   /// Replaces the poses; the map is recomputed from the stored segments on the next map().
   AdjustResult adjust(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses) override;
   bool supportsAdjustment() const override { return true; }

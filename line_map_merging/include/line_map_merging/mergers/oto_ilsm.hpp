@@ -24,6 +24,7 @@ class OtoIlsm : public Merger
 
   const char* name() const override { return "oto"; }
   AddResult addKeyframe(const Keyframe& keyframe) override;
+  AddResult addOriginals(std::uint64_t keyframe, const std::vector<linemap::Segment2>& segments) override;
   /// Without provenance nothing can be moved: counts the unknown indices, moved == 0.
   AdjustResult adjust(const std::vector<std::pair<std::uint64_t, linemap::Pose2>>& poses) override;
   std::vector<MapSegment> map() const override;

@@ -25,6 +25,7 @@
 
 #include "line_map_merging/mergers/merger.hpp"
 #include "line_map_merging/online/keyframe_gate.hpp"
+#include "line_map_merging/online/map_level_lines.hpp"
 #include "line_map_merging/online/node_keyframes.hpp"
 #include "line_map_merging/online/trajectory_anchor.hpp"
 #include "linemap/geometry.hpp"
@@ -43,6 +44,7 @@ struct OnlineMapperParams
   CorrectionMode correction = CorrectionMode::kNearest;
   KeyframeSource keyframe_source = KeyframeSource::kAuto;
   double keyframe_buffer = 300.0;  ///< [s] scans held for a trajectory to name them nodes
+  MapLevelParams map_level;        ///< lines in what no single keyframe's extractor explained
 
   /// Keys "keyframe_distance", "keyframe_angle", "stamp_tolerance", "trajectory_max_gap",
   /// "time_jump_tolerance", "autosave_period", "trajectory_correction" (nearest | interpolate),
@@ -61,6 +63,9 @@ struct StampedScan
   std::vector<linemap::Segment2> segments;  ///< laser frame
   /// The robot (OnlineMapper's lanes): `laser` is then in that robot's own map frame.
   std::size_t lane = 0;
+  /// The scan the segments came from, for the map-level lines (MapLevelLines); none: the keyframe
+  /// gives none.
+  std::shared_ptr<const KeyframeScan> beams;
 };
 
 /// A trajectory node: base pose in the map frame at a stamp.
@@ -91,6 +96,7 @@ struct MapperCounters
   std::size_t rebuilds = 0;          ///< maps made again from the nodes of the first trajectory
   std::size_t handled =
       0;  ///< segment sets finished with: given to addScan, or counted dropped by the caller
+  std::size_t map_level_passes = 0, map_level_lines = 0, map_level_originals = 0;
   double last_otm_ms = 0.0, last_gma_ms = 0.0;
 };
 
@@ -105,6 +111,11 @@ class OnlineMapper
   /// trajectory's nodes choose the keyframes (KeyframeSource), the scan is held instead, or merged at
   /// once when a node of the last trajectory was waiting for it (kKeyframe).
   ScanOutcome addScan(const StampedScan& scan);
+
+  /// Looks for map-level lines (MapLevelLines) in the keyframes' scans at their current poses and
+  /// merges each keyframe's part as an original of that keyframe. Done after every adjustment; the
+  /// caller calls it when the input ends (linemap_batch). Whether the map changed.
+  bool extractMapLevel();
 
   /// Applies a trajectory of base poses (map frame) of the back end's nodes, at any stamps: each
   /// node found among the scans seen gives the corrected map->odom there; every keyframe gets the
@@ -209,6 +220,7 @@ class OnlineMapper
   {
     linemap::Pose2 continuous, mount;
     std::vector<linemap::Segment2> segments;
+    std::shared_ptr<const KeyframeScan> beams;
   };
   /// One robot's record: what is judged and matched by stamp per robot (two robots' scans may share
   /// stamps), and where its map frame lies in this map's.
@@ -227,7 +239,8 @@ class OnlineMapper
   const Lane& lane(std::size_t index) const;
   /// Merges one keyframe (laser pose in the map frame); false when the merger refused it.
   bool merge(std::size_t lane, double stamp, const linemap::Pose2& laser, const linemap::Pose2& continuous,
-             const linemap::Pose2& mount, const std::vector<linemap::Segment2>& segments);
+             const linemap::Pose2& mount, const std::vector<linemap::Segment2>& segments,
+             const std::shared_ptr<const KeyframeScan>& beams = nullptr);
   bool mergeNodes(std::size_t lane, std::vector<NodeKeyframes<HeldScan>::Ready> ready);
   /// addScan for a scan of a placed lane, its laser pose in this map's frame.
   ScanOutcome addPlacedScan(const StampedScan& scan);
@@ -247,6 +260,7 @@ class OnlineMapper
 
   std::unique_ptr<Merger> merger_;
   OnlineMapperParams params_;
+  std::optional<MapLevelLines> map_level_;  ///< when params_.map_level.enabled
   std::map<std::size_t, Lane> lanes_;
   std::unordered_map<std::uint64_t, linemap::Pose2> continuous_;  ///< keyframe index -> laser, same frame
   std::unordered_map<std::uint64_t, std::size_t> lane_of_;        ///< keyframe index -> lane

@@ -90,25 +90,43 @@ AddResult CaeRlsm::addKeyframe(const Keyframe& keyframe)
     const StepTimes<kStepCount>::Scope timed(steps_, kKeyframeSeeThrough);
     result.retired = retireSeenThrough(slot, keyframe.segments, touched);
   }
-  {
-    const StepTimes<kStepCount>::Scope timed(steps_, kKeyframeOtm);
-    for (const Segment2& local : keyframe.segments)
-    {
-      // A finite segment under a huge (finite) pose can still overflow in the map frame.
-      const Segment2 global = local.transformed(p);
-      if (!isValidSegment(local) || !isValidSegment(global))
-      {
-        ++result.rejected;
-        continue;
-      }
-      const auto leaf = static_cast<std::uint32_t>(leaves_.size());
-      leaves_.push_back({slot, local});
-      touched.insert(insertSegment(global, leaf));
-      ++result.merged;
-    }
-  }
+  insertOriginals(slot, keyframe.segments, result, touched);
   finishKeyframe(touched, kKeyframeOtm);
   return result;
+}
+
+AddResult CaeRlsm::addOriginals(std::uint64_t keyframe, const std::vector<Segment2>& segments)
+{
+  const auto slot = slot_of_.find(keyframe);
+  if (slot == slot_of_.end())
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe) +
+                                ": no such keyframe for its originals");
+  AddResult result;
+  IdQueue touched;
+  insertOriginals(slot->second, segments, result, touched);
+  finishKeyframe(touched, kKeyframeOtm);
+  return result;
+}
+
+void CaeRlsm::insertOriginals(std::uint32_t slot, const std::vector<Segment2>& segments, AddResult& result,
+                              IdQueue& touched)
+{
+  const StepTimes<kStepCount>::Scope timed(steps_, kKeyframeOtm);
+  const linemap::Pose2& pose = keyframes_[slot].pose;
+  for (const Segment2& local : segments)
+  {
+    // A finite segment under a huge (finite) pose can still overflow in the map frame.
+    const Segment2 global = local.transformed(pose);
+    if (!isValidSegment(local) || !isValidSegment(global))
+    {
+      ++result.rejected;
+      continue;
+    }
+    const auto leaf = static_cast<std::uint32_t>(leaves_.size());
+    leaves_.push_back({slot, local});
+    touched.insert(insertSegment(global, leaf));
+    ++result.merged;
+  }
 }
 
 void CaeRlsm::finishKeyframe(const IdQueue& touched, std::size_t offset)

@@ -1,0 +1,351 @@
+// Lines in the unexplained points of several registered scans (see the header).
+#include "line_extraction/residual_lines.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <unordered_set>
+
+namespace line_extraction
+{
+namespace
+{
+std::int64_t cellKey(std::int64_t ix, std::int64_t iy)
+{
+  return (ix << 32) ^ (iy & 0xffffffffLL);
+}
+
+std::int64_t cellIndex(double v, double cell)
+{
+  return static_cast<std::int64_t>(std::floor(v / cell));
+}
+}  // namespace
+
+void ResidualLineFinder::index(std::vector<ResidualPoint>& points, const std::vector<ResidualSource>& sources)
+{
+  points_ = &points;
+  sources_ = &sources;
+  max_sigma_ = 0.0;
+  max_gap_ = 0.0;
+  for (const ResidualPoint& w : points)
+  {
+    max_sigma_ = std::max(max_sigma_, static_cast<double>(w.sigma));
+    max_gap_ = std::max(max_gap_, static_cast<double>(w.gap));
+  }
+  const double cell = params_.seed_radius;
+  auto key = [&](std::uint32_t i)
+  { return cellKey(cellIndex(points[i].p.x(), cell), cellIndex(points[i].p.y(), cell)); };
+  cell_order_.resize(points.size());
+  cell_keys_.resize(points.size());
+  std::vector<std::pair<std::int64_t, std::uint32_t>> keyed(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    keyed[i] = {key(static_cast<std::uint32_t>(i)), static_cast<std::uint32_t>(i)};
+  std::sort(keyed.begin(), keyed.end());
+  for (std::size_t k = 0; k < keyed.size(); ++k)
+  {
+    cell_keys_[k] = keyed[k].first;
+    cell_order_[k] = keyed[k].second;
+  }
+}
+
+const ResidualSource* ResidualLineFinder::sourceById(std::uint32_t id) const
+{
+  if (id < sources_->size() && (*sources_)[id].id == id) return &(*sources_)[id];  // ids are positions
+  const auto it = std::lower_bound(sources_->begin(), sources_->end(), id,
+                                   [](const ResidualSource& s, std::uint32_t v) { return s.id < v; });
+  return it != sources_->end() && it->id == id ? &*it : nullptr;
+}
+
+template <class F>
+void ResidualLineFinder::forEachNear(const Vec2& origin, const Vec2& dir, double t0, double t1,
+                                     double half_width, F&& f) const
+{
+  // Every cell whose centre lies within half a diagonal of the rectangle.
+  const double cell = params_.seed_radius;
+  const Vec2 normal(-dir.y(), dir.x());
+  const Vec2 a = origin + dir * t0, b = origin + dir * t1;
+  const Vec2 lo = a.cwiseMin(b) - Vec2::Constant(half_width + cell);
+  const Vec2 hi = a.cwiseMax(b) + Vec2::Constant(half_width + cell);
+  const double reach = half_width + cell * 0.7072;
+  for (std::int64_t ix = cellIndex(lo.x(), cell); ix <= cellIndex(hi.x(), cell); ++ix)
+    for (std::int64_t iy = cellIndex(lo.y(), cell); iy <= cellIndex(hi.y(), cell); ++iy)
+    {
+      const Vec2 centre((static_cast<double>(ix) + 0.5) * cell, (static_cast<double>(iy) + 0.5) * cell);
+      const Vec2 rel = centre - origin;
+      const double t = rel.dot(dir);
+      if (t < t0 - cell || t > t1 + cell || std::abs(rel.dot(normal)) > reach) continue;
+      const auto range = std::equal_range(cell_keys_.begin(), cell_keys_.end(), cellKey(ix, iy));
+      for (auto it = range.first; it != range.second; ++it)
+        f(cell_order_[static_cast<std::size_t>(it - cell_keys_.begin())]);
+    }
+}
+
+bool ResidualLineFinder::grow(std::size_t seed, ResidualLine& line)
+{
+  std::vector<ResidualPoint>& points = *points_;
+  if (points[seed].used) return false;
+  const ResidualSource* seed_source = sourceById(points[seed].source);
+  if (seed_source == nullptr) return false;
+  LineNormal fit_line;
+  std::vector<Candidate> run;
+  if (!seedLine(seed, fit_line) || !growRun(seed, fit_line, run) || !acceptRun(run, fit_line, line))
+    return false;
+
+  // Accepted: the endpoints with the observers on the left.
+  const Vec2 observer = seed_source->laser.translation();
+  const Vec2 d = line.end - line.start;
+  if (Vec2(-d.y(), d.x()).dot(observer - line.start) < 0.0) std::swap(line.start, line.end);
+  line.members.clear();
+  line.members.reserve(run.size());
+  for (const Candidate& c : run)
+  {
+    points[c.index].used = true;
+    line.members.push_back(c.index);
+  }
+  return true;
+}
+
+bool ResidualLineFinder::seedLine(std::size_t seed, LineNormal& best) const
+{
+  const std::vector<ResidualPoint>& points = *points_;
+  const ResidualPoint& s = points[seed];
+  const double radius = params_.seed_radius;
+  // Unused neighbours of the seed.
+  std::vector<std::uint32_t> near;
+  const std::int64_t cx = cellIndex(s.p.x(), radius), cy = cellIndex(s.p.y(), radius);
+  for (std::int64_t dx = -1; dx <= 1; ++dx)
+    for (std::int64_t dy = -1; dy <= 1; ++dy)
+    {
+      const auto range = std::equal_range(cell_keys_.begin(), cell_keys_.end(), cellKey(cx + dx, cy + dy));
+      for (auto it = range.first; it != range.second; ++it)
+      {
+        const std::uint32_t j = cell_order_[static_cast<std::size_t>(it - cell_keys_.begin())];
+        if (!points[j].used && (points[j].p - s.p).squaredNorm() <= radius * radius) near.push_back(j);
+      }
+    }
+  if (static_cast<int>(near.size()) < 3) return false;
+
+  // The line through the seed and one neighbour that holds the most neighbours in its band.
+  int best_count = 0;
+  const std::size_t stride = std::max<std::size_t>(1, near.size() / 48);
+  for (std::size_t a = 0; a < near.size(); a += stride)
+  {
+    const Vec2 d = points[near[a]].p - s.p;
+    const double len = d.norm();
+    if (len < 2.0 * s.sigma) continue;
+    LineNormal h;
+    h.nx = -d.y() / len;
+    h.ny = d.x() / len;
+    h.radius = h.nx * s.p.x() + h.ny * s.p.y();
+    int count = 0;
+    for (std::uint32_t j : near)
+      if (h.distance(points[j].p) <= params_.band_sigmas * points[j].sigma) ++count;
+    if (count > best_count)
+    {
+      best_count = count;
+      best = h;
+    }
+  }
+  return best_count >= 3;
+}
+
+bool ResidualLineFinder::growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const
+{
+  // Collect the band's unused points on the seed's side, keep the contiguous run through the
+  // seed, refit; twice. The band is searched over a stretch of the line that doubles until the run
+  // ends inside it by more than any gap could bridge.
+  const std::vector<ResidualPoint>& points = *points_;
+  const auto observer_side = [&](const LineNormal& l, std::uint32_t source_id)
+  {
+    const ResidualSource* src = sourceById(source_id);
+    return src != nullptr && l.signedDistance(src->laser.translation()) > 0.0 ? 1 : -1;
+  };
+  const double bridge = std::max(params_.max_gap, max_gap_) + 1e-9;
+  const double half_width = params_.band_sigmas * max_sigma_;
+  for (int pass = 0; pass < 2; ++pass)
+  {
+    const int side = observer_side(fit_line, points[seed].source);
+    const Vec2 dir(-fit_line.ny, fit_line.nx);
+    const Vec2 foot = Vec2(fit_line.nx, fit_line.ny) * fit_line.radius;
+    const double t_seed = dir.dot(points[seed].p - foot);
+    std::vector<Candidate> band;
+    for (double stretch = 4.0 * params_.seed_radius + bridge;; stretch *= 2.0)
+    {
+      band.clear();
+      forEachNear(foot, dir, t_seed - stretch, t_seed + stretch, half_width,
+                  [&](std::uint32_t j)
+                  {
+                    const ResidualPoint& w = points[j];
+                    if (w.used || fit_line.distance(w.p) > params_.band_sigmas * w.sigma) return;
+                    if (observer_side(fit_line, w.source) != side) return;
+                    band.push_back({j, dir.dot(w.p - foot)});
+                  });
+      std::sort(band.begin(), band.end(),
+                [](const Candidate& a, const Candidate& b)
+                { return a.along < b.along || (a.along == b.along && a.index < b.index); });
+      const auto at =
+          std::find_if(band.begin(), band.end(), [seed](const Candidate& c) { return c.index == seed; });
+      if (at == band.end()) return false;
+      std::size_t lo = static_cast<std::size_t>(at - band.begin()), hi = lo;
+      const auto joined = [&](std::size_t a, std::size_t b)
+      {
+        const double allowed = std::max({params_.max_gap, static_cast<double>(points[band[a].index].gap),
+                                         static_cast<double>(points[band[b].index].gap)});
+        return band[b].along - band[a].along <= allowed;
+      };
+      while (lo > 0 && joined(lo - 1, lo)) --lo;
+      while (hi + 1 < band.size() && joined(hi, hi + 1)) ++hi;
+      run.assign(band.begin() + static_cast<std::ptrdiff_t>(lo),
+                 band.begin() + static_cast<std::ptrdiff_t>(hi) + 1);
+      if (run.front().along - (t_seed - stretch) > bridge && (t_seed + stretch) - run.back().along > bridge)
+        break;
+    }
+    LineSums sums;
+    for (const Candidate& c : run) sums.add(points[c.index].p);
+    if (!fitNormal(sums, fit_line)) return false;
+  }
+  return true;
+}
+
+bool ResidualLineFinder::acceptRun(const std::vector<Candidate>& run, const LineNormal& fit_line,
+                                   ResidualLine& line) const
+{
+  // Support, extent, fit and the absence of clutter beside it.
+  const std::vector<ResidualPoint>& points = *points_;
+  const double band_k = params_.band_sigmas;
+  if (static_cast<int>(run.size()) < params_.min_points) return false;
+  std::unordered_set<std::uint32_t> sources;
+  double sigma_sum = 0.0, squares = 0.0;
+  for (const Candidate& c : run)
+  {
+    const ResidualPoint& w = points[c.index];
+    sources.insert(w.source);
+    sigma_sum += w.sigma;
+    const double d = fit_line.signedDistance(w.p);
+    squares += d * d;
+  }
+  if (static_cast<int>(sources.size()) < params_.min_sources) return false;
+  const double n = static_cast<double>(run.size());
+  const double sigma = sigma_sum / n;
+  if (std::sqrt(squares / n) > params_.max_rms_sigmas * sigma) return false;
+  const Vec2 dir(-fit_line.ny, fit_line.nx);
+  const Vec2 foot = Vec2(fit_line.nx, fit_line.ny) * fit_line.radius;
+  double t0 = dir.dot(points[run.front().index].p - foot), t1 = t0;
+  for (const Candidate& c : run)
+  {
+    const double t = dir.dot(points[c.index].p - foot);
+    t0 = std::min(t0, t);
+    t1 = std::max(t1, t);
+  }
+  if (t1 - t0 < params_.min_length) return false;
+  if (params_.min_fill > 0.0)
+  {
+    const auto bins = static_cast<std::size_t>(std::ceil((t1 - t0) / params_.fill_bin));
+    std::vector<char> filled(std::max<std::size_t>(bins, 1), 0);
+    for (const Candidate& c : run)
+      if (fit_line.distance(points[c.index].p) <= params_.fill_bin)
+        filled[std::min(filled.size() - 1, static_cast<std::size_t>((dir.dot(points[c.index].p - foot) - t0) /
+                                                                    params_.fill_bin))] = 1;
+    const double share = static_cast<double>(std::count(filled.begin(), filled.end(), 1)) / filled.size();
+    if (share < params_.min_fill) return false;
+  }
+  if (curved(run, fit_line, t0, t1, sigma)) return false;
+  // Beside the band: between one and two bands off the line, away from the ends (where a
+  // corner's other wall starts).
+  const double margin = 2.0 * band_k * sigma;
+  std::size_t beside = 0;
+  if (t1 - t0 > 2.0 * margin)
+    forEachNear(foot, dir, t0 + margin, t1 - margin, 2.0 * band_k * max_sigma_,
+                [&](std::uint32_t j)
+                {
+                  const ResidualPoint& w = points[j];
+                  const double t = dir.dot(w.p - foot);
+                  if (t < t0 + margin || t > t1 - margin) return;
+                  const double d = fit_line.distance(w.p);
+                  if (d > band_k * w.sigma && d <= 2.0 * band_k * w.sigma) ++beside;
+                });
+  if (static_cast<double>(beside) > params_.max_side_share * n) return false;
+
+  line.start = foot + dir * t0;
+  line.end = foot + dir * t1;
+  line.sigma = sigma;
+  return !seenThrough(line.start, line.end, band_k * sigma);
+}
+
+bool ResidualLineFinder::curved(const std::vector<Candidate>& run, const LineNormal& line, double t0,
+                                double t1, double sigma) const
+{
+  // Residuals against the position along the line, u in [-1, 1]: d = a + b u + c u^2. A chord of
+  // a curved wall has a significant c (its sagitta); a straight wall's c is noise.
+  const std::vector<ResidualPoint>& points = *points_;
+  const Vec2 dir(-line.ny, line.nx);
+  const Vec2 foot = Vec2(line.nx, line.ny) * line.radius;
+  const double mid = 0.5 * (t0 + t1), half = std::max(0.5 * (t1 - t0), 1e-9);
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (const Candidate& c : run)
+  {
+    const Vec2& p = points[c.index].p;
+    const double u = (dir.dot(p - foot) - mid) / half;
+    const Eigen::Vector3d row(1.0, u, u * u);
+    normal += row * row.transpose();
+    rhs += row * line.signedDistance(p);
+  }
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(normal);
+  if (!lu.isInvertible()) return false;
+  const double c = lu.solve(rhs)(2);
+  const double c_std = sigma * std::sqrt(std::max(0.0, lu.inverse()(2, 2)));
+  return std::abs(c) > 3.0 * c_std && std::abs(c) > 0.5 * sigma;
+}
+
+bool ResidualLineFinder::seenThrough(const Vec2& a, const Vec2& b, double band) const
+{
+  // Only the interior counts: near an end, a beam grazing past a corner is no contradiction. Of each
+  // scan only the beams between the directions of the two ends can meet the line.
+  const double length = (b - a).norm();
+  const double margin = std::min(0.25 * length, 2.0 * band);
+  std::size_t on = 0, through = 0;
+  for (const ResidualSource& src : *sources_)
+  {
+    if (src.angles.empty() ||
+        linemap::distanceToSegment(src.laser.translation(), a, b) > src.max_range + band)
+      continue;
+    const linemap::Pose2 to_laser = src.laser.inverse();
+    const Vec2 la = to_laser.apply(a), lb = to_laser.apply(b);
+    const Vec2 d = lb - la;
+    double from = std::atan2(la.y(), la.x()), to = std::atan2(lb.y(), lb.x());
+    if (from > to) std::swap(from, to);
+    // The segment subtends less than half a turn from a laser not on it: a wider interval wraps.
+    if (to - from > linemap::kPi)
+    {
+      const double wrapped = from + 2.0 * linemap::kPi;
+      from = to;
+      to = wrapped;
+    }
+    // The scan's angles may follow another convention than atan2's: the interval a turn either way too.
+    for (int turn = -1; turn <= 1; ++turn)
+    {
+      const double shift = 2.0 * linemap::kPi * turn;
+      const auto first = std::lower_bound(src.angles.begin(), src.angles.end(), from + shift);
+      const auto last = std::upper_bound(first, src.angles.end(), to + shift);
+      for (auto it = first; it != last; ++it)
+      {
+        const std::size_t i = static_cast<std::size_t>(it - src.angles.begin());
+        const Vec2 u(std::cos(*it), std::sin(*it));
+        // Ray u * s meets la + d * t where s u - t d = la.
+        const double det = d.x() * u.y() - d.y() * u.x();
+        if (std::abs(det) < 1e-12) continue;
+        const double t = (u.x() * la.y() - u.y() * la.x()) / det;
+        const double s = (d.x() * la.y() - d.y() * la.x()) / det;
+        if (s <= 0.0 || t * length < margin || (1.0 - t) * length < margin) continue;
+        if (src.ranges[i] > s + band)
+          ++through;
+        else if (src.ranges[i] >= s - band)
+          ++on;
+      }
+    }
+  }
+  return static_cast<double>(through) > params_.max_through_share * static_cast<double>(on);
+}
+
+}  // namespace line_extraction

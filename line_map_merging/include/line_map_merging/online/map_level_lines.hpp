@@ -1,0 +1,112 @@
+// Map-level lines: walls no single scan sees well enough for its extractor (far away with coarse
+// beams, glimpsed in pieces, smeared by the registration) still gather a band of points once the
+// keyframes' scans are registered by the map's poses. The returns a keyframe's own segments do not
+// explain, and the map does not either, are searched for lines (ResidualLineFinder) with each point's
+// noise from the sensor model and the registration's error at its range. Every keyframe that gave a
+// line points gets the part of the line it saw as an original of its own, so the map segment has
+// provenance to each of them and moves with them when the trajectory is corrected. ROS-free.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "line_extraction/residual_lines.hpp"
+#include "line_extraction/sensor_model.hpp"
+#include "line_map_merging/mergers/merger.hpp"
+#include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
+
+namespace line_map_merging
+{
+/// Keys of the "map_level" block of config/line_map_merging.yaml.
+struct MapLevelParams
+{
+  bool enabled = true;
+  /// The laser's noise model ("map_level/range_sigma", "map_level/range_sigma_per_m",
+  /// "map_level/gap_incidence": the keys of line_extraction.yaml without the prefix).
+  line_extraction::SensorModel sensor;
+  /// Registration error of a keyframe's pose: a point at range r is displaced across a line by up to
+  /// sqrt(pose_sigma^2 + (r heading_sigma)^2) besides its range noise.
+  double pose_sigma = 0.02;      ///< [m]
+  double heading_sigma = 0.003;  ///< [rad]
+  /// A return lies on a segment (its keyframe's own, or the map's) within this many of its sigmas.
+  double explained_sigmas = 3.0;
+  /// The tests of a line; min_sources counts keyframes. A line must run through its points over
+  /// min_fill of its length at fill_bin (the map's resolution): a wall is seen all along, a few far
+  /// returns or a row of posts are not.
+  line_extraction::ResidualLineParams lines = []
+  {
+    line_extraction::ResidualLineParams p;
+    p.min_fill = 0.85;
+    p.fill_bin = 0.05;
+    return p;
+  }();
+
+  /// Reads the "map_level/..." keys; throws linemap::ParameterError naming a bad one.
+  static MapLevelParams fromParams(const linemap::ParamSet& params);
+};
+
+/// One scan as the laser returned it (the beams of sensor_msgs/LaserScan).
+struct KeyframeScan
+{
+  double angle_min = 0.0, angle_increment = 0.0;  ///< [rad]
+  double range_min = 0.0, range_max = 0.0;        ///< [m]: returns outside (range_min, range_max) are none
+  std::vector<float> ranges;                      ///< [m]
+};
+
+/// Originals found for one keyframe: in its laser frame, observers on the left.
+struct KeyframeOriginals
+{
+  std::uint64_t keyframe = 0;
+  std::vector<linemap::Segment2> segments;
+};
+
+class MapLevelLines
+{
+ public:
+  explicit MapLevelLines(const MapLevelParams& params);
+
+  /// Keeps what a keyframe's scan returned, and which returns its own segments (laser frame) explain.
+  void addKeyframe(std::uint64_t index, const KeyframeScan& scan,
+                   const std::vector<linemap::Segment2>& segments);
+  /// Forgets every keyframe (a new map).
+  void clear()
+  {
+    scans_.clear();
+    searched_.clear();
+  }
+  std::size_t keyframes() const { return scans_.size(); }
+
+  /// The lines in the returns neither their keyframe's segments nor a segment of `map` explain, the
+  /// keyframes registered at their poses in `keyframes` (those unknown here are left out): per
+  /// keyframe that saw a line, the part it saw. `lines` (optional) receives the lines, map frame.
+  /// A line is grown from the points of keyframes new since the last call or moved by more than
+  /// their registration error: from the others it was sought before, with the same neighbours.
+  std::vector<KeyframeOriginals> extract(const std::vector<KeyframeInfo>& keyframes,
+                                         const std::vector<MapSegment>& map,
+                                         std::vector<linemap::Segment2>* lines = nullptr);
+
+  const MapLevelParams& params() const { return params_; }
+
+ private:
+  /// What one keyframe's scan keeps: every valid return (for the test that a line is not seen
+  /// through) and the unexplained ones (the candidates).
+  struct Stored
+  {
+    std::vector<double> angles, ranges;  ///< valid returns, increasing angle
+    double max_range = 0.0;
+    std::vector<std::uint32_t> residual;  ///< indices into angles / ranges
+    std::vector<float> residual_gap;      ///< largest gap to a neighbour on one surface [m]
+    double beam_spacing = 0.0;            ///< |angle_increment| [rad]
+  };
+
+  MapLevelParams params_;
+  // Shared between copies of a mapper (ConcurrentMapper adjusts a copy): a keyframe's scan never changes.
+  std::map<std::uint64_t, std::shared_ptr<const Stored>> scans_;
+  std::map<std::uint64_t, linemap::Pose2> searched_;  ///< keyframes searched from, at that pose
+};
+
+}  // namespace line_map_merging

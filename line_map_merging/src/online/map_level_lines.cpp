@@ -1,0 +1,234 @@
+// Lines in what the keyframes' scans returned and neither their own segments nor the map explain
+// (see the header).
+#include "line_map_merging/online/map_level_lines.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+#include <unordered_map>
+
+#include "line_extraction/param_checks.hpp"
+
+namespace line_map_merging
+{
+using line_extraction::ResidualLine;
+using line_extraction::ResidualLineFinder;
+using line_extraction::ResidualPoint;
+using line_extraction::ResidualSource;
+using linemap::Pose2;
+using linemap::Segment2;
+using linemap::Vec2;
+
+MapLevelParams MapLevelParams::fromParams(const linemap::ParamSet& ps)
+{
+  using namespace line_extraction;
+  MapLevelParams p;
+  const std::string prefix = "map_level/";
+  p.enabled = ps.getBool(prefix + "enabled", p.enabled);
+  linemap::ParamSet sensor;
+  for (const char* key : {"range_sigma", "range_sigma_per_m", "gap_incidence"})
+    if (ps.has(prefix + key)) sensor.set(key, ps.values().at(prefix + key));
+  try
+  {
+    p.sensor = SensorModel::fromParams(sensor);
+  }
+  catch (const linemap::ParameterError& e)
+  {
+    throw linemap::ParameterError(std::string(e.what()) + " (under " + prefix + ")");
+  }
+  p.pose_sigma = nonNegativeParam(ps, prefix + "pose_sigma", p.pose_sigma);
+  p.heading_sigma = nonNegativeParam(ps, prefix + "heading_sigma", p.heading_sigma);
+  p.explained_sigmas = positiveParam(ps, prefix + "explained_sigmas", p.explained_sigmas);
+  ResidualLineParams& l = p.lines;
+  l.band_sigmas = positiveParam(ps, prefix + "band_sigmas", l.band_sigmas);
+  l.seed_radius = positiveParam(ps, prefix + "seed_radius", l.seed_radius);
+  l.max_gap = positiveParam(ps, prefix + "max_gap", l.max_gap);
+  l.min_points = intParamAtLeast(ps, prefix + "min_points", l.min_points, 3);
+  l.min_sources = intParamAtLeast(ps, prefix + "min_keyframes", l.min_sources, 2);
+  l.min_length = nonNegativeParam(ps, prefix + "min_length", l.min_length);
+  l.max_rms_sigmas = positiveParam(ps, prefix + "max_rms_sigmas", l.max_rms_sigmas);
+  l.max_side_share = nonNegativeParam(ps, prefix + "max_side_share", l.max_side_share);
+  l.max_through_share = nonNegativeParam(ps, prefix + "max_through_share", l.max_through_share);
+  l.min_fill = nonNegativeParam(ps, prefix + "min_fill", l.min_fill);
+  l.fill_bin = positiveParam(ps, prefix + "fill_bin", l.fill_bin);
+  return p;
+}
+
+MapLevelLines::MapLevelLines(const MapLevelParams& params) : params_(params) {}
+
+namespace
+{
+/// Whether the point p lies within `band` of the segment, its foot on it (or within `band` of its ends).
+bool onSegment(const Vec2& p, const Segment2& s, double band)
+{
+  const Vec2 d = s.end - s.start;
+  const double len2 = d.squaredNorm();
+  if (len2 <= 0.0) return false;
+  const double t = (p - s.start).dot(d) / len2;
+  const double len = std::sqrt(len2);
+  if (t * len < -band || (t - 1.0) * len > band) return false;
+  return std::abs(d.x() * (p.y() - s.start.y()) - d.y() * (p.x() - s.start.x())) / len <= band;
+}
+}  // namespace
+
+void MapLevelLines::addKeyframe(std::uint64_t index, const KeyframeScan& scan,
+                                const std::vector<Segment2>& segments)
+{
+  auto stored = std::make_shared<Stored>();
+  std::vector<int> beam;  // beam index of each valid return
+  for (std::size_t i = 0; i < scan.ranges.size(); ++i)
+  {
+    const double r = scan.ranges[i];
+    if (!std::isfinite(r) || r <= scan.range_min || r >= scan.range_max) continue;
+    stored->angles.push_back(scan.angle_min + static_cast<double>(i) * scan.angle_increment);
+    stored->ranges.push_back(r);
+    beam.push_back(static_cast<int>(i));
+    stored->max_range = std::max(stored->max_range, r);
+  }
+  stored->beam_spacing = std::abs(scan.angle_increment);
+  const line_extraction::SensorModel& sensor = params_.sensor;
+  const std::size_t n = stored->ranges.size();
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    const double r = stored->ranges[k];
+    const Vec2 p(r * std::cos(stored->angles[k]), r * std::sin(stored->angles[k]));
+    const double band = params_.explained_sigmas * sensor.sigma(r);
+    if (std::any_of(segments.begin(), segments.end(),
+                    [&](const Segment2& s) { return onSegment(p, s, band); }))
+      continue;
+    // The widest gap to a neighbouring beam's return that one surface could leave (the sensor model's).
+    double gap = 0.0;
+    for (const std::size_t j : {k - 1, k + 1})
+      if (j < n && std::abs(beam[j] - beam[k]) == 1)
+        gap = std::max(gap, sensor.neighbourGap(std::min(r, stored->ranges[j]), stored->beam_spacing));
+    stored->residual.push_back(static_cast<std::uint32_t>(k));
+    stored->residual_gap.push_back(static_cast<float>(gap));
+  }
+  if (n > 1 && stored->angles.front() > stored->angles.back())  // a negative increment: increasing angle
+  {
+    std::reverse(stored->angles.begin(), stored->angles.end());
+    std::reverse(stored->ranges.begin(), stored->ranges.end());
+    for (std::uint32_t& k : stored->residual) k = static_cast<std::uint32_t>(n - 1 - k);
+  }
+  scans_[index] = std::move(stored);
+}
+
+std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<KeyframeInfo>& keyframes,
+                                                      const std::vector<MapSegment>& map,
+                                                      std::vector<Segment2>* lines)
+{
+  // The map's faces in a grid of cells, each listing the segments within reach of it.
+  const double cell = 2.0, reach = params_.explained_sigmas * 0.5;  // [m]: a band wider than 0.5 m is no wall
+  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> faces_near;
+  const auto key = [cell](std::int64_t ix, std::int64_t iy) { return (ix << 32) ^ (iy & 0xffffffffLL); };
+  const auto index_of = [cell](double v) { return static_cast<std::int64_t>(std::floor(v / cell)); };
+  for (std::size_t i = 0; i < map.size(); ++i)
+  {
+    const Segment2& s = map[i].segment;
+    for (std::int64_t ix = index_of(std::min(s.start.x(), s.end.x()) - reach);
+         ix <= index_of(std::max(s.start.x(), s.end.x()) + reach); ++ix)
+      for (std::int64_t iy = index_of(std::min(s.start.y(), s.end.y()) - reach);
+           iy <= index_of(std::max(s.start.y(), s.end.y()) + reach); ++iy)
+      {
+        const Vec2 centre((static_cast<double>(ix) + 0.5) * cell, (static_cast<double>(iy) + 0.5) * cell);
+        if (linemap::distanceToSegment(centre, s.start, s.end) <= reach + cell * 0.7072)
+          faces_near[key(ix, iy)].push_back(static_cast<std::uint32_t>(i));
+      }
+  }
+  std::vector<char> seed_source;
+  // Sources by position in `sources` (ids ascending), points with their keyframe's source id.
+  std::vector<ResidualSource> sources;
+  std::vector<std::uint64_t> keyframe_of;
+  std::vector<ResidualPoint> points;
+  std::vector<double> point_range;
+  for (const KeyframeInfo& k : keyframes)
+  {
+    const auto it = scans_.find(k.index);
+    if (it == scans_.end()) continue;
+    const Stored& st = *it->second;
+    ResidualSource src;
+    src.id = static_cast<std::uint32_t>(sources.size());
+    src.laser = k.pose;
+    src.angles = st.angles;
+    src.ranges = st.ranges;
+    src.max_range = st.max_range;
+    for (std::size_t j = 0; j < st.residual.size(); ++j)
+    {
+      const std::uint32_t b = st.residual[j];
+      const double r = st.ranges[b];
+      ResidualPoint w;
+      w.p = k.pose.apply(Vec2(r * std::cos(st.angles[b]), r * std::sin(st.angles[b])));
+      const double across =
+          params_.pose_sigma * params_.pose_sigma + (r * params_.heading_sigma) * (r * params_.heading_sigma);
+      const double sigma = std::sqrt(params_.sensor.sigma(r) * params_.sensor.sigma(r) + across);
+      // Explained by the map: the wall is mapped already.
+      const double band = params_.explained_sigmas * sigma;
+      const auto explains = [&](std::uint32_t i)
+      {
+        // Only a face turned to the keyframe: the other face of a thin wall is not this one.
+        const Segment2& m = map[i].segment;
+        const Vec2 d = m.end - m.start, to_laser = k.pose.translation() - m.start;
+        return d.x() * to_laser.y() - d.y() * to_laser.x() > 0.0 && onSegment(w.p, m, band);
+      };
+      const auto near = faces_near.find(key(index_of(w.p.x()), index_of(w.p.y())));
+      if (near != faces_near.end() && std::any_of(near->second.begin(), near->second.end(), explains))
+        continue;
+      w.sigma = static_cast<float>(sigma);
+      w.gap = st.residual_gap[j];
+      w.source = src.id;
+      points.push_back(w);
+      point_range.push_back(r);
+    }
+    keyframe_of.push_back(k.index);
+    sources.push_back(std::move(src));
+    const auto before = searched_.find(k.index);
+    const bool moved =
+        before == searched_.end() ||
+        (before->second.translation() - k.pose.translation()).norm() > params_.pose_sigma ||
+        std::abs(linemap::normalizeAngle(before->second.theta - k.pose.theta)) > params_.heading_sigma;
+    seed_source.push_back(moved ? 1 : 0);
+    searched_[k.index] = k.pose;
+  }
+
+  ResidualLineFinder finder(params_.lines);
+  finder.index(points, sources);
+  std::vector<KeyframeOriginals> out;
+  std::map<std::uint64_t, std::size_t> out_slot;
+  for (std::size_t seed = 0; seed < points.size(); ++seed)
+  {
+    ResidualLine line;
+    if (!seed_source[points[seed].source] || !finder.grow(seed, line)) continue;
+    if (lines) lines->emplace_back(line.start, line.end);
+    // Each keyframe's part: the span of its points along the line, widened by half a beam's footprint
+    // at each end (one return stands for that much wall), within the line.
+    const Vec2 dir = (line.end - line.start).normalized();
+    const double length = (line.end - line.start).norm();
+    std::map<std::uint32_t, std::pair<double, double>> span;
+    for (const std::uint32_t m : line.members)
+    {
+      const double t = (points[m].p - line.start).dot(dir);
+      const ResidualSource& src = sources[points[m].source];
+      const double half = 0.5 * point_range[m] * scans_.at(keyframe_of[src.id])->beam_spacing;
+      auto [it, fresh] = span.emplace(src.id, std::make_pair(t - half, t + half));
+      if (!fresh)
+      {
+        it->second.first = std::min(it->second.first, t - half);
+        it->second.second = std::max(it->second.second, t + half);
+      }
+    }
+    for (const auto& [id, range] : span)
+    {
+      const double t0 = std::max(0.0, range.first), t1 = std::min(length, range.second);
+      if (!(t1 > t0)) continue;
+      const Pose2 to_laser = sources[id].laser.inverse();
+      const Segment2 part(to_laser.apply(line.start + dir * t0), to_laser.apply(line.start + dir * t1));
+      auto [slot, fresh] = out_slot.emplace(keyframe_of[id], out.size());
+      if (fresh) out.push_back({keyframe_of[id], {}});
+      out[slot->second].segments.push_back(part);
+    }
+  }
+  return out;
+}
+
+}  // namespace line_map_merging
