@@ -185,6 +185,7 @@ TEST(MapLevelLines, ThroughTheMapperTheLineIsOriginalsOfItsKeyframesAndMovesWith
   OnlineMapperParams params;
   params.keyframe_source = KeyframeSource::kTf;
   params.gate.distance = 0.1;
+  params.map_level.every_keyframes = 0;  // the pass is called below
   OnlineMapper mapper(makeMerger("cae", linemap::ParamSet()), params);
   std::mt19937 rng(3);
   const std::vector<KeyframeInfo> keyframes = drive();
@@ -217,6 +218,27 @@ TEST(MapLevelLines, ThroughTheMapperTheLineIsOriginalsOfItsKeyframesAndMovesWith
   ASSERT_EQ(after.size(), 1u);
   EXPECT_NEAR(after[0].segment.start.x(), 24.5, 0.03);
   EXPECT_NEAR(after[0].segment.end.x(), 24.5, 0.03);
+}
+
+TEST(MapLevelLines, TheMapperSearchesEveryFiftyKeyframesWithoutATrajectory)
+{
+  OnlineMapperParams params;
+  params.keyframe_source = KeyframeSource::kTf;
+  params.gate.distance = 0.1;
+  ASSERT_EQ(params.map_level.every_keyframes, 50);
+  OnlineMapper mapper(makeMerger("cae", linemap::ParamSet()), params);
+  std::mt19937 rng(3);
+  for (const KeyframeInfo& k : drive())
+  {
+    StampedScan scan;
+    scan.stamp = 1.0 + static_cast<double>(k.index);
+    scan.laser = k.pose;
+    scan.beams = std::make_shared<KeyframeScan>(cast(k.pose, {kFarWall}, Laser(), rng));
+    mapper.addScan(scan);
+    // The pass comes with the 50th keyframe, not before.
+    EXPECT_EQ(mapper.counters().map_level_passes, k.index + 1 >= 50 ? 1u : 0u) << "keyframe " << k.index;
+  }
+  EXPECT_EQ(mapper.merger().map().size(), 1u);
 }
 
 TEST(MapLevelLines, BadParametersAreNamed)

@@ -64,7 +64,6 @@ FleetDrive driveFleet(line_map_merging::OnlineMapper& mapper, line_map_merging::
     for (; next < f.schedule.trajectories.size() && f.schedule.trajectories[next].stamp <= scan.stamp; ++next)
       mapper.addTrajectory(f.schedule.trajectories[next].poses, *robot);
   }
-  mapper.extractMapLevel();  // the input ends
   return out;
 }
 

@@ -100,8 +100,6 @@ std::size_t driveOnline(line_map_merging::OnlineMapper& mapper, const Recording&
       if (hooks.trajectory) hooks.trajectory(next, schedule.trajectories[next]);
     }
   }
-  // The input ends: the map-level lines of the keyframes since the last trajectory.
-  mapper.extractMapLevel();
   return next;
 }
 

@@ -26,6 +26,7 @@ MapLevelParams MapLevelParams::fromParams(const linemap::ParamSet& ps)
   MapLevelParams p;
   const std::string prefix = "map_level/";
   p.enabled = ps.getBool(prefix + "enabled", p.enabled);
+  p.every_keyframes = intParamAtLeast(ps, prefix + "every_keyframes", p.every_keyframes, 0);
   linemap::ParamSet sensor;
   for (const char* key : {"range_sigma", "range_sigma_per_m", "gap_incidence"})
     if (ps.has(prefix + key)) sensor.set(key, ps.values().at(prefix + key));
@@ -40,6 +41,7 @@ MapLevelParams MapLevelParams::fromParams(const linemap::ParamSet& ps)
   p.pose_sigma = nonNegativeParam(ps, prefix + "pose_sigma", p.pose_sigma);
   p.heading_sigma = nonNegativeParam(ps, prefix + "heading_sigma", p.heading_sigma);
   p.explained_sigmas = positiveParam(ps, prefix + "explained_sigmas", p.explained_sigmas);
+  p.map_distance = nonNegativeParam(ps, prefix + "map_distance", p.map_distance);
   ResidualLineParams& l = p.lines;
   l.band_sigmas = positiveParam(ps, prefix + "band_sigmas", l.band_sigmas);
   l.seed_radius = positiveParam(ps, prefix + "seed_radius", l.seed_radius);
@@ -118,8 +120,9 @@ std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<Keyframe
                                                       const std::vector<MapSegment>& map,
                                                       std::vector<Segment2>* lines)
 {
-  // The map's faces in a grid of cells, each listing the segments within reach of it.
-  const double cell = 2.0, reach = params_.explained_sigmas * 0.5;  // [m]: a band wider than 0.5 m is no wall
+  // The map's faces in a grid of 2 m cells, each listing the segments within reach of it (a point's
+  // sigma beyond 0.5 m would be no wall's).
+  const double cell = 2.0, reach = std::max(params_.explained_sigmas * 0.5, params_.map_distance);
   std::unordered_map<std::int64_t, std::vector<std::uint32_t>> faces_near;
   const auto key = [cell](std::int64_t ix, std::int64_t iy) { return (ix << 32) ^ (iy & 0xffffffffLL); };
   const auto index_of = [cell](double v) { return static_cast<std::int64_t>(std::floor(v / cell)); };
@@ -136,17 +139,47 @@ std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<Keyframe
           faces_near[key(ix, iy)].push_back(static_cast<std::uint32_t>(i));
       }
   }
-  std::vector<char> seed_source;
-  // Sources by position in `sources` (ids ascending), points with their keyframe's source id.
-  std::vector<ResidualSource> sources;
-  std::vector<std::uint64_t> keyframe_of;
-  std::vector<ResidualPoint> points;
-  std::vector<double> point_range;
+  // Which keyframes are new or moved (their points seed lines), and where: a line through their
+  // points lies within range of them, and so do the other keyframes that saw it.
+  std::vector<const KeyframeInfo*> taking_part;
+  std::vector<char> seeding;
+  bool any_seeding = false;
+  Vec2 lo = Vec2::Constant(INFINITY), hi = Vec2::Constant(-INFINITY);
+  double reach_of_seeds = 0.0;
   for (const KeyframeInfo& k : keyframes)
   {
     const auto it = scans_.find(k.index);
     if (it == scans_.end()) continue;
-    const Stored& st = *it->second;
+    const auto before = searched_.find(k.index);
+    const bool moved =
+        before == searched_.end() ||
+        (before->second.translation() - k.pose.translation()).norm() > params_.pose_sigma ||
+        std::abs(linemap::normalizeAngle(before->second.theta - k.pose.theta)) > params_.heading_sigma;
+    searched_[k.index] = k.pose;
+    taking_part.push_back(&k);
+    seeding.push_back(moved ? 1 : 0);
+    if (!moved) continue;
+    any_seeding = true;
+    lo = lo.cwiseMin(k.pose.translation());
+    hi = hi.cwiseMax(k.pose.translation());
+    reach_of_seeds = std::max(reach_of_seeds, 2.0 * it->second->max_range);
+  }
+  if (!any_seeding) return {};
+  lo -= Vec2::Constant(reach_of_seeds);
+  hi += Vec2::Constant(reach_of_seeds);
+
+  // Sources by position in `sources` (ids ascending), points with their keyframe's source id.
+  std::vector<char> seed_source;
+  std::vector<ResidualSource> sources;
+  std::vector<std::uint64_t> keyframe_of;
+  std::vector<ResidualPoint> points;
+  std::vector<double> point_range;
+  for (std::size_t part = 0; part < taking_part.size(); ++part)
+  {
+    const KeyframeInfo& k = *taking_part[part];
+    const Vec2 at = k.pose.translation();
+    if (at.x() < lo.x() || at.y() < lo.y() || at.x() > hi.x() || at.y() > hi.y()) continue;
+    const Stored& st = *scans_.at(k.index);
     ResidualSource src;
     src.id = static_cast<std::uint32_t>(sources.size());
     src.laser = k.pose;
@@ -163,7 +196,7 @@ std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<Keyframe
           params_.pose_sigma * params_.pose_sigma + (r * params_.heading_sigma) * (r * params_.heading_sigma);
       const double sigma = std::sqrt(params_.sensor.sigma(r) * params_.sensor.sigma(r) + across);
       // Explained by the map: the wall is mapped already.
-      const double band = params_.explained_sigmas * sigma;
+      const double band = std::max(params_.explained_sigmas * sigma, params_.map_distance);
       const auto explains = [&](std::uint32_t i)
       {
         // Only a face turned to the keyframe: the other face of a thin wall is not this one.
@@ -182,13 +215,7 @@ std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<Keyframe
     }
     keyframe_of.push_back(k.index);
     sources.push_back(std::move(src));
-    const auto before = searched_.find(k.index);
-    const bool moved =
-        before == searched_.end() ||
-        (before->second.translation() - k.pose.translation()).norm() > params_.pose_sigma ||
-        std::abs(linemap::normalizeAngle(before->second.theta - k.pose.theta)) > params_.heading_sigma;
-    seed_source.push_back(moved ? 1 : 0);
-    searched_[k.index] = k.pose;
+    seed_source.push_back(seeding[part]);
   }
 
   ResidualLineFinder finder(params_.lines);

@@ -109,6 +109,9 @@ bool OnlineMapper::merge(std::size_t lane, double stamp, const linemap::Pose2& l
   keyframe_order_.push_back(stamp);
   ++next_index_;
   afterMapChange();
+  if (map_level_ && params_.map_level.every_keyframes > 0 &&
+      ++keyframes_since_map_level_ >= params_.map_level.every_keyframes)
+    extractMapLevel();
   return true;
 }
 
@@ -349,6 +352,7 @@ bool OnlineMapper::adjustTo(std::size_t lane, const std::vector<StampedPose>& no
 bool OnlineMapper::extractMapLevel()
 {
   if (!map_level_ || map_level_->keyframes() == 0) return false;
+  keyframes_since_map_level_ = 0;
   ++counters_.map_level_passes;
   std::vector<linemap::Segment2> lines;
   const std::vector<KeyframeOriginals> found =
@@ -379,6 +383,7 @@ void OnlineMapper::clearKeyframes()
 {
   merger_->reset();
   if (map_level_) map_level_->clear();
+  keyframes_since_map_level_ = 0;
   continuous_.clear();
   lane_of_.clear();
   for (auto& [index, l] : lanes_) l.keyframe_stamps.clear();
@@ -479,6 +484,7 @@ OnlineMapper::OnlineMapper(const OnlineMapper& other, std::unique_ptr<Merger> me
     : merger_(std::move(merger)),
       params_(other.params_),
       map_level_(other.map_level_),
+      keyframes_since_map_level_(other.keyframes_since_map_level_),
       lanes_(other.lanes_),
       continuous_(other.continuous_),
       lane_of_(other.lane_of_),

@@ -25,6 +25,8 @@ namespace line_map_merging
 struct MapLevelParams
 {
   bool enabled = true;
+  /// Keyframes merged between two passes that no trajectory triggered (0: only after trajectories).
+  int every_keyframes = 50;
   /// The laser's noise model ("map_level/range_sigma", "map_level/range_sigma_per_m",
   /// "map_level/gap_incidence": the keys of line_extraction.yaml without the prefix).
   line_extraction::SensorModel sensor;
@@ -34,6 +36,9 @@ struct MapLevelParams
   double heading_sigma = 0.003;  ///< [rad]
   /// A return lies on a segment (its keyframe's own, or the map's) within this many of its sigmas.
   double explained_sigmas = 3.0;
+  /// ... and on a map segment within this distance at least [m]: a line closer to it than the
+  /// fusion's d_max would only be the same wall drawn again.
+  double map_distance = 0.10;
   /// The tests of a line; min_sources counts keyframes. A line must run through its points over
   /// min_fill of its length at fill_bin (the map's resolution): a wall is seen all along, a few far
   /// returns or a row of posts are not.
@@ -84,7 +89,8 @@ class MapLevelLines
   /// keyframes registered at their poses in `keyframes` (those unknown here are left out): per
   /// keyframe that saw a line, the part it saw. `lines` (optional) receives the lines, map frame.
   /// A line is grown from the points of keyframes new since the last call or moved by more than
-  /// their registration error: from the others it was sought before, with the same neighbours.
+  /// their registration error: from the others it was sought before, with the same neighbours. Only
+  /// keyframes within twice their range of those take part.
   std::vector<KeyframeOriginals> extract(const std::vector<KeyframeInfo>& keyframes,
                                          const std::vector<MapSegment>& map,
                                          std::vector<linemap::Segment2>* lines = nullptr);

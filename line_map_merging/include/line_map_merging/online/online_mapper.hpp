@@ -113,8 +113,9 @@ class OnlineMapper
   ScanOutcome addScan(const StampedScan& scan);
 
   /// Looks for map-level lines (MapLevelLines) in the keyframes' scans at their current poses and
-  /// merges each keyframe's part as an original of that keyframe. Done after every adjustment; the
-  /// caller calls it when the input ends (linemap_batch). Whether the map changed.
+  /// merges each keyframe's part as an original of that keyframe. Done after every adjustment and
+  /// every map_level.every_keyframes keyframes, so that the same input gives the same map live and
+  /// in linemap_batch. Whether the map changed.
   bool extractMapLevel();
 
   /// Applies a trajectory of base poses (map frame) of the back end's nodes, at any stamps: each
@@ -261,6 +262,7 @@ class OnlineMapper
   std::unique_ptr<Merger> merger_;
   OnlineMapperParams params_;
   std::optional<MapLevelLines> map_level_;  ///< when params_.map_level.enabled
+  int keyframes_since_map_level_ = 0;
   std::map<std::size_t, Lane> lanes_;
   std::unordered_map<std::uint64_t, linemap::Pose2> continuous_;  ///< keyframe index -> laser, same frame
   std::unordered_map<std::uint64_t, std::size_t> lane_of_;        ///< keyframe index -> lane
