@@ -420,6 +420,8 @@ MergerHolder runOnline(const BatchSetup& setup, const SharedEvaluation& shared, 
   run.adjustments = counters.adjustments;
   run.rebuilds = counters.rebuilds;
   run.retired = counters.retired;
+  run.map_level_lines = counters.map_level_lines;
+  run.map_level_ms = counters.map_level_ms;
   run.adjust_ms = timed.adjustTime();
   run.per_frame_ms = linemap::median(timed.addTimes());
   run.per_frame_p99_ms = linemap::percentile(timed.addTimes(), 0.99);
@@ -457,14 +459,17 @@ MergerHolder runOffline(const BatchSetup& setup, MergerRun& run)
   bar.finish();
   if (setup.mapper.map_level.enabled)
   {
-    // The map-level lines over every keyframe at its final pose, as the online path's last pass.
+    // The map-level lines over every keyframe at its final pose, in one pass.
     const auto start = Clock::now();
     line_map_merging::MapLevelLines map_level(setup.mapper.map_level);
     for (const Frame& f : setup.frames)
       map_level.addKeyframe(f.scan, *keyframeScan(rec, f.scan), setup.lines[f.scan].segments);
-    for (const auto& k : map_level.extract(holder.offline->keyframes(), holder.offline->map()))
+    std::vector<Segment2> lines;
+    for (const auto& k : map_level.extract(holder.offline->keyframes(), holder.offline->map(), &lines))
       holder.offline->addOriginals(k.keyframe, k.segments);
-    run.total_ms += linemap::millisecondsSince(start);
+    run.map_level_lines = lines.size();
+    run.map_level_ms = linemap::millisecondsSince(start);
+    run.total_ms += run.map_level_ms;
   }
   return holder;
 }

@@ -194,6 +194,8 @@ void emitRunning(YAML::Emitter& out, const MergerRun& r)
   field(out, "adjustments", r.adjustments);
   field(out, "rebuilds", r.rebuilds);
   field(out, "retired_originals", r.retired);
+  field(out, "map_level_lines", r.map_level_lines);
+  measure(out, "map_level_ms", r.map_level_ms);
   measure(out, "evaluation_ms", r.evaluation_ms);
   field(out, "online", r.online);
   field(out, "provenance", r.provenance);
@@ -405,6 +407,9 @@ void mergerNote(std::ostringstream& md, const MergerRun& r)
   if (r.adjustments) md << "; " << r.adjustments << " adjustments, " << fixed(r.adjust_ms, 1) << " ms";
   if (r.rebuilds) md << "; rebuilt from the nodes of the first trajectory";
   if (r.retired) md << "; " << r.retired << " originals of the saved map retired (seen through)";
+  if (r.map_level_lines)
+    md << "; " << r.map_level_lines << " map-level lines (" << fixed(r.map_level_ms, 1)
+       << " ms of the merging time)";
   if (!r.step_ms.empty())
   {
     md << "; steps";

@@ -105,6 +105,7 @@ void MapLevelLines::addKeyframe(std::uint64_t index, const KeyframeScan& scan,
       if (j < n && std::abs(beam[j] - beam[k]) == 1)
         gap = std::max(gap, sensor.neighbourGap(std::min(r, stored->ranges[j]), stored->beam_spacing));
     stored->residual.push_back(static_cast<std::uint32_t>(k));
+    stored->residual_at.push_back(p);
     stored->residual_gap.push_back(static_cast<float>(gap));
   }
   if (n > 1 && stored->angles.front() > stored->angles.back())  // a negative increment: increasing angle
@@ -191,7 +192,7 @@ std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<Keyframe
       const std::uint32_t b = st.residual[j];
       const double r = st.ranges[b];
       ResidualPoint w;
-      w.p = k.pose.apply(Vec2(r * std::cos(st.angles[b]), r * std::sin(st.angles[b])));
+      w.p = k.pose.apply(st.residual_at[j]);
       const double across =
           params_.pose_sigma * params_.pose_sigma + (r * params_.heading_sigma) * (r * params_.heading_sigma);
       const double sigma = std::sqrt(params_.sensor.sigma(r) * params_.sensor.sigma(r) + across);

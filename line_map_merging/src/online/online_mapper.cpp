@@ -354,6 +354,7 @@ bool OnlineMapper::extractMapLevel()
   if (!map_level_ || map_level_->keyframes() == 0) return false;
   keyframes_since_map_level_ = 0;
   ++counters_.map_level_passes;
+  const auto t0 = std::chrono::steady_clock::now();
   std::vector<linemap::Segment2> lines;
   const std::vector<KeyframeOriginals> found =
       map_level_->extract(merger_->keyframes(), merger_->map(), &lines);
@@ -366,6 +367,7 @@ bool OnlineMapper::extractMapLevel()
     counters_.bad_segments += result.rejected;
   }
   counters_.map_level_originals += merged;
+  counters_.map_level_ms += linemap::millisecondsSince(t0);
   if (merged == 0) return false;
   afterMapChange();
   return true;
@@ -621,6 +623,7 @@ std::vector<std::pair<std::string, std::string>> OnlineMapper::diagnostics() con
       {"map-level passes", n(c.map_level_passes)},
       {"map-level lines", n(c.map_level_lines)},
       {"map-level originals", n(c.map_level_originals)},
+      {"map-level time [ms]", text(c.map_level_ms)},
       {"bad segments", n(c.bad_segments)},
       {"bad trajectory poses", n(c.bad_poses)},
       {"unmatched trajectory poses", n(c.unmatched_poses)},

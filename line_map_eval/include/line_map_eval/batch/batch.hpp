@@ -130,11 +130,13 @@ struct MergerRun
   LengthCoverage length_coverage;        ///< of the originals extracted from the keyframes
   RedundancyResult redundancy;           ///< pairs of map segments meeting the fusion conditions
   std::vector<line_map_merging::CrossingPair> crossing_pairs;  ///< map segments crossing in an X
-  std::string error_assignment;  ///< "provenance" or "nearest segment meeting the fusion conditions"
-  std::size_t trajectories = 0;  ///< trajectories fed to the OnlineMapper (online mergers)
-  std::size_t adjustments = 0;   ///< adjust() calls the OnlineMapper made
-  std::size_t rebuilds = 0;      ///< maps made again from the nodes of the first trajectory
-  std::size_t retired = 0;       ///< originals of a saved map retired as seen through (see_through)
+  std::string error_assignment;     ///< "provenance" or "nearest segment meeting the fusion conditions"
+  std::size_t trajectories = 0;     ///< trajectories fed to the OnlineMapper (online mergers)
+  std::size_t adjustments = 0;      ///< adjust() calls the OnlineMapper made
+  std::size_t rebuilds = 0;         ///< maps made again from the nodes of the first trajectory
+  std::size_t retired = 0;          ///< originals of a saved map retired as seen through (see_through)
+  std::size_t map_level_lines = 0;  ///< lines the map-level passes found (their parts are originals)
+  double map_level_ms = 0.0;        ///< [ms] the map-level passes, part of total_ms
   std::optional<double> quality_before_adjust;  ///< [%] map just before the last trajectory
   std::optional<GroundTruthResult> ground_truth;
   double per_frame_ms = std::numeric_limits<double>::quiet_NaN();      ///< median addKeyframe, online only

@@ -104,9 +104,10 @@ class MapLevelLines
   {
     std::vector<double> angles, ranges;  ///< valid returns, increasing angle
     double max_range = 0.0;
-    std::vector<std::uint32_t> residual;  ///< indices into angles / ranges
-    std::vector<float> residual_gap;      ///< largest gap to a neighbour on one surface [m]
-    double beam_spacing = 0.0;            ///< |angle_increment| [rad]
+    std::vector<std::uint32_t> residual;     ///< indices into angles / ranges
+    std::vector<linemap::Vec2> residual_at;  ///< their points in the laser frame
+    std::vector<float> residual_gap;         ///< largest gap to a neighbour on one surface [m]
+    double beam_spacing = 0.0;               ///< |angle_increment| [rad]
   };
 
   MapLevelParams params_;

@@ -97,6 +97,7 @@ struct MapperCounters
   std::size_t handled =
       0;  ///< segment sets finished with: given to addScan, or counted dropped by the caller
   std::size_t map_level_passes = 0, map_level_lines = 0, map_level_originals = 0;
+  double map_level_ms = 0.0;  ///< every map-level pass together, search and merge of its originals
   double last_otm_ms = 0.0, last_gma_ms = 0.0;
 };
 
