@@ -21,6 +21,21 @@ std::int64_t cellIndex(double v, double cell)
 }
 }  // namespace
 
+std::shared_ptr<const ResidualReturns> ResidualReturns::of(std::vector<double> angles,
+                                                           std::vector<double> ranges)
+{
+  auto r = std::make_shared<ResidualReturns>();
+  if (angles.size() > 1 && angles.front() > angles.back())  // a negative increment
+  {
+    std::reverse(angles.begin(), angles.end());
+    std::reverse(ranges.begin(), ranges.end());
+  }
+  r->angles = std::move(angles);
+  r->ranges = std::move(ranges);
+  for (const double v : r->ranges) r->max_range = std::max(r->max_range, v);
+  return r;
+}
+
 void ResidualLineFinder::index(std::vector<ResidualPoint>& points, const std::vector<ResidualSource>& sources)
 {
   points_ = &points;
@@ -36,15 +51,16 @@ void ResidualLineFinder::index(std::vector<ResidualPoint>& points, const std::ve
   auto key = [&](std::uint32_t i)
   { return cellKey(cellIndex(points[i].p.x(), cell), cellIndex(points[i].p.y(), cell)); };
   cell_order_.resize(points.size());
-  cell_keys_.resize(points.size());
+  cells_.clear();
   std::vector<std::pair<std::int64_t, std::uint32_t>> keyed(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
     keyed[i] = {key(static_cast<std::uint32_t>(i)), static_cast<std::uint32_t>(i)};
   std::sort(keyed.begin(), keyed.end());
   for (std::size_t k = 0; k < keyed.size(); ++k)
   {
-    cell_keys_[k] = keyed[k].first;
     cell_order_[k] = keyed[k].second;
+    auto [at, fresh] = cells_.emplace(keyed[k].first, std::make_pair(static_cast<std::uint32_t>(k), 0u));
+    at->second.second = static_cast<std::uint32_t>(k) + 1;
   }
 }
 
@@ -74,9 +90,9 @@ void ResidualLineFinder::forEachNear(const Vec2& origin, const Vec2& dir, double
       const Vec2 rel = centre - origin;
       const double t = rel.dot(dir);
       if (t < t0 - cell || t > t1 + cell || std::abs(rel.dot(normal)) > reach) continue;
-      const auto range = std::equal_range(cell_keys_.begin(), cell_keys_.end(), cellKey(ix, iy));
-      for (auto it = range.first; it != range.second; ++it)
-        f(cell_order_[static_cast<std::size_t>(it - cell_keys_.begin())]);
+      const auto cell_at = cells_.find(cellKey(ix, iy));
+      if (cell_at == cells_.end()) continue;
+      for (std::uint32_t k = cell_at->second.first; k < cell_at->second.second; ++k) f(cell_order_[k]);
     }
 }
 
@@ -116,10 +132,11 @@ bool ResidualLineFinder::seedLine(std::size_t seed, LineNormal& best) const
   for (std::int64_t dx = -1; dx <= 1; ++dx)
     for (std::int64_t dy = -1; dy <= 1; ++dy)
     {
-      const auto range = std::equal_range(cell_keys_.begin(), cell_keys_.end(), cellKey(cx + dx, cy + dy));
-      for (auto it = range.first; it != range.second; ++it)
+      const auto cell_at = cells_.find(cellKey(cx + dx, cy + dy));
+      if (cell_at == cells_.end()) continue;
+      for (std::uint32_t k = cell_at->second.first; k < cell_at->second.second; ++k)
       {
-        const std::uint32_t j = cell_order_[static_cast<std::size_t>(it - cell_keys_.begin())];
+        const std::uint32_t j = cell_order_[k];
         if (!points[j].used && (points[j].p - s.p).squaredNorm() <= radius * radius) near.push_back(j);
       }
     }
@@ -307,9 +324,11 @@ bool ResidualLineFinder::seenThrough(const Vec2& a, const Vec2& b, double band) 
   std::size_t on = 0, through = 0;
   for (const ResidualSource& src : *sources_)
   {
-    if (src.angles.empty() ||
-        linemap::distanceToSegment(src.laser.translation(), a, b) > src.max_range + band)
+    if (!src.returns || src.returns->angles.empty() ||
+        linemap::distanceToSegment(src.laser.translation(), a, b) > src.returns->max_range + band)
       continue;
+    const std::vector<double>& angles = src.returns->angles;
+    const std::vector<double>& ranges = src.returns->ranges;
     const linemap::Pose2 to_laser = src.laser.inverse();
     const Vec2 la = to_laser.apply(a), lb = to_laser.apply(b);
     const Vec2 d = lb - la;
@@ -326,11 +345,11 @@ bool ResidualLineFinder::seenThrough(const Vec2& a, const Vec2& b, double band) 
     for (int turn = -1; turn <= 1; ++turn)
     {
       const double shift = 2.0 * linemap::kPi * turn;
-      const auto first = std::lower_bound(src.angles.begin(), src.angles.end(), from + shift);
-      const auto last = std::upper_bound(first, src.angles.end(), to + shift);
+      const auto first = std::lower_bound(angles.begin(), angles.end(), from + shift);
+      const auto last = std::upper_bound(first, angles.end(), to + shift);
       for (auto it = first; it != last; ++it)
       {
-        const std::size_t i = static_cast<std::size_t>(it - src.angles.begin());
+        const std::size_t i = static_cast<std::size_t>(it - angles.begin());
         const Vec2 u(std::cos(*it), std::sin(*it));
         // Ray u * s meets la + d * t where s u - t d = la.
         const double det = d.x() * u.y() - d.y() * u.x();
@@ -338,9 +357,9 @@ bool ResidualLineFinder::seenThrough(const Vec2& a, const Vec2& b, double band) 
         const double t = (u.x() * la.y() - u.y() * la.x()) / det;
         const double s = (d.x() * la.y() - d.y() * la.x()) / det;
         if (s <= 0.0 || t * length < margin || (1.0 - t) * length < margin) continue;
-        if (src.ranges[i] > s + band)
+        if (ranges[i] > s + band)
           ++through;
-        else if (src.ranges[i] >= s - band)
+        else if (ranges[i] >= s - band)
           ++on;
       }
     }

@@ -116,14 +116,7 @@ void SubmapExtractor::addResiduals(const PreparedScan& scan, const ExtractionRes
   ResidualSource source;
   source.id = id;
   source.laser = laser;
-  source.angles = scan.angles;
-  source.ranges = scan.ranges;
-  if (source.angles.size() > 1 && source.angles.front() > source.angles.back())  // a negative increment
-  {
-    std::reverse(source.angles.begin(), source.angles.end());
-    std::reverse(source.ranges.begin(), source.ranges.end());
-  }
-  for (const double r : source.ranges) source.max_range = std::max(source.max_range, r);
+  source.returns = ResidualReturns::of(scan.angles, scan.ranges);
   scans_.push_back(std::move(source));
   scan_paths_.push_back(path_);
   for (std::size_t i = 0; i < scan.size(); ++i)

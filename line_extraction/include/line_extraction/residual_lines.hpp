@@ -6,6 +6,9 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "line_extraction/line_fit.hpp"
@@ -24,14 +27,23 @@ struct ResidualPoint
   bool used = false;         ///< already part of a line
 };
 
+/// Every valid return of a scan, in increasing angle (laser frame).
+struct ResidualReturns
+{
+  std::vector<double> angles, ranges;
+  double max_range = 0.0;  ///< the largest of `ranges`
+
+  /// From a scan's valid returns in beam order (either increasing or decreasing angle).
+  static std::shared_ptr<const ResidualReturns> of(std::vector<double> angles, std::vector<double> ranges);
+};
+
 /// A scan the points came from: where the laser stood and every return it had, for the test that
-/// a line is not seen through.
+/// a line is not seen through (shared: a scan is registered again and again).
 struct ResidualSource
 {
   std::uint32_t id = 0;
-  linemap::Pose2 laser;                ///< in the fixed frame
-  std::vector<double> angles, ranges;  ///< of every valid return, in increasing angle
-  double max_range = 0.0;              ///< the largest of `ranges`
+  linemap::Pose2 laser;  ///< in the fixed frame
+  std::shared_ptr<const ResidualReturns> returns;
 };
 
 /// The tests a line must pass (keys of the "submap" and "map_level" blocks).
@@ -102,8 +114,9 @@ class ResidualLineFinder
   const std::vector<ResidualSource>* sources_ = nullptr;
   double max_sigma_ = 0.0, max_gap_ = 0.0;  ///< over all points
   // Hash grid over the points, cell = seed_radius: keys sorted, with the point of each.
-  std::vector<std::int64_t> cell_keys_;
   std::vector<std::uint32_t> cell_order_;
+  /// Per occupied cell, its points' range in cell_order_.
+  std::unordered_map<std::int64_t, std::pair<std::uint32_t, std::uint32_t>> cells_;
 };
 
 }  // namespace line_extraction

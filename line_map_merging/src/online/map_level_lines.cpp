@@ -41,6 +41,9 @@ MapLevelParams MapLevelParams::fromParams(const linemap::ParamSet& ps)
   p.pose_sigma = nonNegativeParam(ps, prefix + "pose_sigma", p.pose_sigma);
   p.heading_sigma = nonNegativeParam(ps, prefix + "heading_sigma", p.heading_sigma);
   p.explained_sigmas = positiveParam(ps, prefix + "explained_sigmas", p.explained_sigmas);
+  p.reseed_distance = nonNegativeParam(ps, prefix + "reseed_distance", p.reseed_distance);
+  p.reseed_angle = nonNegativeParam(ps, prefix + "reseed_angle", p.reseed_angle);
+  p.search_margin = positiveParam(ps, prefix + "search_margin", p.search_margin);
   p.map_distance = nonNegativeParam(ps, prefix + "map_distance", p.map_distance);
   ResidualLineParams& l = p.lines;
   l.band_sigmas = positiveParam(ps, prefix + "band_sigmas", l.band_sigmas);
@@ -78,23 +81,23 @@ void MapLevelLines::addKeyframe(std::uint64_t index, const KeyframeScan& scan,
                                 const std::vector<Segment2>& segments)
 {
   auto stored = std::make_shared<Stored>();
+  std::vector<double> angles, ranges;
   std::vector<int> beam;  // beam index of each valid return
   for (std::size_t i = 0; i < scan.ranges.size(); ++i)
   {
     const double r = scan.ranges[i];
     if (!std::isfinite(r) || r <= scan.range_min || r >= scan.range_max) continue;
-    stored->angles.push_back(scan.angle_min + static_cast<double>(i) * scan.angle_increment);
-    stored->ranges.push_back(r);
+    angles.push_back(scan.angle_min + static_cast<double>(i) * scan.angle_increment);
+    ranges.push_back(r);
     beam.push_back(static_cast<int>(i));
-    stored->max_range = std::max(stored->max_range, r);
   }
   stored->beam_spacing = std::abs(scan.angle_increment);
   const line_extraction::SensorModel& sensor = params_.sensor;
-  const std::size_t n = stored->ranges.size();
+  const std::size_t n = ranges.size();
   for (std::size_t k = 0; k < n; ++k)
   {
-    const double r = stored->ranges[k];
-    const Vec2 p(r * std::cos(stored->angles[k]), r * std::sin(stored->angles[k]));
+    const double r = ranges[k];
+    const Vec2 p(r * std::cos(angles[k]), r * std::sin(angles[k]));
     const double band = params_.explained_sigmas * sensor.sigma(r);
     if (std::any_of(segments.begin(), segments.end(),
                     [&](const Segment2& s) { return onSegment(p, s, band); }))
@@ -103,96 +106,111 @@ void MapLevelLines::addKeyframe(std::uint64_t index, const KeyframeScan& scan,
     double gap = 0.0;
     for (const std::size_t j : {k - 1, k + 1})
       if (j < n && std::abs(beam[j] - beam[k]) == 1)
-        gap = std::max(gap, sensor.neighbourGap(std::min(r, stored->ranges[j]), stored->beam_spacing));
-    stored->residual.push_back(static_cast<std::uint32_t>(k));
+        gap = std::max(gap, sensor.neighbourGap(std::min(r, ranges[j]), stored->beam_spacing));
     stored->residual_at.push_back(p);
+    stored->residual_range.push_back(static_cast<float>(r));
     stored->residual_gap.push_back(static_cast<float>(gap));
   }
-  if (n > 1 && stored->angles.front() > stored->angles.back())  // a negative increment: increasing angle
-  {
-    std::reverse(stored->angles.begin(), stored->angles.end());
-    std::reverse(stored->ranges.begin(), stored->ranges.end());
-    for (std::uint32_t& k : stored->residual) k = static_cast<std::uint32_t>(n - 1 - k);
-  }
+  stored->returns = line_extraction::ResidualReturns::of(std::move(angles), std::move(ranges));
   scans_[index] = std::move(stored);
 }
+
+namespace
+{
+/// Grows the box lo-hi to hold p.
+void growBox(const Vec2& p, Vec2& lo, Vec2& hi)
+{
+  lo = lo.cwiseMin(p);
+  hi = hi.cwiseMax(p);
+}
+
+bool inBox(const Vec2& p, const Vec2& lo, const Vec2& hi)
+{
+  return p.x() >= lo.x() && p.y() >= lo.y() && p.x() <= hi.x() && p.y() <= hi.y();
+}
+
+double distanceToBox(const Vec2& p, const Vec2& lo, const Vec2& hi)
+{
+  return (p - p.cwiseMax(lo).cwiseMin(hi)).norm();
+}
+}  // namespace
 
 std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<KeyframeInfo>& keyframes,
                                                       const std::vector<MapSegment>& map,
                                                       std::vector<Segment2>* lines)
 {
-  // The map's faces in a grid of 2 m cells, each listing the segments within reach of it (a point's
-  // sigma beyond 0.5 m would be no wall's).
+  // Which keyframes seed lines, and where their points lie: a line through them is sought among the
+  // points within search_margin of those, and judged seen through by the keyframes within range.
+  std::vector<std::pair<const KeyframeInfo*, const Stored*>> known;
+  std::vector<char> seeding;
+  Vec2 lo = Vec2::Constant(INFINITY), hi = Vec2::Constant(-INFINITY);
+  for (const KeyframeInfo& k : keyframes)
+  {
+    const auto it = scans_.find(k.index);
+    if (it == scans_.end()) continue;
+    const auto before = searched_.find(k.index);
+    // A back end nudges every pose a little with each trajectory: only a keyframe that moved by
+    // more than reseed_distance / reseed_angle since it last seeded (a loop closed) seeds again.
+    const bool moved =
+        before == searched_.end() ||
+        (before->second.translation() - k.pose.translation()).norm() > params_.reseed_distance ||
+        std::abs(linemap::normalizeAngle(before->second.theta - k.pose.theta)) > params_.reseed_angle;
+    known.emplace_back(&k, it->second.get());
+    seeding.push_back(moved ? 1 : 0);
+    if (!moved) continue;
+    searched_[k.index] = k.pose;
+    for (const Vec2& local : it->second->residual_at) growBox(k.pose.apply(local), lo, hi);
+  }
+  if (!(lo.x() <= hi.x())) return {};
+  lo -= Vec2::Constant(params_.search_margin);
+  hi += Vec2::Constant(params_.search_margin);
+
+  // The map's faces near the area in a grid of 2 m cells, each listing the segments within reach of it
+  // (a point's sigma beyond 0.5 m would be no wall's).
   const double cell = 2.0, reach = std::max(params_.explained_sigmas * 0.5, params_.map_distance);
   std::unordered_map<std::int64_t, std::vector<std::uint32_t>> faces_near;
-  const auto key = [cell](std::int64_t ix, std::int64_t iy) { return (ix << 32) ^ (iy & 0xffffffffLL); };
+  const auto key = [](std::int64_t ix, std::int64_t iy) { return (ix << 32) ^ (iy & 0xffffffffLL); };
   const auto index_of = [cell](double v) { return static_cast<std::int64_t>(std::floor(v / cell)); };
   for (std::size_t i = 0; i < map.size(); ++i)
   {
     const Segment2& s = map[i].segment;
-    for (std::int64_t ix = index_of(std::min(s.start.x(), s.end.x()) - reach);
-         ix <= index_of(std::max(s.start.x(), s.end.x()) + reach); ++ix)
-      for (std::int64_t iy = index_of(std::min(s.start.y(), s.end.y()) - reach);
-           iy <= index_of(std::max(s.start.y(), s.end.y()) + reach); ++iy)
+    const Vec2 s_lo = s.start.cwiseMin(s.end) - Vec2::Constant(reach);
+    const Vec2 s_hi = s.start.cwiseMax(s.end) + Vec2::Constant(reach);
+    if (s_lo.x() > hi.x() || s_lo.y() > hi.y() || s_hi.x() < lo.x() || s_hi.y() < lo.y()) continue;
+    for (std::int64_t ix = index_of(std::max(s_lo.x(), lo.x())); ix <= index_of(std::min(s_hi.x(), hi.x()));
+         ++ix)
+      for (std::int64_t iy = index_of(std::max(s_lo.y(), lo.y())); iy <= index_of(std::min(s_hi.y(), hi.y()));
+           ++iy)
       {
         const Vec2 centre((static_cast<double>(ix) + 0.5) * cell, (static_cast<double>(iy) + 0.5) * cell);
         if (linemap::distanceToSegment(centre, s.start, s.end) <= reach + cell * 0.7072)
           faces_near[key(ix, iy)].push_back(static_cast<std::uint32_t>(i));
       }
   }
-  // Which keyframes are new or moved (their points seed lines), and where: a line through their
-  // points lies within range of them, and so do the other keyframes that saw it.
-  std::vector<const KeyframeInfo*> taking_part;
-  std::vector<char> seeding;
-  bool any_seeding = false;
-  Vec2 lo = Vec2::Constant(INFINITY), hi = Vec2::Constant(-INFINITY);
-  double reach_of_seeds = 0.0;
-  for (const KeyframeInfo& k : keyframes)
-  {
-    const auto it = scans_.find(k.index);
-    if (it == scans_.end()) continue;
-    const auto before = searched_.find(k.index);
-    const bool moved =
-        before == searched_.end() ||
-        (before->second.translation() - k.pose.translation()).norm() > params_.pose_sigma ||
-        std::abs(linemap::normalizeAngle(before->second.theta - k.pose.theta)) > params_.heading_sigma;
-    searched_[k.index] = k.pose;
-    taking_part.push_back(&k);
-    seeding.push_back(moved ? 1 : 0);
-    if (!moved) continue;
-    any_seeding = true;
-    lo = lo.cwiseMin(k.pose.translation());
-    hi = hi.cwiseMax(k.pose.translation());
-    reach_of_seeds = std::max(reach_of_seeds, 2.0 * it->second->max_range);
-  }
-  if (!any_seeding) return {};
-  lo -= Vec2::Constant(reach_of_seeds);
-  hi += Vec2::Constant(reach_of_seeds);
 
   // Sources by position in `sources` (ids ascending), points with their keyframe's source id.
   std::vector<char> seed_source;
   std::vector<ResidualSource> sources;
+  std::vector<const Stored*> stored_of;
   std::vector<std::uint64_t> keyframe_of;
   std::vector<ResidualPoint> points;
   std::vector<double> point_range;
-  for (std::size_t part = 0; part < taking_part.size(); ++part)
+  for (std::size_t part = 0; part < known.size(); ++part)
   {
-    const KeyframeInfo& k = *taking_part[part];
-    const Vec2 at = k.pose.translation();
-    if (at.x() < lo.x() || at.y() < lo.y() || at.x() > hi.x() || at.y() > hi.y()) continue;
-    const Stored& st = *scans_.at(k.index);
-    ResidualSource src;
-    src.id = static_cast<std::uint32_t>(sources.size());
-    src.laser = k.pose;
-    src.angles = st.angles;
-    src.ranges = st.ranges;
-    src.max_range = st.max_range;
-    for (std::size_t j = 0; j < st.residual.size(); ++j)
+    const KeyframeInfo& k = *known[part].first;
+    const Stored& st = *known[part].second;
+    if (distanceToBox(k.pose.translation(), lo, hi) > st.returns->max_range) continue;
+    const auto src_id = static_cast<std::uint32_t>(sources.size());
+    sources.push_back({src_id, k.pose, st.returns});
+    stored_of.push_back(&st);
+    keyframe_of.push_back(k.index);
+    seed_source.push_back(seeding[part]);
+    for (std::size_t j = 0; j < st.residual_at.size(); ++j)
     {
-      const std::uint32_t b = st.residual[j];
-      const double r = st.ranges[b];
+      const double r = st.residual_range[j];
       ResidualPoint w;
       w.p = k.pose.apply(st.residual_at[j]);
+      if (!inBox(w.p, lo, hi)) continue;
       const double across =
           params_.pose_sigma * params_.pose_sigma + (r * params_.heading_sigma) * (r * params_.heading_sigma);
       const double sigma = std::sqrt(params_.sensor.sigma(r) * params_.sensor.sigma(r) + across);
@@ -210,13 +228,10 @@ std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<Keyframe
         continue;
       w.sigma = static_cast<float>(sigma);
       w.gap = st.residual_gap[j];
-      w.source = src.id;
+      w.source = src_id;
       points.push_back(w);
       point_range.push_back(r);
     }
-    keyframe_of.push_back(k.index);
-    sources.push_back(std::move(src));
-    seed_source.push_back(seeding[part]);
   }
 
   ResidualLineFinder finder(params_.lines);
@@ -236,9 +251,9 @@ std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<Keyframe
     for (const std::uint32_t m : line.members)
     {
       const double t = (points[m].p - line.start).dot(dir);
-      const ResidualSource& src = sources[points[m].source];
-      const double half = 0.5 * point_range[m] * scans_.at(keyframe_of[src.id])->beam_spacing;
-      auto [it, fresh] = span.emplace(src.id, std::make_pair(t - half, t + half));
+      const std::uint32_t id = points[m].source;
+      const double half = 0.5 * point_range[m] * stored_of[id]->beam_spacing;
+      auto [it, fresh] = span.emplace(id, std::make_pair(t - half, t + half));
       if (!fresh)
       {
         it->second.first = std::min(it->second.first, t - half);

@@ -34,6 +34,13 @@ struct MapLevelParams
   /// sqrt(pose_sigma^2 + (r heading_sigma)^2) besides its range noise.
   double pose_sigma = 0.02;      ///< [m]
   double heading_sigma = 0.003;  ///< [rad]
+  /// A keyframe's points seed lines when it is new, and again after it moved this much since (a loop
+  /// closed): lines through them were sought before.
+  double reseed_distance = 0.25;  ///< [m]
+  double reseed_angle = 0.05;     ///< [rad]
+  /// Lines through the seeding points are sought among the points within this of them [m]: a longer
+  /// wall is found in parts, which the merger fuses.
+  double search_margin = 20.0;
   /// A return lies on a segment (its keyframe's own, or the map's) within this many of its sigmas.
   double explained_sigmas = 3.0;
   /// ... and on a map segment within this distance at least [m]: a line closer to it than the
@@ -89,8 +96,8 @@ class MapLevelLines
   /// keyframes registered at their poses in `keyframes` (those unknown here are left out): per
   /// keyframe that saw a line, the part it saw. `lines` (optional) receives the lines, map frame.
   /// A line is grown from the points of keyframes new since the last call or moved by more than
-  /// their registration error: from the others it was sought before, with the same neighbours. Only
-  /// keyframes within twice their range of those take part.
+  /// reseed_distance / reseed_angle since they last seeded: from the others it was sought before. Only
+  /// points within search_margin of those take part, and the keyframes whose range reaches them.
   std::vector<KeyframeOriginals> extract(const std::vector<KeyframeInfo>& keyframes,
                                          const std::vector<MapSegment>& map,
                                          std::vector<linemap::Segment2>* lines = nullptr);
@@ -102,10 +109,9 @@ class MapLevelLines
   /// through) and the unexplained ones (the candidates).
   struct Stored
   {
-    std::vector<double> angles, ranges;  ///< valid returns, increasing angle
-    double max_range = 0.0;
-    std::vector<std::uint32_t> residual;     ///< indices into angles / ranges
-    std::vector<linemap::Vec2> residual_at;  ///< their points in the laser frame
+    std::shared_ptr<const line_extraction::ResidualReturns> returns;  ///< every valid return
+    std::vector<linemap::Vec2> residual_at;  ///< the unexplained returns, laser frame
+    std::vector<float> residual_range;       ///< their ranges [m]
     std::vector<float> residual_gap;         ///< largest gap to a neighbour on one surface [m]
     double beam_spacing = 0.0;               ///< |angle_increment| [rad]
   };
