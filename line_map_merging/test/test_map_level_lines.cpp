@@ -11,6 +11,7 @@
 
 #include "line_map_merging/online/map_level_lines.hpp"
 #include "line_map_merging/online/online_mapper.hpp"
+#include "line_map_merging/online/recent_scans.hpp"
 
 using namespace line_map_merging;
 using linemap::Pose2;
@@ -272,4 +273,47 @@ TEST(MapLevelLines, BadParametersAreNamed)
   {
     EXPECT_NE(std::string(e.what()).find("map_level"), std::string::npos) << e.what();
   }
+}
+
+TEST(MapLevelLines, SegmentSetsWaitForTheirScanAndLeaveInOrder)
+{
+  const auto scan = [](double stamp)
+  {
+    StampedScan s;
+    s.stamp = stamp;
+    return s;
+  };
+  const auto beams = std::make_shared<KeyframeScan>();
+  // No scan ever came (nothing publishes them): every set leaves at once, without.
+  ScanPairing<int> none;
+  none.addSegments(scan(1.0), 1);
+  ASSERT_EQ(none.ready().size(), 1u);
+  // A set before its scan waits; the scan releases it with its beams, and the set after it waits.
+  ScanPairing<int> pairing;
+  pairing.addScan(1.0, beams);
+  auto out = pairing.ready();
+  pairing.addSegments(scan(1.0), 1);
+  out = pairing.ready();
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].first.beams, beams);
+  pairing.addSegments(scan(2.0), 2);
+  pairing.addSegments(scan(3.0), 3);
+  EXPECT_TRUE(pairing.ready().empty()) << "scan 2 has not come";
+  pairing.addScan(2.0, beams);
+  out = pairing.ready();
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].second, 2);
+  // Scan 3 lost: scan 4 comes first, and set 3 leaves without a scan.
+  pairing.addScan(4.0, beams);
+  out = pairing.ready();
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].second, 3);
+  EXPECT_EQ(out[0].first.beams, nullptr);
+  // At most max_waiting sets wait.
+  ScanPairing<int> bounded(200, 2);
+  bounded.addScan(0.5, beams);
+  for (int i = 1; i <= 3; ++i) bounded.addSegments(scan(i), i);
+  out = bounded.ready();
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].second, 1);
 }

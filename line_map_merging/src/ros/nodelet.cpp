@@ -54,7 +54,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     std::unique_ptr<linemap_ros::TfWaitQueue<line_map_msgs::LineSegmentArray>> waiting;
     ros::Subscriber trajectory_sub;
     ros::Subscriber scan_sub;  ///< with the map-level lines: the scans the segments come from
-    RecentScans scans;
+    ScanPairing<ros::Time> pairing;
   };
 
   void onInit() override
@@ -188,7 +188,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
           [this, &r](const sensor_msgs::LaserScan::ConstPtr& s)
           {
             std::lock_guard<std::mutex> lock(mutex_);
-            r.scans.add(s->header.stamp.toSec(), toKeyframeScan(*s));
+            r.pairing.addScan(s->header.stamp.toSec(), toKeyframeScan(*s));
+            mergeReady(r);
           },
           ros::VoidConstPtr(), linemap_ros::noDelay());
     r.trajectory_sub = nh.subscribe<nav_msgs::Path>(
@@ -212,10 +213,19 @@ class LineMapMergingNodelet : public nodelet::Nodelet
                         robot.base_frame.c_str(), frame.c_str());
     newest_ = std::max(newest_, msg->header.stamp);
     scan->lane = robot.lane;
-    scan->beams = robot.scans.take(msg->header.stamp.toSec());
-    const bool adjusted = mapper_->poll();
-    const bool placed = place(*scan, robot);
-    if (mapper_->addScan(*scan) == ScanOutcome::kKeyframe || adjusted || placed) publish(msg->header.stamp);
+    robot.pairing.addSegments(std::move(*scan), msg->header.stamp);
+    mergeReady(robot);
+  }
+
+  /// Merges the robot's segment sets whose scans came (or will not). Lock held.
+  void mergeReady(Robot& robot)
+  {
+    for (const auto& [scan, stamp] : robot.pairing.ready())
+    {
+      const bool adjusted = mapper_->poll();
+      const bool placed = place(scan, robot);
+      if (mapper_->addScan(scan) == ScanOutcome::kKeyframe || adjusted || placed) publish(stamp);
+    }
   }
 
   /// A scan of a robot not placed yet is looked for in the fleet's map; whether it placed the robot. Lock

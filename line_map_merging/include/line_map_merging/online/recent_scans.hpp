@@ -1,5 +1,7 @@
-// The last scans of a robot by stamp, for the segment sets that come from them later (the extractor
-// runs in between): the merger nodelet keeps each keyframe's scan for the map-level lines. ROS-free.
+// Pairs a robot's segment sets with the scans they came from (the extractor runs in between, and a
+// nodelet's callbacks may run in any order): the merger nodelet keeps each keyframe's scan for the
+// map-level lines. The sets leave in the order they came, each with its scan, so the map does not
+// depend on which callback ran first. ROS-free.
 #pragma once
 
 #include <cmath>
@@ -7,44 +9,68 @@
 #include <deque>
 #include <memory>
 #include <utility>
+#include <vector>
 
-#include "line_map_merging/online/map_level_lines.hpp"
+#include "line_map_merging/online/online_mapper.hpp"
 
 namespace line_map_merging
 {
-class RecentScans
+/// `Tag`: what the caller keeps with each segment set (the nodelet: its exact stamp).
+template <class Tag>
+class ScanPairing
 {
  public:
-  /// Keeps at most `capacity` scans; a stamp matches within `tolerance` [s].
-  explicit RecentScans(std::size_t capacity = 200, double tolerance = 1e-6)
-      : capacity_(capacity), tolerance_(tolerance)
+  /// Keeps at most `max_scans` scans; at most `max_waiting` segment sets wait (the oldest then goes
+  /// without its scan); a stamp matches within `tolerance` [s].
+  explicit ScanPairing(std::size_t max_scans = 200, std::size_t max_waiting = 50, double tolerance = 1e-6)
+      : max_scans_(max_scans), max_waiting_(max_waiting), tolerance_(tolerance)
   {
   }
 
-  void add(double stamp, std::shared_ptr<const KeyframeScan> scan)
+  void addScan(double stamp, std::shared_ptr<const KeyframeScan> scan)
   {
+    scans_seen_ = true;
     scans_.emplace_back(stamp, std::move(scan));
-    while (scans_.size() > capacity_) scans_.pop_front();
+    while (scans_.size() > max_scans_) scans_.pop_front();
   }
 
-  /// The scan stamped `stamp` (null when none is kept); it and every older one are forgotten.
-  std::shared_ptr<const KeyframeScan> take(double stamp)
+  void addSegments(StampedScan segments, Tag tag)
   {
-    std::shared_ptr<const KeyframeScan> found;
-    while (!scans_.empty() && scans_.front().first <= stamp + tolerance_)
-    {
-      if (std::abs(scans_.front().first - stamp) <= tolerance_) found = std::move(scans_.front().second);
-      scans_.pop_front();
-    }
-    return found;
+    waiting_.emplace_back(std::move(segments), std::move(tag));
   }
 
-  std::size_t size() const { return scans_.size(); }
+  /// The segment sets ready, in the order they came, with their scans (`beams`). A set waits for its
+  /// scan until it comes; it goes without when a later scan came first (its own was lost), when no scan
+  /// ever came (nothing publishes them), or when too many wait.
+  std::vector<std::pair<StampedScan, Tag>> ready()
+  {
+    std::vector<std::pair<StampedScan, Tag>> out;
+    while (!waiting_.empty())
+    {
+      StampedScan& front = waiting_.front().first;
+      while (!scans_.empty() && scans_.front().first < front.stamp - tolerance_) scans_.pop_front();
+      const bool found = !scans_.empty() && std::abs(scans_.front().first - front.stamp) <= tolerance_;
+      const bool lost = !scans_.empty() && !found;  // the oldest scan kept is later than the set
+      if (!found && !lost && scans_seen_ && waiting_.size() <= max_waiting_) break;
+      if (found)
+      {
+        front.beams = std::move(scans_.front().second);
+        scans_.pop_front();
+      }
+      out.push_back(std::move(waiting_.front()));
+      waiting_.pop_front();
+    }
+    return out;
+  }
+
+  std::size_t waiting() const { return waiting_.size(); }
 
  private:
-  std::size_t capacity_;
+  std::size_t max_scans_, max_waiting_;
   double tolerance_;
+  bool scans_seen_ = false;
   std::deque<std::pair<double, std::shared_ptr<const KeyframeScan>>> scans_;
+  std::deque<std::pair<StampedScan, Tag>> waiting_;
 };
 
 }  // namespace line_map_merging
