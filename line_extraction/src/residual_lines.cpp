@@ -6,8 +6,28 @@
 #include <cmath>
 #include <unordered_set>
 
+#include "line_extraction/param_checks.hpp"
+
 namespace line_extraction
 {
+ResidualLineParams ResidualLineParams::readOver(const linemap::ParamSet& ps, const std::string& prefix,
+                                                const std::string& sources_key) const
+{
+  ResidualLineParams p = *this;
+  p.band_sigmas = positiveParam(ps, prefix + "band_sigmas", p.band_sigmas);
+  p.seed_radius = positiveParam(ps, prefix + "seed_radius", p.seed_radius);
+  p.max_gap = positiveParam(ps, prefix + "max_gap", p.max_gap);
+  p.min_points = intParamAtLeast(ps, prefix + "min_points", p.min_points, 3);
+  p.min_sources = intParamAtLeast(ps, prefix + sources_key, p.min_sources, 2);
+  p.min_length = nonNegativeParam(ps, prefix + "min_length", p.min_length);
+  p.max_rms_sigmas = positiveParam(ps, prefix + "max_rms_sigmas", p.max_rms_sigmas);
+  p.max_side_share = nonNegativeParam(ps, prefix + "max_side_share", p.max_side_share);
+  p.max_through_share = nonNegativeParam(ps, prefix + "max_through_share", p.max_through_share);
+  p.min_fill = nonNegativeParam(ps, prefix + "min_fill", p.min_fill);
+  p.fill_bin = positiveParam(ps, prefix + "fill_bin", p.fill_bin);
+  return p;
+}
+
 namespace
 {
 std::int64_t cellKey(std::int64_t ix, std::int64_t iy)

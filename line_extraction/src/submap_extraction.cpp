@@ -17,35 +17,12 @@ SubmapParams SubmapParams::fromParams(const linemap::ParamSet& ps)
   p.scan_angle = nonNegativeParam(ps, "submap/scan_angle", p.scan_angle);
   p.window_distance = positiveParam(ps, "submap/window_distance", p.window_distance);
   p.window_scans = intParamAtLeast(ps, "submap/window_scans", p.window_scans, 2);
-  p.band_sigmas = positiveParam(ps, "submap/band_sigmas", p.band_sigmas);
-  p.seed_radius = positiveParam(ps, "submap/seed_radius", p.seed_radius);
-  p.max_gap = positiveParam(ps, "submap/max_gap", p.max_gap);
-  p.min_points = intParamAtLeast(ps, "submap/min_points", p.min_points, 3);
-  p.min_scans = intParamAtLeast(ps, "submap/min_scans", p.min_scans, 2);
-  p.min_length = nonNegativeParam(ps, "submap/min_length", p.min_length);
-  p.max_rms_sigmas = positiveParam(ps, "submap/max_rms_sigmas", p.max_rms_sigmas);
-  p.max_side_share = nonNegativeParam(ps, "submap/max_side_share", p.max_side_share);
-  p.max_through_share = nonNegativeParam(ps, "submap/max_through_share", p.max_through_share);
-  return p;
-}
-
-ResidualLineParams SubmapParams::lineParams() const
-{
-  ResidualLineParams p;
-  p.band_sigmas = band_sigmas;
-  p.seed_radius = seed_radius;
-  p.max_gap = max_gap;
-  p.min_points = min_points;
-  p.min_sources = min_scans;
-  p.min_length = min_length;
-  p.max_rms_sigmas = max_rms_sigmas;
-  p.max_side_share = max_side_share;
-  p.max_through_share = max_through_share;
+  p.lines = p.lines.readOver(ps, "submap/", "min_scans");
   return p;
 }
 
 SubmapExtractor::SubmapExtractor(const SubmapParams& params, const SensorModel& sensor)
-    : params_(params), sensor_(sensor), finder_(params.lineParams())
+    : params_(params), sensor_(sensor), finder_(params.lines)
 {
 }
 

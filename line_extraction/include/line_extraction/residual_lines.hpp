@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "line_extraction/line_fit.hpp"
 #include "line_extraction/types.hpp"
 #include "linemap/geometry.hpp"
+#include "linemap/params.hpp"
 
 namespace line_extraction
 {
@@ -66,6 +68,12 @@ struct ResidualLineParams
   /// returns are not.
   double min_fill = 0.0;
   double fill_bin = 0.05;  ///< [m]
+
+  /// These tests with the keys `<prefix>band_sigmas` ... `<prefix>fill_bin` read over them, the
+  /// count of sources under `<prefix><sources_key>` (a submap counts scans, the map keyframes).
+  /// Throws linemap::ParameterError naming a bad key.
+  ResidualLineParams readOver(const linemap::ParamSet& params, const std::string& prefix,
+                              const std::string& sources_key) const;
 };
 
 struct ResidualLine

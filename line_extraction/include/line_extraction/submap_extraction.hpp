@@ -30,29 +30,12 @@ struct SubmapParams
   /// Path length the window covers [m]: short enough that odometry registers it within noise.
   double window_distance = 4.0;
   int window_scans = 40;  ///< at most this many scans in the window
-  /// A point lies on a line within band_sigmas * sigma(r) of it.
-  double band_sigmas = 3.0;
-  /// Radius around a seed point in which a line hypothesis is sought [m].
-  double seed_radius = 0.5;
-  /// Largest gap between neighbouring points of a line, at least [m] (the points' own beam
-  /// spacing may allow more, as in the per-scan extractors).
-  double max_gap = 0.3;
-  int min_points = 10;      ///< points of a submap line
-  int min_scans = 3;        ///< distinct scans among them: a line one scan alone shows is that scan's
-  double min_length = 0.2;  ///< [m]
-  /// The fit's RMS residual may be at most this many times the points' mean sigma(r).
-  double max_rms_sigmas = 1.5;
-  /// Points beside the band (within 3 bands of the line, over its extent) may be at most this
-  /// share of the line's points: a blob of clutter has a line through it, but also points around it.
-  double max_side_share = 0.3;
-  /// Beams of the window's scans that pass through the line (their return lies more than a band
-  /// beyond it) may be at most this share of the beams that end on it: a wall is not seen through.
-  double max_through_share = 0.1;
+  /// The tests of a line ("submap/band_sigmas" ...; the count of scans is "submap/min_scans"): a
+  /// blob of clutter has a line through it, but also points beside it; a wall is not seen through.
+  ResidualLineParams lines;
 
   /// Reads the "submap/..." keys; throws linemap::ParameterError naming a bad one.
   static SubmapParams fromParams(const linemap::ParamSet& params);
-  /// The tests of a line, from the keys above.
-  ResidualLineParams lineParams() const;
 };
 
 class SubmapExtractor

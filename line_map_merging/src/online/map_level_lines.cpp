@@ -45,18 +45,7 @@ MapLevelParams MapLevelParams::fromParams(const linemap::ParamSet& ps)
   p.reseed_angle = nonNegativeParam(ps, prefix + "reseed_angle", p.reseed_angle);
   p.search_margin = positiveParam(ps, prefix + "search_margin", p.search_margin);
   p.map_distance = nonNegativeParam(ps, prefix + "map_distance", p.map_distance);
-  ResidualLineParams& l = p.lines;
-  l.band_sigmas = positiveParam(ps, prefix + "band_sigmas", l.band_sigmas);
-  l.seed_radius = positiveParam(ps, prefix + "seed_radius", l.seed_radius);
-  l.max_gap = positiveParam(ps, prefix + "max_gap", l.max_gap);
-  l.min_points = intParamAtLeast(ps, prefix + "min_points", l.min_points, 3);
-  l.min_sources = intParamAtLeast(ps, prefix + "min_keyframes", l.min_sources, 2);
-  l.min_length = nonNegativeParam(ps, prefix + "min_length", l.min_length);
-  l.max_rms_sigmas = positiveParam(ps, prefix + "max_rms_sigmas", l.max_rms_sigmas);
-  l.max_side_share = nonNegativeParam(ps, prefix + "max_side_share", l.max_side_share);
-  l.max_through_share = nonNegativeParam(ps, prefix + "max_through_share", l.max_through_share);
-  l.min_fill = nonNegativeParam(ps, prefix + "min_fill", l.min_fill);
-  l.fill_bin = positiveParam(ps, prefix + "fill_bin", l.fill_bin);
+  p.lines = p.lines.readOver(ps, prefix, "min_keyframes");
   return p;
 }
 
@@ -135,15 +124,60 @@ double distanceToBox(const Vec2& p, const Vec2& lo, const Vec2& hi)
 }
 }  // namespace
 
-std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<KeyframeInfo>& keyframes,
-                                                      const std::vector<MapSegment>& map,
-                                                      std::vector<Segment2>* lines)
+/// The map's faces near the searched box in a grid of cells, each listing the segments within reach
+/// of it: whether a registered return lies on a mapped face is asked for every return.
+class MapLevelLines::FacesNear
 {
-  // Which keyframes seed lines, and where their points lie: a line through them is sought among the
-  // points within search_margin of those, and judged seen through by the keyframes within range.
-  std::vector<std::pair<const KeyframeInfo*, const Stored*>> known;
-  std::vector<char> seeding;
-  Vec2 lo = Vec2::Constant(INFINITY), hi = Vec2::Constant(-INFINITY);
+ public:
+  FacesNear(const std::vector<MapSegment>& map, const Vec2& lo, const Vec2& hi, double reach) : map_(map)
+  {
+    for (std::size_t i = 0; i < map.size(); ++i)
+    {
+      const Segment2& s = map[i].segment;
+      const Vec2 s_lo = s.start.cwiseMin(s.end) - Vec2::Constant(reach);
+      const Vec2 s_hi = s.start.cwiseMax(s.end) + Vec2::Constant(reach);
+      if (s_lo.x() > hi.x() || s_lo.y() > hi.y() || s_hi.x() < lo.x() || s_hi.y() < lo.y()) continue;
+      for (std::int64_t ix = indexOf(std::max(s_lo.x(), lo.x())); ix <= indexOf(std::min(s_hi.x(), hi.x()));
+           ++ix)
+        for (std::int64_t iy = indexOf(std::max(s_lo.y(), lo.y())); iy <= indexOf(std::min(s_hi.y(), hi.y()));
+             ++iy)
+        {
+          const Vec2 centre((static_cast<double>(ix) + 0.5) * kCell, (static_cast<double>(iy) + 0.5) * kCell);
+          if (linemap::distanceToSegment(centre, s.start, s.end) <= reach + kCell * 0.7072)
+            cells_[key(ix, iy)].push_back(static_cast<std::uint32_t>(i));
+        }
+    }
+  }
+
+  /// Whether p lies within `band` of a mapped face turned to the laser at `laser` (the other face of
+  /// a thin wall is not this one); band at most the reach given.
+  bool explain(const Vec2& p, const Vec2& laser, double band) const
+  {
+    const auto near = cells_.find(key(indexOf(p.x()), indexOf(p.y())));
+    if (near == cells_.end()) return false;
+    return std::any_of(near->second.begin(), near->second.end(),
+                       [&](std::uint32_t i)
+                       {
+                         const Segment2& m = map_[i].segment;
+                         const Vec2 d = m.end - m.start, to_laser = laser - m.start;
+                         return d.x() * to_laser.y() - d.y() * to_laser.x() > 0.0 && onSegment(p, m, band);
+                       });
+  }
+
+ private:
+  static constexpr double kCell = 2.0;  ///< [m]
+  static std::int64_t indexOf(double v) { return static_cast<std::int64_t>(std::floor(v / kCell)); }
+  static std::int64_t key(std::int64_t ix, std::int64_t iy) { return (ix << 32) ^ (iy & 0xffffffffLL); }
+
+  const std::vector<MapSegment>& map_;
+  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> cells_;
+};
+
+MapLevelLines::SeedArea MapLevelLines::seedArea(const std::vector<KeyframeInfo>& keyframes)
+{
+  SeedArea area;
+  area.lo = Vec2::Constant(INFINITY);
+  area.hi = Vec2::Constant(-INFINITY);
   for (const KeyframeInfo& k : keyframes)
   {
     const auto it = scans_.find(k.index);
@@ -155,121 +189,111 @@ std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<Keyframe
         before == searched_.end() ||
         (before->second.translation() - k.pose.translation()).norm() > params_.reseed_distance ||
         std::abs(linemap::normalizeAngle(before->second.theta - k.pose.theta)) > params_.reseed_angle;
-    known.emplace_back(&k, it->second.get());
-    seeding.push_back(moved ? 1 : 0);
+    area.known.push_back({&k, it->second.get(), moved});
     if (!moved) continue;
     searched_[k.index] = k.pose;
-    for (const Vec2& local : it->second->residual_at) growBox(k.pose.apply(local), lo, hi);
+    for (const Vec2& local : it->second->residual_at) growBox(k.pose.apply(local), area.lo, area.hi);
   }
-  if (!(lo.x() <= hi.x())) return {};
-  lo -= Vec2::Constant(params_.search_margin);
-  hi += Vec2::Constant(params_.search_margin);
-
-  // The map's faces near the area in a grid of 2 m cells, each listing the segments within reach of it
-  // (a point's sigma beyond 0.5 m would be no wall's).
-  const double cell = 2.0, reach = std::max(params_.explained_sigmas * 0.5, params_.map_distance);
-  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> faces_near;
-  const auto key = [](std::int64_t ix, std::int64_t iy) { return (ix << 32) ^ (iy & 0xffffffffLL); };
-  const auto index_of = [cell](double v) { return static_cast<std::int64_t>(std::floor(v / cell)); };
-  for (std::size_t i = 0; i < map.size(); ++i)
+  if (area.lo.x() <= area.hi.x())
   {
-    const Segment2& s = map[i].segment;
-    const Vec2 s_lo = s.start.cwiseMin(s.end) - Vec2::Constant(reach);
-    const Vec2 s_hi = s.start.cwiseMax(s.end) + Vec2::Constant(reach);
-    if (s_lo.x() > hi.x() || s_lo.y() > hi.y() || s_hi.x() < lo.x() || s_hi.y() < lo.y()) continue;
-    for (std::int64_t ix = index_of(std::max(s_lo.x(), lo.x())); ix <= index_of(std::min(s_hi.x(), hi.x()));
-         ++ix)
-      for (std::int64_t iy = index_of(std::max(s_lo.y(), lo.y())); iy <= index_of(std::min(s_hi.y(), hi.y()));
-           ++iy)
-      {
-        const Vec2 centre((static_cast<double>(ix) + 0.5) * cell, (static_cast<double>(iy) + 0.5) * cell);
-        if (linemap::distanceToSegment(centre, s.start, s.end) <= reach + cell * 0.7072)
-          faces_near[key(ix, iy)].push_back(static_cast<std::uint32_t>(i));
-      }
+    area.lo -= Vec2::Constant(params_.search_margin);
+    area.hi += Vec2::Constant(params_.search_margin);
   }
+  return area;
+}
 
-  // Sources by position in `sources` (ids ascending), points with their keyframe's source id.
-  std::vector<char> seed_source;
-  std::vector<ResidualSource> sources;
-  std::vector<const Stored*> stored_of;
-  std::vector<std::uint64_t> keyframe_of;
-  std::vector<ResidualPoint> points;
-  std::vector<double> point_range;
-  for (std::size_t part = 0; part < known.size(); ++part)
+MapLevelLines::Registered MapLevelLines::registerResiduals(const SeedArea& area, const FacesNear& faces) const
+{
+  Registered reg;
+  for (const Known& known : area.known)
   {
-    const KeyframeInfo& k = *known[part].first;
-    const Stored& st = *known[part].second;
-    if (distanceToBox(k.pose.translation(), lo, hi) > st.returns->max_range) continue;
-    const auto src_id = static_cast<std::uint32_t>(sources.size());
-    sources.push_back({src_id, k.pose, st.returns});
-    stored_of.push_back(&st);
-    keyframe_of.push_back(k.index);
-    seed_source.push_back(seeding[part]);
+    const KeyframeInfo& k = *known.keyframe;
+    const Stored& st = *known.stored;
+    if (distanceToBox(k.pose.translation(), area.lo, area.hi) > st.returns->max_range) continue;
+    const auto src_id = static_cast<std::uint32_t>(reg.sources.size());
+    reg.sources.push_back({src_id, k.pose, st.returns});
+    reg.stored_of.push_back(&st);
+    reg.keyframe_of.push_back(k.index);
+    reg.seeds.push_back(known.seeds ? 1 : 0);
     for (std::size_t j = 0; j < st.residual_at.size(); ++j)
     {
       const double r = st.residual_range[j];
       ResidualPoint w;
       w.p = k.pose.apply(st.residual_at[j]);
-      if (!inBox(w.p, lo, hi)) continue;
+      if (!inBox(w.p, area.lo, area.hi)) continue;
       const double across =
           params_.pose_sigma * params_.pose_sigma + (r * params_.heading_sigma) * (r * params_.heading_sigma);
       const double sigma = std::sqrt(params_.sensor.sigma(r) * params_.sensor.sigma(r) + across);
       // Explained by the map: the wall is mapped already.
-      const double band = std::max(params_.explained_sigmas * sigma, params_.map_distance);
-      const auto explains = [&](std::uint32_t i)
-      {
-        // Only a face turned to the keyframe: the other face of a thin wall is not this one.
-        const Segment2& m = map[i].segment;
-        const Vec2 d = m.end - m.start, to_laser = k.pose.translation() - m.start;
-        return d.x() * to_laser.y() - d.y() * to_laser.x() > 0.0 && onSegment(w.p, m, band);
-      };
-      const auto near = faces_near.find(key(index_of(w.p.x()), index_of(w.p.y())));
-      if (near != faces_near.end() && std::any_of(near->second.begin(), near->second.end(), explains))
+      if (faces.explain(w.p, k.pose.translation(),
+                        std::max(params_.explained_sigmas * sigma, params_.map_distance)))
         continue;
       w.sigma = static_cast<float>(sigma);
       w.gap = st.residual_gap[j];
       w.source = src_id;
-      points.push_back(w);
-      point_range.push_back(r);
+      reg.points.push_back(w);
+      reg.point_range.push_back(r);
     }
   }
+  return reg;
+}
+
+void MapLevelLines::addParts(const ResidualLine& line, const Registered& reg,
+                             std::vector<KeyframeOriginals>& out,
+                             std::map<std::uint64_t, std::size_t>& out_slot)
+{
+  // Each keyframe's part: the span of its points along the line, widened by half a beam's footprint
+  // at each end (one return stands for that much wall), within the line.
+  const Vec2 dir = (line.end - line.start).normalized();
+  const double length = (line.end - line.start).norm();
+  std::map<std::uint32_t, std::pair<double, double>> span;
+  for (const std::uint32_t m : line.members)
+  {
+    const double t = (reg.points[m].p - line.start).dot(dir);
+    const std::uint32_t id = reg.points[m].source;
+    const double half = 0.5 * reg.point_range[m] * reg.stored_of[id]->beam_spacing;
+    auto [it, fresh] = span.emplace(id, std::make_pair(t - half, t + half));
+    if (!fresh)
+    {
+      it->second.first = std::min(it->second.first, t - half);
+      it->second.second = std::max(it->second.second, t + half);
+    }
+  }
+  for (const auto& [id, range] : span)
+  {
+    const double t0 = std::max(0.0, range.first), t1 = std::min(length, range.second);
+    if (!(t1 > t0)) continue;
+    const Pose2 to_laser = reg.sources[id].laser.inverse();
+    const Segment2 part(to_laser.apply(line.start + dir * t0), to_laser.apply(line.start + dir * t1));
+    auto [slot, fresh] = out_slot.emplace(reg.keyframe_of[id], out.size());
+    if (fresh) out.push_back({reg.keyframe_of[id], {}});
+    out[slot->second].segments.push_back(part);
+  }
+}
+
+std::vector<KeyframeOriginals> MapLevelLines::extract(const std::vector<KeyframeInfo>& keyframes,
+                                                      const std::vector<MapSegment>& map,
+                                                      std::vector<Segment2>* lines)
+{
+  // Lines through the seeding keyframes' points are sought among the points within search_margin of
+  // them, and judged seen through by the keyframes within range.
+  const SeedArea area = seedArea(keyframes);
+  if (!(area.lo.x() <= area.hi.x())) return {};
+  // A point's sigma beyond 0.5 m would be no wall's.
+  const FacesNear faces(map, area.lo, area.hi,
+                        std::max(params_.explained_sigmas * 0.5, params_.map_distance));
+  Registered reg = registerResiduals(area, faces);
 
   ResidualLineFinder finder(params_.lines);
-  finder.index(points, sources);
+  finder.index(reg.points, reg.sources);
   std::vector<KeyframeOriginals> out;
   std::map<std::uint64_t, std::size_t> out_slot;
-  for (std::size_t seed = 0; seed < points.size(); ++seed)
+  for (std::size_t seed = 0; seed < reg.points.size(); ++seed)
   {
     ResidualLine line;
-    if (!seed_source[points[seed].source] || !finder.grow(seed, line)) continue;
+    if (!reg.seeds[reg.points[seed].source] || !finder.grow(seed, line)) continue;
     if (lines) lines->emplace_back(line.start, line.end);
-    // Each keyframe's part: the span of its points along the line, widened by half a beam's footprint
-    // at each end (one return stands for that much wall), within the line.
-    const Vec2 dir = (line.end - line.start).normalized();
-    const double length = (line.end - line.start).norm();
-    std::map<std::uint32_t, std::pair<double, double>> span;
-    for (const std::uint32_t m : line.members)
-    {
-      const double t = (points[m].p - line.start).dot(dir);
-      const std::uint32_t id = points[m].source;
-      const double half = 0.5 * point_range[m] * stored_of[id]->beam_spacing;
-      auto [it, fresh] = span.emplace(id, std::make_pair(t - half, t + half));
-      if (!fresh)
-      {
-        it->second.first = std::min(it->second.first, t - half);
-        it->second.second = std::max(it->second.second, t + half);
-      }
-    }
-    for (const auto& [id, range] : span)
-    {
-      const double t0 = std::max(0.0, range.first), t1 = std::min(length, range.second);
-      if (!(t1 > t0)) continue;
-      const Pose2 to_laser = sources[id].laser.inverse();
-      const Segment2 part(to_laser.apply(line.start + dir * t0), to_laser.apply(line.start + dir * t1));
-      auto [slot, fresh] = out_slot.emplace(keyframe_of[id], out.size());
-      if (fresh) out.push_back({keyframe_of[id], {}});
-      out[slot->second].segments.push_back(part);
-    }
+    addParts(line, reg, out, out_slot);
   }
   return out;
 }

@@ -116,6 +116,40 @@ class MapLevelLines
     double beam_spacing = 0.0;               ///< |angle_increment| [rad]
   };
 
+  /// A keyframe known here at its current pose; `seeds` when lines are grown from its points.
+  struct Known
+  {
+    const KeyframeInfo* keyframe;
+    const Stored* stored;
+    bool seeds;
+  };
+  /// The keyframes known here, and the box around the seeding keyframes' points within which lines
+  /// are sought (empty when none seeds).
+  struct SeedArea
+  {
+    std::vector<Known> known;
+    linemap::Vec2 lo, hi;
+  };
+  /// The keyframes that reach the box as sources (ids by position), and the unexplained returns in it
+  /// registered by their poses.
+  struct Registered
+  {
+    std::vector<line_extraction::ResidualSource> sources;
+    std::vector<const Stored*> stored_of;
+    std::vector<std::uint64_t> keyframe_of;
+    std::vector<char> seeds;
+    std::vector<line_extraction::ResidualPoint> points;
+    std::vector<double> point_range;  ///< [m], per point
+  };
+  class FacesNear;
+
+  /// Marks the keyframes that seed (new, or moved since they last did) and records their pose.
+  SeedArea seedArea(const std::vector<KeyframeInfo>& keyframes);
+  Registered registerResiduals(const SeedArea& area, const FacesNear& faces) const;
+  /// Appends to `out` each keyframe's part of `line` (out_slot: keyframe -> its entry in out).
+  static void addParts(const line_extraction::ResidualLine& line, const Registered& reg,
+                       std::vector<KeyframeOriginals>& out, std::map<std::uint64_t, std::size_t>& out_slot);
+
   MapLevelParams params_;
   // Shared between copies of a mapper (ConcurrentMapper adjusts a copy): a keyframe's scan never changes.
   std::map<std::uint64_t, std::shared_ptr<const Stored>> scans_;
