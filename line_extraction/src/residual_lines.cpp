@@ -25,6 +25,7 @@ ResidualLineParams ResidualLineParams::readOver(const linemap::ParamSet& ps, con
   p.max_through_share = nonNegativeParam(ps, prefix + "max_through_share", p.max_through_share);
   p.min_fill = nonNegativeParam(ps, prefix + "min_fill", p.min_fill);
   p.fill_bin = positiveParam(ps, prefix + "fill_bin", p.fill_bin);
+  p.coarse_beam_fill = ps.getBool(prefix + "coarse_beam_fill", p.coarse_beam_fill);
   return p;
 }
 
@@ -275,17 +276,7 @@ bool ResidualLineFinder::acceptRun(const std::vector<Candidate>& run, const Line
     t1 = std::max(t1, t);
   }
   if (t1 - t0 < params_.min_length) return false;
-  if (params_.min_fill > 0.0)
-  {
-    const auto bins = static_cast<std::size_t>(std::ceil((t1 - t0) / params_.fill_bin));
-    std::vector<char> filled(std::max<std::size_t>(bins, 1), 0);
-    for (const Candidate& c : run)
-      if (fit_line.distance(points[c.index].p) <= params_.fill_bin)
-        filled[std::min(filled.size() - 1, static_cast<std::size_t>((dir.dot(points[c.index].p - foot) - t0) /
-                                                                    params_.fill_bin))] = 1;
-    const double share = static_cast<double>(std::count(filled.begin(), filled.end(), 1)) / filled.size();
-    if (share < params_.min_fill) return false;
-  }
+  if (params_.min_fill > 0.0 && filledShare(run, fit_line, t0, t1) < params_.min_fill) return false;
   if (curved(run, fit_line, t0, t1, sigma)) return false;
   // Beside the band: between one and two bands off the line, away from the ends (where a
   // corner's other wall starts).
@@ -307,6 +298,47 @@ bool ResidualLineFinder::acceptRun(const std::vector<Candidate>& run, const Line
   line.end = foot + dir * t1;
   line.sigma = sigma;
   return !seenThrough(line.start, line.end, band_k * sigma);
+}
+
+double ResidualLineFinder::filledShare(const std::vector<Candidate>& run, const LineNormal& line, double t0,
+                                       double t1) const
+{
+  const std::vector<ResidualPoint>& points = *points_;
+  const Vec2 dir(-line.ny, line.nx);
+  const Vec2 foot = Vec2(line.nx, line.ny) * line.radius;
+  const auto bins = static_cast<std::size_t>(std::ceil((t1 - t0) / params_.fill_bin));
+  std::vector<char> filled(std::max<std::size_t>(bins, 1), 0);
+  const auto bin_of = [&](double t)
+  { return std::min(filled.size() - 1, static_cast<std::size_t>(std::max(0.0, t - t0) / params_.fill_bin)); };
+  struct Near
+  {
+    std::uint32_t source;
+    std::int32_t beam;
+    double along;
+    float gap;
+    bool operator<(const Near& o) const { return source < o.source || (source == o.source && beam < o.beam); }
+  };
+  std::vector<Near> near_line;
+  for (const Candidate& c : run)
+  {
+    const ResidualPoint& w = points[c.index];
+    if (line.distance(w.p) > params_.fill_bin) continue;
+    const double t = dir.dot(w.p - foot);
+    filled[bin_of(t)] = 1;
+    if (params_.coarse_beam_fill && w.beam >= 0) near_line.push_back({w.source, w.beam, t, w.gap});
+  }
+  std::sort(near_line.begin(), near_line.end());
+  for (std::size_t i = 1; i < near_line.size(); ++i)
+  {
+    const Near &a = near_line[i - 1], &b = near_line[i];
+    if (a.source != b.source || b.beam - a.beam != 1) continue;
+    const double apart = std::abs(b.along - a.along);
+    if (apart <= params_.max_gap || apart > std::max(a.gap, b.gap)) continue;
+    for (std::size_t k = bin_of(std::min(a.along, b.along)); k <= bin_of(std::max(a.along, b.along)); ++k)
+      filled[k] = 1;
+  }
+  return static_cast<double>(std::count(filled.begin(), filled.end(), 1)) /
+         static_cast<double>(filled.size());
 }
 
 bool ResidualLineFinder::curved(const std::vector<Candidate>& run, const LineNormal& line, double t0,

@@ -107,6 +107,7 @@ void SubmapExtractor::addResiduals(const PreparedScan& scan, const ExtractionRes
     if (!scan.gap2.empty() && i + 1 < scan.size()) gap2 = std::max(gap2, scan.gap2[i + 1]);
     w.gap = static_cast<float>(std::sqrt(gap2));
     w.source = id;
+    if (i < scan.beam_index.size()) w.beam = scan.beam_index[i];
     points_.push_back(w);
   }
 }

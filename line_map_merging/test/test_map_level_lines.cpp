@@ -131,10 +131,55 @@ TEST(MapLevelLines, ClutterGetsNoLine)
     posts.emplace_back(c - d, c + d);
   }
   const std::vector<KeyframeInfo> keyframes = drive();
-  MapLevelLines lines = observed(keyframes, posts);
+  MapLevelParams coarse;
+  coarse.lines.coarse_beam_fill = true;
+  for (const MapLevelParams& params : {MapLevelParams(), coarse})
+  {
+    MapLevelLines lines = observed(keyframes, posts, params);
+    std::vector<Segment2> found;
+    lines.extract(keyframes, {}, &found);
+    for (const Segment2& s : found)
+      EXPECT_LT(s.length(), 0.5) << "a line through posts (coarse_beam_fill " << params.lines.coarse_beam_fill
+                                 << ")";
+  }
+}
+
+/// Five keyframes over 0.8 m, and a wall 6 m long 15-20 m away seen at 45-55 degrees of incidence:
+/// each scan has about 13 returns on it, 0.46 m apart along it (farther than max_gap, within the sensor
+/// model's gap of 0.8 m at that range), so all five together put points in at most 65 of its 120 bins.
+std::vector<KeyframeInfo> glimpse()
+{
+  std::vector<KeyframeInfo> keyframes = drive();
+  keyframes.resize(5);
+  return keyframes;
+}
+const Segment2 kGrazedWall(Vec2(16.0, 10.0), Vec2(10.0, 10.0));  // the robot (y < 10) on its left
+
+TEST(MapLevelLines, AWallSampledCoarselyByEveryScanIsFilledBetweenNeighbouringBeamsWhenAskedTo)
+{
+  const std::vector<KeyframeInfo> keyframes = glimpse();
   std::vector<Segment2> found;
-  lines.extract(keyframes, {}, &found);
-  for (const Segment2& s : found) EXPECT_LT(s.length(), 0.5) << "a line through posts";
+  observed(keyframes, {kGrazedWall}).extract(keyframes, {}, &found);
+  EXPECT_TRUE(found.empty()) << "its points alone fill at most 54 % of the bins, below min_fill";
+
+  MapLevelParams coarse;
+  coarse.lines.coarse_beam_fill = true;
+  found.clear();
+  observed(keyframes, {kGrazedWall}, coarse).extract(keyframes, {}, &found);
+  ASSERT_EQ(found.size(), 1u);
+  // Its points' sigma at 20 m is 5.4 cm across (range and registration), the fit over 65 of them better.
+  EXPECT_LT(distanceToWall(found[0].start, kGrazedWall), 0.05);
+  EXPECT_LT(distanceToWall(found[0].end, kGrazedWall), 0.05);
+  EXPECT_GT(found[0].length(), 0.8 * kGrazedWall.length());
+  EXPECT_LT(std::abs(linemap::normalizeAngle(found[0].heading() - kGrazedWall.heading())), 2.0 * kDeg);
+
+  // Posts 0.3 m wide every 0.8 m along the same line: close enough for one run of points, but the
+  // beams between them return nothing, so no two neighbouring beams end on the line across a gap.
+  std::vector<Segment2> posts;
+  for (double x = 10.0; x <= 16.01; x += 0.8) posts.emplace_back(Vec2(x + 0.15, 10.0), Vec2(x - 0.15, 10.0));
+  found.clear();
+  observed(keyframes, posts, coarse).extract(keyframes, {}, &found);
+  for (const Segment2& s : found) EXPECT_LT(s.length(), 0.5) << "a line through a row of posts";
 }
 
 TEST(MapLevelLines, AWallTheMapOrTheKeyframesOwnSegmentsHoldGetsNoLine)

@@ -26,7 +26,10 @@ struct ResidualPoint
   float sigma = 0.0f;  ///< its noise across a line [m]: the range's, and the registration's where it has one
   float gap = 0.0f;    ///< largest gap to a neighbour on one surface [m]
   std::uint32_t source = 0;  ///< id of its scan (a ResidualSource)
-  bool used = false;         ///< already part of a line
+  /// Its beam's index in that scan (-1: unknown). Two returns of neighbouring beams on a line saw
+  /// the wall between them.
+  std::int32_t beam = -1;
+  bool used = false;  ///< already part of a line
 };
 
 /// Every valid return of a scan, in increasing angle (laser frame).
@@ -68,6 +71,11 @@ struct ResidualLineParams
   /// returns are not.
   double min_fill = 0.0;
   double fill_bin = 0.05;  ///< [m]
+  /// Whether two such points of neighbouring beams of one scan also fill the bins between them when
+  /// they lie farther apart than max_gap (where a scan's own extractor breaks a wall) and no farther
+  /// than one surface could leave them (the sensor model's gap): a wall far away or at a grazing
+  /// angle is sampled that coarsely by every scan, and seen between the returns.
+  bool coarse_beam_fill = false;
 
   /// These tests with the keys `<prefix>band_sigmas` ... `<prefix>fill_bin` read over them, the
   /// count of sources under `<prefix><sources_key>` (a submap counts scans, the map keyframes).
@@ -113,6 +121,8 @@ class ResidualLineFinder
   bool seedLine(std::size_t seed, LineNormal& best) const;
   bool growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const;
   bool acceptRun(const std::vector<Candidate>& run, const LineNormal& fit_line, ResidualLine& line) const;
+  /// The share of the line's bins [t0, t1] that its points fill (see ResidualLineParams::min_fill).
+  double filledShare(const std::vector<Candidate>& run, const LineNormal& line, double t0, double t1) const;
   bool curved(const std::vector<Candidate>& run, const LineNormal& line, double t0, double t1,
               double sigma) const;
   bool seenThrough(const Vec2& a, const Vec2& b, double band) const;

@@ -99,6 +99,7 @@ void MapLevelLines::addKeyframe(std::uint64_t index, const KeyframeScan& scan,
     stored->residual_at.push_back(p);
     stored->residual_range.push_back(static_cast<float>(r));
     stored->residual_gap.push_back(static_cast<float>(gap));
+    stored->residual_beam.push_back(beam[k]);
   }
   stored->returns = line_extraction::ResidualReturns::of(std::move(angles), std::move(ranges));
   scans_[index] = std::move(stored);
@@ -230,6 +231,7 @@ MapLevelLines::Registered MapLevelLines::registerResiduals(const SeedArea& area,
         continue;
       w.sigma = static_cast<float>(sigma);
       w.gap = st.residual_gap[j];
+      w.beam = st.residual_beam[j];
       w.source = src_id;
       reg.points.push_back(w);
       reg.point_range.push_back(r);

@@ -110,10 +110,11 @@ class MapLevelLines
   struct Stored
   {
     std::shared_ptr<const line_extraction::ResidualReturns> returns;  ///< every valid return
-    std::vector<linemap::Vec2> residual_at;  ///< the unexplained returns, laser frame
-    std::vector<float> residual_range;       ///< their ranges [m]
-    std::vector<float> residual_gap;         ///< largest gap to a neighbour on one surface [m]
-    double beam_spacing = 0.0;               ///< |angle_increment| [rad]
+    std::vector<linemap::Vec2> residual_at;   ///< the unexplained returns, laser frame
+    std::vector<float> residual_range;        ///< their ranges [m]
+    std::vector<float> residual_gap;          ///< largest gap to a neighbour on one surface [m]
+    std::vector<std::int32_t> residual_beam;  ///< their beams' indices
+    double beam_spacing = 0.0;                ///< |angle_increment| [rad]
   };
 
   /// A keyframe known here at its current pose; `seeds` when lines are grown from its points.
