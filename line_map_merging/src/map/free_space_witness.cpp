@@ -7,10 +7,7 @@ namespace line_map_merging
 using linemap::Segment2;
 using linemap::Vec2;
 
-namespace
-{
 using linemap::cross;
-}  // namespace
 
 std::pair<double, double> clipToHalfPlanes(const Segment2& s, const HalfPlane* planes, std::size_t count)
 {

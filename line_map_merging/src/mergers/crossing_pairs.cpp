@@ -14,11 +14,7 @@ namespace line_map_merging
 using linemap::Segment2;
 using linemap::Vec2;
 
-namespace
-{
 using linemap::cross;
-
-}  // namespace
 
 bool segmentsCross(const Segment2& a, const Segment2& b, double min_overhang, Vec2* point)
 {
