@@ -163,6 +163,24 @@ TEST(Batch, EveryMergerProducesEveryColumn)
     EXPECT_GE(r.ground_truth->unseen_walls, 4u);
     EXPECT_EQ(gt["unmapped_ends"].as<std::size_t>(), r.ground_truth->unmapped_ends);
     EXPECT_LE(r.ground_truth->mean_endpoint_error, r.ground_truth->max_endpoint_error);
+    // Each seen face listed: the seen-length-weighted mean of their coverage is the overall one, and
+    // the faces without a segment are the undetected walls.
+    const YAML::Node faces = gt["faces"];
+    ASSERT_TRUE(faces.IsSequence());
+    EXPECT_EQ(faces.size(), r.ground_truth->walls.size());
+    double seen = 0.0, covered = 0.0;
+    std::size_t without = 0;
+    for (const YAML::Node& f : faces)
+    {
+      ASSERT_EQ(f["start"].size(), 2u);
+      ASSERT_EQ(f["end"].size(), 2u);
+      seen += f["seen_m"].as<double>();
+      covered += f["seen_m"].as<double>() * f["coverage_pct"].as<double>();
+      without += f["segments"].as<std::size_t>() == 0 ? 1 : 0;
+    }
+    ASSERT_GT(seen, 0.0);
+    EXPECT_NEAR(covered / seen, gt["coverage_pct"].as<double>(), 0.05);
+    EXPECT_EQ(without, gt["undetected_walls"].as<std::size_t>());
   }
   const std::string md = toMarkdown(result);
   EXPECT_NE(md.find("never seen, not scored"), std::string::npos);

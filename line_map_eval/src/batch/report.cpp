@@ -221,6 +221,23 @@ void emitGroundTruth(YAML::Emitter& out, const GroundTruthResult& g)
   field(out, "missed_corners", g.missed_corners);
   field(out, "corners", g.corners.size());
   field(out, "walls", g.walls.size());
+  // Each seen face: which walls a map misses, and where.
+  key(out, "faces");
+  out << YAML::BeginSeq;
+  for (const WallScore& w : g.walls)
+  {
+    out << YAML::Flow << YAML::BeginMap;
+    field(out, "face", w.face);
+    key(out, "start");
+    out << YAML::Flow << YAML::BeginSeq << w.segment.start.x() << w.segment.start.y() << YAML::EndSeq;
+    key(out, "end");
+    out << YAML::Flow << YAML::BeginSeq << w.segment.end.x() << w.segment.end.y() << YAML::EndSeq;
+    measure(out, "seen_m", w.seen_length);
+    measure(out, "coverage_pct", w.coverage * 100.0);
+    field(out, "segments", w.associated);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
   out << YAML::EndMap;
 }
 

@@ -354,6 +354,7 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
     }
     WallScore score;
     score.face = w;
+    score.segment = wall;
     score.length = length;
     GroundTruthParams face_params = params;
     if (!slack.empty())

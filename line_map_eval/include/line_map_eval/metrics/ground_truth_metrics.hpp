@@ -64,9 +64,10 @@ SeenParts unionOfSeenParts(const SeenParts& a, const SeenParts& b);
 
 struct WallScore
 {
-  std::size_t face = 0;      ///< index into the faces
-  double length = 0.0;       ///< of the face [m]
-  double seen_length = 0.0;  ///< of its seen parts [m]
+  std::size_t face = 0;       ///< index into the faces
+  linemap::Segment2 segment;  ///< the face, its free side on the left
+  double length = 0.0;        ///< of the face [m]
+  double seen_length = 0.0;   ///< of its seen parts [m]
   /// Fraction of the samples of the seen parts within coverage_tolerance of an associated segment.
   double coverage = 0.0;
   /// Largest distance from a seen and mapped face endpoint to the nearest endpoint of an
