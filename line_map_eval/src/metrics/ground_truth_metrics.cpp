@@ -192,6 +192,138 @@ std::vector<Corner> cornersOf(const std::vector<Segment2>& walls, const GroundTr
     }
   return corners;
 }
+/// joint[face][end]: where consecutive chords of a curve meet, which is no end of a wall.
+std::vector<std::array<bool, 2>> curveJoints(const std::vector<Segment2>& walls,
+                                             const std::vector<std::vector<std::size_t>>& curves,
+                                             double corner_tolerance)
+{
+  std::vector<std::array<bool, 2>> joint(walls.size(), {false, false});
+  for (const auto& curve : curves)
+    for (std::size_t k = 0; k < curve.size(); ++k)
+    {
+      if (curve[k] >= walls.size())
+        throw std::invalid_argument("ground truth metrics: a curve lists face " + std::to_string(curve[k]) +
+                                    " of " + std::to_string(walls.size()));
+      const std::size_t a = curve[k], b = curve[(k + 1) % curve.size()];
+      if (a == b || b >= walls.size()) continue;  // one face; b out of range is reported at its turn
+      for (std::size_t ea = 0; ea < 2; ++ea)
+        for (std::size_t eb = 0; eb < 2; ++eb)
+          if (((ea ? walls[a].end : walls[a].start) - (eb ? walls[b].end : walls[b].start)).norm() <=
+              corner_tolerance)
+            joint[a][ea] = joint[b][eb] = true;
+    }
+  return joint;
+}
+
+/// The face's seen length, and the share of samples `spacing` apart over its seen parts that lie within
+/// `tolerance` of a segment associated with it.
+void scoreCoverage(const Segment2& wall, const std::vector<std::pair<double, double>>& seen,
+                   const std::vector<Segment2>& map, const std::vector<std::size_t>& assoc, double tolerance,
+                   double spacing, WallScore& score)
+{
+  std::size_t samples = 0, covered = 0;
+  const Vec2 u = (wall.end - wall.start) / wall.length();
+  for (const auto& [from, to] : seen)
+  {
+    score.seen_length += to - from;
+    const std::size_t steps = static_cast<std::size_t>(std::ceil((to - from) / spacing));
+    for (std::size_t k = 0; k <= steps; ++k)
+    {
+      const double t =
+          steps == 0 ? from : from + (to - from) * static_cast<double>(k) / static_cast<double>(steps);
+      const Vec2 p = wall.start + t * u;
+      ++samples;
+      for (const std::size_t m : assoc)
+        if (linemap::distanceToSegment(p, map[m].start, map[m].end) <= tolerance)
+        {
+          ++covered;
+          break;
+        }
+    }
+  }
+  score.coverage = static_cast<double>(covered) / static_cast<double>(samples);
+}
+
+struct EndpointTally
+{
+  double sum = 0.0;
+  std::size_t count = 0;
+};
+
+/// Per seen end of the face that an associated segment reaches within `vertex_radius`: the distance to
+/// the nearest endpoint of those segments (the others count as unmapped ends).
+void scoreEnds(const Segment2& wall, const std::array<bool, 2>& seen_end, const std::vector<Segment2>& map,
+               const std::vector<std::size_t>& assoc, double vertex_radius, WallScore& score,
+               GroundTruthResult& r, EndpointTally& tally)
+{
+  for (std::size_t e = 0; e < 2; ++e)
+  {
+    if (!seen_end[e]) continue;
+    const Vec2& end = e == 0 ? wall.start : wall.end;
+    double nearest = std::numeric_limits<double>::infinity(), reach = nearest;
+    for (const std::size_t m : assoc)
+    {
+      nearest = std::min({nearest, (map[m].start - end).norm(), (map[m].end - end).norm()});
+      reach = std::min(reach, linemap::distanceToSegment(end, map[m].start, map[m].end));
+    }
+    if (reach > vertex_radius)
+    {
+      ++r.unmapped_ends;
+      continue;
+    }
+    ++score.mapped_endpoints;
+    score.endpoint_error = std::max(score.endpoint_error, nearest);
+    r.max_endpoint_error = std::max(r.max_endpoint_error, nearest);
+    tally.sum += nearest;
+    ++tally.count;
+  }
+}
+
+/// The corners both of whose meeting ends were seen: the map endpoints near each, of the segments
+/// associated with its faces.
+void scoreCorners(const std::vector<Segment2>& walls, const std::vector<std::array<bool, 2>>& seen_end,
+                  const std::vector<std::vector<std::size_t>>& assoc, const std::vector<Segment2>& map,
+                  const GroundTruthParams& params, GroundTruthResult& r)
+{
+  double vertex_sum = 0.0;
+  std::size_t corners_with_endpoints = 0;
+  std::vector<std::size_t> faces;
+  for (const Corner& c : cornersOf(walls, params))
+  {
+    faces.clear();
+    for (const Corner::Meeting& m : c.meetings)
+      if (seen_end[m.face_a][m.end_a] && seen_end[m.face_b][m.end_b])
+        for (const std::size_t f : {m.face_a, m.face_b})
+          if (std::find(faces.begin(), faces.end(), f) == faces.end()) faces.push_back(f);
+    if (faces.empty()) continue;  // not seen
+    CornerScore cs;
+    cs.corner = c.point;
+    // Each map endpoint once, however many of the corner's faces its segment is associated with.
+    std::vector<std::size_t> segments;
+    for (const std::size_t f : faces) segments.insert(segments.end(), assoc[f].begin(), assoc[f].end());
+    std::sort(segments.begin(), segments.end());
+    segments.erase(std::unique(segments.begin(), segments.end()), segments.end());
+    for (const std::size_t m : segments)
+      for (const Vec2& e : {map[m].start, map[m].end})
+      {
+        const double d = (e - c.point).norm();
+        if (d > params.vertex_radius) continue;
+        cs.vertex_error += d;
+        ++cs.endpoints;
+      }
+    if (cs.endpoints == 0)
+      ++r.missed_corners;
+    else
+    {
+      vertex_sum += cs.vertex_error;
+      ++corners_with_endpoints;
+    }
+    r.corners.push_back(cs);
+  }
+  if (corners_with_endpoints > 0)
+    r.mean_vertex_error = vertex_sum / static_cast<double>(corners_with_endpoints);
+}
+
 }  // namespace
 
 GroundTruthParams GroundTruthParams::fromParams(const linemap::ParamSet& params)
@@ -320,27 +452,12 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
     throw std::invalid_argument("ground truth metrics: slack for " + std::to_string(slack.size()) +
                                 " faces, but there are " + std::to_string(walls.size()));
   GroundTruthResult r;
-  double covered_length = 0.0, seen_total = 0.0, endpoint_sum = 0.0, vertex_sum = 0.0;
-  std::size_t endpoint_count = 0;
+  double covered_length = 0.0, seen_total = 0.0;
+  EndpointTally endpoints;
   std::vector<std::vector<std::size_t>> assoc(walls.size());
   // seen_end[face][0 / 1]: the face's start / end was seen.
   std::vector<std::array<bool, 2>> seen_end(walls.size(), {false, false});
-  // joint[face][end]: where consecutive chords of a curve meet: no end of a wall.
-  std::vector<std::array<bool, 2>> joint(walls.size(), {false, false});
-  for (const auto& curve : curves)
-    for (std::size_t k = 0; k < curve.size(); ++k)
-    {
-      if (curve[k] >= walls.size())
-        throw std::invalid_argument("ground truth metrics: a curve lists face " + std::to_string(curve[k]) +
-                                    " of " + std::to_string(walls.size()));
-      const std::size_t a = curve[k], b = curve[(k + 1) % curve.size()];
-      if (a == b || b >= walls.size()) continue;  // one face; b out of range is reported at its turn
-      for (std::size_t ea = 0; ea < 2; ++ea)
-        for (std::size_t eb = 0; eb < 2; ++eb)
-          if (((ea ? walls[a].end : walls[a].start) - (eb ? walls[b].end : walls[b].start)).norm() <=
-              params.corner_tolerance)
-            joint[a][ea] = joint[b][eb] = true;
-    }
+  const std::vector<std::array<bool, 2>> joint = curveJoints(walls, curves, params.corner_tolerance);
   for (std::size_t w = 0; w < walls.size(); ++w)
   {
     const Segment2& wall = walls[w];
@@ -365,28 +482,7 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
     for (std::size_t m = 0; m < map.size(); ++m)
       if (associated(map[m], wall, face_params)) assoc[w].push_back(m);
     score.associated = assoc[w].size();
-
-    std::size_t samples = 0, covered = 0;
-    const Vec2 u = (wall.end - wall.start) / length;
-    for (const auto& [from, to] : seen[w])
-    {
-      score.seen_length += to - from;
-      const std::size_t steps = static_cast<std::size_t>(std::ceil((to - from) / params.sample_spacing));
-      for (std::size_t k = 0; k <= steps; ++k)
-      {
-        const double t =
-            steps == 0 ? from : from + (to - from) * static_cast<double>(k) / static_cast<double>(steps);
-        const Vec2 p = wall.start + t * u;
-        ++samples;
-        for (const std::size_t m : assoc[w])
-          if (linemap::distanceToSegment(p, map[m].start, map[m].end) <= face_params.coverage_tolerance)
-          {
-            ++covered;
-            break;
-          }
-      }
-    }
-    score.coverage = static_cast<double>(covered) / static_cast<double>(samples);
+    scoreCoverage(wall, seen[w], map, assoc[w], face_params.coverage_tolerance, params.sample_spacing, score);
 
     seen_end[w] = {!joint[w][0] && seen[w].front().first <= params.coverage_tolerance,
                    !joint[w][1] && seen[w].back().second >= length - params.coverage_tolerance};
@@ -397,70 +493,14 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
       ++r.undetected_walls;
     }
     else
-      for (std::size_t e = 0; e < 2; ++e)
-      {
-        if (!seen_end[w][e]) continue;
-        const Vec2& end = e == 0 ? wall.start : wall.end;
-        double nearest = std::numeric_limits<double>::infinity(), reach = nearest;
-        for (const std::size_t m : assoc[w])
-        {
-          nearest = std::min({nearest, (map[m].start - end).norm(), (map[m].end - end).norm()});
-          reach = std::min(reach, linemap::distanceToSegment(end, map[m].start, map[m].end));
-        }
-        if (reach > params.vertex_radius)
-        {
-          ++r.unmapped_ends;
-          continue;
-        }
-        ++score.mapped_endpoints;
-        score.endpoint_error = std::max(score.endpoint_error, nearest);
-        r.max_endpoint_error = std::max(r.max_endpoint_error, nearest);
-        endpoint_sum += nearest;
-        ++endpoint_count;
-      }
+      scoreEnds(wall, seen_end[w], map, assoc[w], params.vertex_radius, score, r, endpoints);
     covered_length += score.coverage * score.seen_length;
     seen_total += score.seen_length;
     r.walls.push_back(score);
   }
   if (seen_total > 0.0) r.coverage = covered_length / seen_total;
-  if (endpoint_count > 0) r.mean_endpoint_error = endpoint_sum / static_cast<double>(endpoint_count);
-
-  std::size_t corners_with_endpoints = 0;
-  std::vector<std::size_t> faces;
-  for (const Corner& c : cornersOf(walls, params))
-  {
-    faces.clear();
-    for (const Corner::Meeting& m : c.meetings)
-      if (seen_end[m.face_a][m.end_a] && seen_end[m.face_b][m.end_b])
-        for (const std::size_t f : {m.face_a, m.face_b})
-          if (std::find(faces.begin(), faces.end(), f) == faces.end()) faces.push_back(f);
-    if (faces.empty()) continue;  // not seen
-    CornerScore cs;
-    cs.corner = c.point;
-    // Each map endpoint once, however many of the corner's faces its segment is associated with.
-    std::vector<std::size_t> segments;
-    for (const std::size_t f : faces) segments.insert(segments.end(), assoc[f].begin(), assoc[f].end());
-    std::sort(segments.begin(), segments.end());
-    segments.erase(std::unique(segments.begin(), segments.end()), segments.end());
-    for (const std::size_t m : segments)
-      for (const Vec2& e : {map[m].start, map[m].end})
-      {
-        const double d = (e - c.point).norm();
-        if (d > params.vertex_radius) continue;
-        cs.vertex_error += d;
-        ++cs.endpoints;
-      }
-    if (cs.endpoints == 0)
-      ++r.missed_corners;
-    else
-    {
-      vertex_sum += cs.vertex_error;
-      ++corners_with_endpoints;
-    }
-    r.corners.push_back(cs);
-  }
-  if (corners_with_endpoints > 0)
-    r.mean_vertex_error = vertex_sum / static_cast<double>(corners_with_endpoints);
+  if (endpoints.count > 0) r.mean_endpoint_error = endpoints.sum / static_cast<double>(endpoints.count);
+  scoreCorners(walls, seen_end, assoc, map, params, r);
   return r;
 }
 
