@@ -6,6 +6,7 @@ import os
 import re
 import struct
 import subprocess
+import sys
 import tempfile
 import time
 import zlib
@@ -46,7 +47,7 @@ def artifact_dir():
 
 def run(cmd, timeout):
     """Runs a command; returns (returncode, combined output)."""
-    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=timeout)
+    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=within_budget(timeout))
     return p.returncode, p.stdout.decode(errors="replace")
 
 
@@ -135,8 +136,41 @@ def play(bag, rate, timeout=None, topics=None, wait_for_subscribers=True):
         raise RuntimeError("rosbag play failed:\n" + out)
 
 
+def time_limit_of(script, test_dir):
+    """The smallest rostest time-limit [s] of the test/*.test files that run `script`, or None."""
+    limits = []
+    for name in sorted(os.listdir(test_dir)) if os.path.isdir(test_dir) else []:
+        if name.endswith(".test"):
+            with open(os.path.join(test_dir, name)) as f:
+                for test in re.findall(r"<test\b[^>]*>", f.read()):
+                    if re.search(r'\btype="%s"' % re.escape(script), test):
+                        limit = re.search(r'\btime-limit="([0-9.]+)"', test)
+                        limits.append(float(limit.group(1)) if limit else 60.0)  # rostest's default
+    return min(limits) if limits else None
+
+
+def _test_deadline():
+    """When this checker's waits must have ended: its rostest time-limit (counted from the start of the
+    test node, about when this module is imported) less a reserve for stopping the nodes. Past the
+    time-limit rostest kills the checker, which then leaves no result naming what it awaited."""
+    limit = time_limit_of(os.path.basename(sys.argv[0]), os.path.join(repo_root(), "test"))
+    if limit is None:
+        return None
+    return time.time() + limit - max(60.0, 0.1 * limit)
+
+
+TEST_DEADLINE = _test_deadline()
+
+
+def within_budget(limit):
+    """`limit` [s], shortened to what is left before the test's deadline (at least 1 s)."""
+    if TEST_DEADLINE is None:
+        return limit
+    return max(1.0, min(limit, TEST_DEADLINE - time.time()))
+
+
 def wait_for(predicate, timeout, step=0.1):
-    deadline = time.time() + timeout
+    deadline = time.time() + within_budget(timeout)
     while time.time() < deadline:
         if predicate():
             return True
@@ -149,7 +183,7 @@ def wait_until(predicate, awaited, arrived, limit, step=0.1, gone=None):
     what had arrived (`arrived()` describes the state). `gone()`, checked every 2 s, names a dead
     node (or returns None): the wait then fails at once instead of at the limit."""
     t0 = time.time()
-    deadline, next_check = t0 + limit, t0 + 2.0
+    deadline, next_check = t0 + within_budget(limit), t0 + 2.0
     while not predicate():
         now = time.time()
         if gone is not None and now >= next_check:
@@ -158,7 +192,8 @@ def wait_until(predicate, awaited, arrived, limit, step=0.1, gone=None):
             if dead:
                 raise AssertionError("%s while waiting for %s; arrived: %s" % (dead, awaited, arrived()))
         if now >= deadline:
-            raise AssertionError("waited %.0f s (the limit) for %s; arrived: %s" % (now - t0, awaited, arrived()))
+            raise AssertionError("waited %.0f s (the limit, or what the test's time-limit left) for %s; arrived: %s"
+                                 % (now - t0, awaited, arrived()))
         time.sleep(step)
     return time.time() - t0
 
