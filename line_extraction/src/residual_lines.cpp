@@ -4,8 +4,10 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_set>
 
+#include "line_extraction/bucket_sort.hpp"
 #include "line_extraction/param_checks.hpp"
 
 namespace line_extraction
@@ -187,6 +189,14 @@ bool ResidualLineFinder::seedLine(std::size_t seed, LineNormal& best) const
   return best_count >= 3;
 }
 
+void ResidualLineFinder::sortAlong(std::vector<Candidate>& band, std::vector<Candidate>& scratch)
+{
+  bucketSortByKey(
+      band, scratch, [](const Candidate& c) { return c.along; },
+      [](const Candidate& a, const Candidate& b)
+      { return a.along < b.along || (a.along == b.along && a.index < b.index); });
+}
+
 bool ResidualLineFinder::growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const
 {
   // Collect the band's unused points on the seed's side, keep the contiguous run through the
@@ -200,14 +210,20 @@ bool ResidualLineFinder::growRun(std::size_t seed, LineNormal& fit_line, std::ve
   };
   const double bridge = std::max(params_.max_gap, max_gap_) + 1e-9;
   const double half_width = params_.band_sigmas * max_sigma_;
+  // Any stretch at which the run ends inside gives the same run (points collected beyond it lie
+  // farther than a gap from its ends), so the refit pass starts at the stretch the first one reached.
+  double stretch = 4.0 * params_.seed_radius + bridge;
+  std::vector<Candidate> band, sorted;
   for (int pass = 0; pass < 2; ++pass)
   {
     const int side = observer_side(fit_line, points[seed].source);
     const Vec2 dir(-fit_line.ny, fit_line.nx);
     const Vec2 foot = Vec2(fit_line.nx, fit_line.ny) * fit_line.radius;
     const double t_seed = dir.dot(points[seed].p - foot);
-    std::vector<Candidate> band;
-    for (double stretch = 4.0 * params_.seed_radius + bridge;; stretch *= 2.0)
+    // A cell's points come mostly from one keyframe: its side of the line is looked up once per run of them.
+    std::uint32_t last_source = std::numeric_limits<std::uint32_t>::max();
+    int last_side = 0;
+    for (;; stretch *= 2.0)
     {
       band.clear();
       forEachNear(foot, dir, t_seed - stretch, t_seed + stretch, half_width,
@@ -215,12 +231,15 @@ bool ResidualLineFinder::growRun(std::size_t seed, LineNormal& fit_line, std::ve
                   {
                     const ResidualPoint& w = points[j];
                     if (w.used || fit_line.distance(w.p) > params_.band_sigmas * w.sigma) return;
-                    if (observer_side(fit_line, w.source) != side) return;
+                    if (w.source != last_source)
+                    {
+                      last_source = w.source;
+                      last_side = observer_side(fit_line, w.source);
+                    }
+                    if (last_side != side) return;
                     band.push_back({j, dir.dot(w.p - foot)});
                   });
-      std::sort(band.begin(), band.end(),
-                [](const Candidate& a, const Candidate& b)
-                { return a.along < b.along || (a.along == b.along && a.index < b.index); });
+      sortAlong(band, sorted);
       const auto at =
           std::find_if(band.begin(), band.end(), [seed](const Candidate& c) { return c.index == seed; });
       if (at == band.end()) return false;

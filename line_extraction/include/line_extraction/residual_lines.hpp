@@ -113,6 +113,8 @@ class ResidualLineFinder
     double along;
   };
 
+  /// Sorts by position along the line, ties by index.
+  static void sortAlong(std::vector<Candidate>& band, std::vector<Candidate>& scratch);
   const ResidualSource* sourceById(std::uint32_t id) const;
   /// Calls f(index) for every point whose grid cell may hold points within `half_width` of the line
   /// through `origin` along `dir` between `t0` and `t1` (each point once; the caller tests exactly).
