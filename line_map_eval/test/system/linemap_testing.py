@@ -46,9 +46,21 @@ def artifact_dir():
 
 
 def run(cmd, timeout):
-    """Runs a command; returns (returncode, combined output)."""
-    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=within_budget(timeout))
-    return p.returncode, p.stdout.decode(errors="replace")
+    """Runs a command in a process group of its own; returns (returncode, combined output). On reaching the
+    timeout the whole group is killed and subprocess.TimeoutExpired raised: killing the command alone leaves
+    a child of a wrapper (rosbag play's player) holding the output open, and the read would never end."""
+    import signal
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        out, _ = p.communicate(timeout=within_budget(timeout))
+    except BaseException:
+        try:
+            os.killpg(p.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        p.communicate()
+        raise
+    return p.returncode, out.decode(errors="replace")
 
 
 def stamp_key(stamp):
