@@ -240,20 +240,7 @@ bool ResidualLineFinder::growRun(std::size_t seed, LineNormal& fit_line, std::ve
                     band.push_back({j, dir.dot(w.p - foot)});
                   });
       sortAlong(band, sorted);
-      const auto at =
-          std::find_if(band.begin(), band.end(), [seed](const Candidate& c) { return c.index == seed; });
-      if (at == band.end()) return false;
-      std::size_t lo = static_cast<std::size_t>(at - band.begin()), hi = lo;
-      const auto joined = [&](std::size_t a, std::size_t b)
-      {
-        const double allowed = std::max({params_.max_gap, static_cast<double>(points[band[a].index].gap),
-                                         static_cast<double>(points[band[b].index].gap)});
-        return band[b].along - band[a].along <= allowed;
-      };
-      while (lo > 0 && joined(lo - 1, lo)) --lo;
-      while (hi + 1 < band.size() && joined(hi, hi + 1)) ++hi;
-      run.assign(band.begin() + static_cast<std::ptrdiff_t>(lo),
-                 band.begin() + static_cast<std::ptrdiff_t>(hi) + 1);
+      if (!runThrough(seed, band, run)) return false;
       if (run.front().along - (t_seed - stretch) > bridge && (t_seed + stretch) - run.back().along > bridge)
         break;
     }
@@ -261,6 +248,27 @@ bool ResidualLineFinder::growRun(std::size_t seed, LineNormal& fit_line, std::ve
     for (const Candidate& c : run) sums.add(points[c.index].p);
     if (!fitNormal(sums, fit_line)) return false;
   }
+  return true;
+}
+
+bool ResidualLineFinder::runThrough(std::size_t seed, const std::vector<Candidate>& band,
+                                    std::vector<Candidate>& run) const
+{
+  const std::vector<ResidualPoint>& points = *points_;
+  const auto at =
+      std::find_if(band.begin(), band.end(), [seed](const Candidate& c) { return c.index == seed; });
+  if (at == band.end()) return false;
+  std::size_t lo = static_cast<std::size_t>(at - band.begin()), hi = lo;
+  const auto joined = [&](std::size_t a, std::size_t b)
+  {
+    const double allowed = std::max({params_.max_gap, static_cast<double>(points[band[a].index].gap),
+                                     static_cast<double>(points[band[b].index].gap)});
+    return band[b].along - band[a].along <= allowed;
+  };
+  while (lo > 0 && joined(lo - 1, lo)) --lo;
+  while (hi + 1 < band.size() && joined(hi, hi + 1)) ++hi;
+  run.assign(band.begin() + static_cast<std::ptrdiff_t>(lo),
+             band.begin() + static_cast<std::ptrdiff_t>(hi) + 1);
   return true;
 }
 

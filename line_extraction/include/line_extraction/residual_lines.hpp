@@ -122,6 +122,9 @@ class ResidualLineFinder
   void forEachNear(const Vec2& origin, const Vec2& dir, double t0, double t1, double half_width, F&& f) const;
   bool seedLine(std::size_t seed, LineNormal& best) const;
   bool growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const;
+  /// The band's candidates (sorted along the line) that the seed reaches without a gap wider than the
+  /// points allow; false when the seed is not in the band.
+  bool runThrough(std::size_t seed, const std::vector<Candidate>& band, std::vector<Candidate>& run) const;
   bool acceptRun(const std::vector<Candidate>& run, const LineNormal& fit_line, ResidualLine& line) const;
   /// The share of the line's bins [t0, t1] that its points fill (see ResidualLineParams::min_fill).
   double filledShare(const std::vector<Candidate>& run, const LineNormal& line, double t0, double t1) const;

@@ -192,6 +192,21 @@ std::vector<Corner> cornersOf(const std::vector<Segment2>& walls, const GroundTr
     }
   return corners;
 }
+/// Throws std::invalid_argument (ParameterError for the parameters) naming what does not fit.
+void checkInputs(const std::vector<Segment2>& walls, const SeenParts& seen, const std::vector<Segment2>& map,
+                 const GroundTruthParams& params, const std::vector<double>& slack)
+{
+  params.validate();
+  checkFinite(walls, "face");
+  checkFinite(map, "map segment");
+  if (seen.size() != walls.size())
+    throw std::invalid_argument("ground truth metrics: seen parts for " + std::to_string(seen.size()) +
+                                " faces, but there are " + std::to_string(walls.size()));
+  if (!slack.empty() && slack.size() != walls.size())
+    throw std::invalid_argument("ground truth metrics: slack for " + std::to_string(slack.size()) +
+                                " faces, but there are " + std::to_string(walls.size()));
+}
+
 /// joint[face][end]: where consecutive chords of a curve meet, which is no end of a wall.
 std::vector<std::array<bool, 2>> curveJoints(const std::vector<Segment2>& walls,
                                              const std::vector<std::vector<std::size_t>>& curves,
@@ -442,15 +457,7 @@ GroundTruthResult evaluateAgainstGroundTruth(const std::vector<Segment2>& walls,
                                              const std::vector<std::vector<std::size_t>>& curves,
                                              const std::vector<double>& slack)
 {
-  params.validate();
-  checkFinite(walls, "face");
-  checkFinite(map, "map segment");
-  if (seen.size() != walls.size())
-    throw std::invalid_argument("ground truth metrics: seen parts for " + std::to_string(seen.size()) +
-                                " faces, but there are " + std::to_string(walls.size()));
-  if (!slack.empty() && slack.size() != walls.size())
-    throw std::invalid_argument("ground truth metrics: slack for " + std::to_string(slack.size()) +
-                                " faces, but there are " + std::to_string(walls.size()));
+  checkInputs(walls, seen, map, params, slack);
   GroundTruthResult r;
   double covered_length = 0.0, seen_total = 0.0;
   EndpointTally endpoints;
