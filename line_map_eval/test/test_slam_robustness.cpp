@@ -54,8 +54,8 @@ TEST(SlamRobustness, ScaledValuesKeepTheKeysKind)
 
 TEST(SlamRobustness, RatiosAndProbabilitiesStayValid)
 {
-  EXPECT_DOUBLE_EQ(std::stod(*scaledValue("loop/ambiguity_ratio", "0.9", 1.4)), 1.0);
-  EXPECT_DOUBLE_EQ(std::stod(*scaledValue("loop/ambiguity_ratio", "0.9", 0.7)), 0.63);
+  EXPECT_DOUBLE_EQ(std::stod(*scaledValue("loop/ambiguity_margin", "0.8", 1.4)), 1.0);
+  EXPECT_DOUBLE_EQ(std::stod(*scaledValue("loop/ambiguity_margin", "0.1", 0.7)), 0.07);
   // The tail 0.001 scaled: 0.9986 and 0.9993.
   EXPECT_NEAR(std::stod(*scaledValue("loop/consistency_probability", "0.999", 1.4)), 0.9986, 1e-9);
   EXPECT_NEAR(std::stod(*scaledValue("loop/consistency_probability", "0.999", 0.7)), 0.9993, 1e-9);

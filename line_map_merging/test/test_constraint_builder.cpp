@@ -73,7 +73,7 @@ TEST(ConstraintBuilder, FindsTheTrueOffsetOfARevisit)
   EXPECT_NEAR(m.match->pose.y, expected.y, 0.02);
   EXPECT_NEAR(linemap::normalizeAngle(m.match->pose.theta - expected.theta), 0.0, 0.01);
   EXPECT_GE(m.match->score, p.loop_min_score);
-  EXPECT_LT(m.ambiguity, p.loop_ambiguity_ratio);
+  EXPECT_FALSE(p.ambiguous(m.ambiguity));
   // The edge is the match's, a loop edge j -> k.
   EXPECT_EQ(m.edge.from, j);
   EXPECT_EQ(m.edge.to, k);

@@ -295,3 +295,32 @@ TEST(LaserSlam, ParametersAreCheckedByName)
   p.set("loop/min_score", "0.7");
   EXPECT_DOUBLE_EQ(LaserSlamParams::fromParams(p).loop_min_score, 0.7);
 }
+
+TEST(LaserSlam, TheAmbiguityTestIsAMarginBelowTheBest)
+{
+  linemap::ParamSet p;
+  p.set("loop/ambiguity_ratio", "0.9");
+  try
+  {
+    LaserSlamParams::fromParams(p);
+    FAIL() << "the former key was silently ignored";
+  }
+  catch (const linemap::ParameterError& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("loop/ambiguity_margin"), std::string::npos) << e.what();
+  }
+  p = linemap::ParamSet();
+  p.set("loop/ambiguity_margin", "1.5");
+  EXPECT_THROW(LaserSlamParams::fromParams(p), linemap::ParameterError);
+  p.set("loop/ambiguity_margin", "0.2");
+  const LaserSlamParams s = LaserSlamParams::fromParams(p);
+  // A rival at 85 % of the best lies within 20 % of it; one at 75 % does not.
+  EXPECT_TRUE(s.ambiguous(0.85));
+  EXPECT_FALSE(s.ambiguous(0.75));
+  LaserSlamParams off = s;
+  off.loop_ambiguity_margin = 0.0;
+  EXPECT_FALSE(off.ambiguous(1.0)) << "a margin of 0 is no test, even for a tie";
+  off = s;
+  off.loop_ambiguity_distance = 0.0;
+  EXPECT_FALSE(off.ambiguous(1.0));
+}

@@ -31,7 +31,7 @@ bool isCount(const std::string& value)
 bool isRatio(const std::string& key)
 {
   return key == "isotropic_ratio" || key == "min_weight" || key == "front_end/widen_ratio" ||
-         key == "loop/ambiguity_ratio";
+         key == "loop/ambiguity_margin";
 }
 
 std::string formatNumber(double v)

@@ -25,7 +25,7 @@ import linemap_testing as lt  # noqa: E402
 #   today's SLAM (config/slam.yaml)                                  0.0161 / 0.0372
 #   no loop closures (loop/candidates=0)                             0.174  / 0.130
 #   closure gate off (loop/consistency_probability=0, min_score=0.3,
-#     ambiguity_ratio=1.1, max_error_xy=100, max_error_theta=10)     0.865  / 1.011
+#     ambiguity_margin=0, max_error_xy=100, max_error_theta=10)      0.865  / 1.011
 #   front end never matches (front_end/min_score=2)                  6.88   / 1.76
 #   raw odometry (--odometry)                                        7.37   / 0.549
 # Each floor lies well above today's figure (1.5x, 1.3x: the figures moved by up to 0.002 m between the

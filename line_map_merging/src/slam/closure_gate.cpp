@@ -28,7 +28,7 @@ bool ClosureGate::passesScreening(const LoopMatch& match, std::size_t attempt, S
     ++counters.loops_rejected_score;
     return false;
   }
-  if (params_.loop_ambiguity_distance > 0.0 && match.ambiguity >= params_.loop_ambiguity_ratio)
+  if (params_.ambiguous(match.ambiguity))
   {
     ++counters.loops_ambiguous;
     attempts_[attempt].outcome = ClosureOutcome::kAmbiguous;

@@ -99,7 +99,12 @@ void readLoop(const linemap::ParamSet& p, LaserSlamParams& s)
   s.loop_consensus_keyframes = countParam(p, "loop/consensus_keyframes", s.loop_consensus_keyframes, 1);
   s.loop_pending_keyframes = countParam(p, "loop/pending_keyframes", s.loop_pending_keyframes, 1);
   s.loop_ambiguity_distance = p.getDouble("loop/ambiguity_distance", s.loop_ambiguity_distance);
-  s.loop_ambiguity_ratio = p.getDouble("loop/ambiguity_ratio", s.loop_ambiguity_ratio);
+  if (p.has("loop/ambiguity_ratio"))
+    throw linemap::ParameterError(
+        "parameter 'loop/ambiguity_ratio' is now 'loop/ambiguity_margin' (1 - ratio: the former 0.9 is 0.1)");
+  s.loop_ambiguity_margin = p.getDouble("loop/ambiguity_margin", s.loop_ambiguity_margin);
+  if (!(s.loop_ambiguity_margin >= 0.0 && s.loop_ambiguity_margin <= 1.0))
+    throw linemap::ParameterError("parameter 'loop/ambiguity_margin' must be in [0, 1]");
   s.loop_consistency_probability =
       p.getDouble("loop/consistency_probability", s.loop_consistency_probability);
   if (!(s.loop_consistency_probability >= 0.0 && s.loop_consistency_probability < 1.0))

@@ -78,10 +78,18 @@ struct LaserSlamParams
   std::size_t loop_candidates = 2;  ///< submaps tried per keyframe
   std::size_t loop_every = 1;       ///< keyframes between attempts
   double loop_min_score = 0.55;
-  /// A closure whose coarse search finds another pose at least ambiguity_distance away scoring at least
-  /// ambiguity_ratio of the best is refused (a corridor seen from inside); 0 / ratio > 1: no check.
+  /// A closure whose coarse search finds another pose at least ambiguity_distance away scoring within
+  /// ambiguity_margin of the best (a fraction of its score) is refused (a corridor seen from inside); either
+  /// 0: no check. A margin, not the rival's share of the best: near 1 a share leaves no room to loosen the
+  /// test.
   double loop_ambiguity_distance = 0.3;  ///< [m]
-  double loop_ambiguity_ratio = 0.9;
+  double loop_ambiguity_margin = 0.1;
+  /// Whether a match whose rival scores `ambiguity` (a fraction of the best) is refused as ambiguous.
+  bool ambiguous(double ambiguity) const
+  {
+    return loop_ambiguity_distance > 0.0 && loop_ambiguity_margin > 0.0 &&
+           ambiguity >= 1.0 - loop_ambiguity_margin;
+  }
   /// A closure is refused when its disagreement with the estimate is beyond this quantile of the chi-square
   /// distribution (3 degrees of freedom) in the metric of the combined uncertainty: the closure's own
   /// covariance plus that of the estimate's relative pose along the graph's most certain path
