@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <unordered_set>
 
 #include "line_extraction/bucket_sort.hpp"
@@ -97,22 +98,37 @@ const ResidualSource* ResidualLineFinder::sourceById(std::uint32_t id) const
 
 template <class F>
 void ResidualLineFinder::forEachNear(const Vec2& origin, const Vec2& dir, double t0, double t1,
-                                     double half_width, F&& f) const
+                                     double half_width, F&& f, const Stretch* visited) const
 {
   // Every cell whose centre lies within half a diagonal of the rectangle.
   const double cell = params_.seed_radius;
   const Vec2 normal(-dir.y(), dir.x());
-  const Vec2 a = origin + dir * t0, b = origin + dir * t1;
-  const Vec2 lo = a.cwiseMin(b) - Vec2::Constant(half_width + cell);
-  const Vec2 hi = a.cwiseMax(b) + Vec2::Constant(half_width + cell);
+  struct CellRange
+  {
+    std::int64_t x0, x1, y0, y1;
+  };
+  const auto cellRange = [&](double from, double to)
+  {
+    const Vec2 a = origin + dir * from, b = origin + dir * to;
+    const Vec2 lo = a.cwiseMin(b) - Vec2::Constant(half_width + cell);
+    const Vec2 hi = a.cwiseMax(b) + Vec2::Constant(half_width + cell);
+    return CellRange{cellIndex(lo.x(), cell), cellIndex(hi.x(), cell), cellIndex(lo.y(), cell),
+                     cellIndex(hi.y(), cell)};
+  };
+  const CellRange range = cellRange(t0, t1);
+  const CellRange before = visited ? cellRange(visited->t0, visited->t1) : CellRange{1, 0, 1, 0};
   const double reach = half_width + cell * 0.7072;
-  for (std::int64_t ix = cellIndex(lo.x(), cell); ix <= cellIndex(hi.x(), cell); ++ix)
-    for (std::int64_t iy = cellIndex(lo.y(), cell); iy <= cellIndex(hi.y(), cell); ++iy)
+  for (std::int64_t ix = range.x0; ix <= range.x1; ++ix)
+    for (std::int64_t iy = range.y0; iy <= range.y1; ++iy)
     {
       const Vec2 centre((static_cast<double>(ix) + 0.5) * cell, (static_cast<double>(iy) + 0.5) * cell);
       const Vec2 rel = centre - origin;
       const double t = rel.dot(dir);
       if (t < t0 - cell || t > t1 + cell || std::abs(rel.dot(normal)) > reach) continue;
+      // The same tests as the earlier call made, so a cell is visited by exactly one of the two.
+      if (ix >= before.x0 && ix <= before.x1 && iy >= before.y0 && iy <= before.y1 &&
+          t >= visited->t0 - cell && t <= visited->t1 + cell)
+        continue;
       const auto cell_at = cells_.find(cellKey(ix, iy));
       if (cell_at == cells_.end()) continue;
       for (std::uint32_t k = cell_at->second.first; k < cell_at->second.second; ++k) f(cell_order_[k]);
@@ -189,12 +205,15 @@ bool ResidualLineFinder::seedLine(std::size_t seed, LineNormal& best) const
   return best_count >= 3;
 }
 
+bool ResidualLineFinder::alongThenIndex(const Candidate& a, const Candidate& b)
+{
+  return a.along < b.along || (a.along == b.along && a.index < b.index);
+}
+
 void ResidualLineFinder::sortAlong(std::vector<Candidate>& band, std::vector<Candidate>& scratch)
 {
   bucketSortByKey(
-      band, scratch, [](const Candidate& c) { return c.along; },
-      [](const Candidate& a, const Candidate& b)
-      { return a.along < b.along || (a.along == b.along && a.index < b.index); });
+      band, scratch, [](const Candidate& c) { return c.along; }, alongThenIndex);
 }
 
 bool ResidualLineFinder::growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const
@@ -213,7 +232,7 @@ bool ResidualLineFinder::growRun(std::size_t seed, LineNormal& fit_line, std::ve
   // Any stretch at which the run ends inside gives the same run (points collected beyond it lie
   // farther than a gap from its ends), so the refit pass starts at the stretch the first one reached.
   double stretch = 4.0 * params_.seed_radius + bridge;
-  std::vector<Candidate> band, sorted;
+  std::vector<Candidate> band, fresh, scratch;
   for (int pass = 0; pass < 2; ++pass)
   {
     const int side = observer_side(fit_line, points[seed].source);
@@ -223,23 +242,32 @@ bool ResidualLineFinder::growRun(std::size_t seed, LineNormal& fit_line, std::ve
     // A cell's points come mostly from one keyframe: its side of the line is looked up once per run of them.
     std::uint32_t last_source = std::numeric_limits<std::uint32_t>::max();
     int last_side = 0;
+    // A longer stretch adds the points of the cells the shorter one did not visit to its sorted band.
+    band.clear();
+    std::optional<Stretch> visited;
     for (;; stretch *= 2.0)
     {
-      band.clear();
-      forEachNear(foot, dir, t_seed - stretch, t_seed + stretch, half_width,
-                  [&](std::uint32_t j)
-                  {
-                    const ResidualPoint& w = points[j];
-                    if (w.used || fit_line.distance(w.p) > params_.band_sigmas * w.sigma) return;
-                    if (w.source != last_source)
-                    {
-                      last_source = w.source;
-                      last_side = observer_side(fit_line, w.source);
-                    }
-                    if (last_side != side) return;
-                    band.push_back({j, dir.dot(w.p - foot)});
-                  });
-      sortAlong(band, sorted);
+      fresh.clear();
+      forEachNear(
+          foot, dir, t_seed - stretch, t_seed + stretch, half_width,
+          [&](std::uint32_t j)
+          {
+            const ResidualPoint& w = points[j];
+            if (w.used || fit_line.distance(w.p) > params_.band_sigmas * w.sigma) return;
+            if (w.source != last_source)
+            {
+              last_source = w.source;
+              last_side = observer_side(fit_line, w.source);
+            }
+            if (last_side != side) return;
+            fresh.push_back({j, dir.dot(w.p - foot)});
+          },
+          visited ? &*visited : nullptr);
+      sortAlong(fresh, scratch);
+      scratch.resize(band.size() + fresh.size());
+      std::merge(band.begin(), band.end(), fresh.begin(), fresh.end(), scratch.begin(), alongThenIndex);
+      band.swap(scratch);
+      visited = Stretch{t_seed - stretch, t_seed + stretch};
       if (!runThrough(seed, band, run)) return false;
       if (run.front().along - (t_seed - stretch) > bridge && (t_seed + stretch) - run.back().along > bridge)
         break;

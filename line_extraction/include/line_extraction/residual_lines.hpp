@@ -113,13 +113,21 @@ class ResidualLineFinder
     double along;
   };
 
+  static bool alongThenIndex(const Candidate& a, const Candidate& b);
   /// Sorts by position along the line, ties by index.
   static void sortAlong(std::vector<Candidate>& band, std::vector<Candidate>& scratch);
   const ResidualSource* sourceById(std::uint32_t id) const;
+  /// A stretch [t0, t1] of a line: the cells of forEachNear's call over it.
+  struct Stretch
+  {
+    double t0, t1;
+  };
   /// Calls f(index) for every point whose grid cell may hold points within `half_width` of the line
   /// through `origin` along `dir` between `t0` and `t1` (each point once; the caller tests exactly).
+  /// With `visited`, only the cells a call over that shorter stretch (same line and width) did not visit.
   template <class F>
-  void forEachNear(const Vec2& origin, const Vec2& dir, double t0, double t1, double half_width, F&& f) const;
+  void forEachNear(const Vec2& origin, const Vec2& dir, double t0, double t1, double half_width, F&& f,
+                   const Stretch* visited = nullptr) const;
   bool seedLine(std::size_t seed, LineNormal& best) const;
   bool growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const;
   /// The band's candidates (sorted along the line) that the seed reaches without a gap wider than the
