@@ -219,64 +219,74 @@ void ResidualLineFinder::sortAlong(std::vector<Candidate>& band, std::vector<Can
 bool ResidualLineFinder::growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const
 {
   // Collect the band's unused points on the seed's side, keep the contiguous run through the
-  // seed, refit; twice. The band is searched over a stretch of the line that doubles until the run
-  // ends inside it by more than any gap could bridge.
-  const std::vector<ResidualPoint>& points = *points_;
-  const auto observer_side = [&](const LineNormal& l, std::uint32_t source_id)
-  {
-    const ResidualSource* src = sourceById(source_id);
-    return src != nullptr && l.signedDistance(src->laser.translation()) > 0.0 ? 1 : -1;
-  };
-  const double bridge = std::max(params_.max_gap, max_gap_) + 1e-9;
-  const double half_width = params_.band_sigmas * max_sigma_;
+  // seed, refit; twice.
   // Any stretch at which the run ends inside gives the same run (points collected beyond it lie
   // farther than a gap from its ends), so the refit pass starts at the stretch the first one reached.
-  double stretch = 4.0 * params_.seed_radius + bridge;
-  std::vector<Candidate> band, fresh, scratch;
+  double stretch = 4.0 * params_.seed_radius + bridge();
   for (int pass = 0; pass < 2; ++pass)
   {
-    const int side = observer_side(fit_line, points[seed].source);
-    const Vec2 dir(-fit_line.ny, fit_line.nx);
-    const Vec2 foot = Vec2(fit_line.nx, fit_line.ny) * fit_line.radius;
-    const double t_seed = dir.dot(points[seed].p - foot);
-    // A cell's points come mostly from one keyframe: its side of the line is looked up once per run of them.
-    std::uint32_t last_source = std::numeric_limits<std::uint32_t>::max();
-    int last_side = 0;
-    // A longer stretch adds the points of the cells the shorter one did not visit to its sorted band.
-    band.clear();
-    std::optional<Stretch> visited;
-    for (;; stretch *= 2.0)
-    {
-      fresh.clear();
-      forEachNear(
-          foot, dir, t_seed - stretch, t_seed + stretch, half_width,
-          [&](std::uint32_t j)
-          {
-            const ResidualPoint& w = points[j];
-            if (w.used || fit_line.distance(w.p) > params_.band_sigmas * w.sigma) return;
-            if (w.source != last_source)
-            {
-              last_source = w.source;
-              last_side = observer_side(fit_line, w.source);
-            }
-            if (last_side != side) return;
-            fresh.push_back({j, dir.dot(w.p - foot)});
-          },
-          visited ? &*visited : nullptr);
-      sortAlong(fresh, scratch);
-      scratch.resize(band.size() + fresh.size());
-      std::merge(band.begin(), band.end(), fresh.begin(), fresh.end(), scratch.begin(), alongThenIndex);
-      band.swap(scratch);
-      visited = Stretch{t_seed - stretch, t_seed + stretch};
-      if (!runThrough(seed, band, run)) return false;
-      if (run.front().along - (t_seed - stretch) > bridge && (t_seed + stretch) - run.back().along > bridge)
-        break;
-    }
+    if (!runAlong(seed, fit_line, stretch, run)) return false;
     LineSums sums;
-    for (const Candidate& c : run) sums.add(points[c.index].p);
+    for (const Candidate& c : run) sums.add((*points_)[c.index].p);
     if (!fitNormal(sums, fit_line)) return false;
   }
   return true;
+}
+
+double ResidualLineFinder::bridge() const
+{
+  return std::max(params_.max_gap, max_gap_) + 1e-9;
+}
+
+bool ResidualLineFinder::runAlong(std::size_t seed, const LineNormal& fit_line, double& stretch,
+                                  std::vector<Candidate>& run) const
+{
+  // The band is searched over a stretch of the line that doubles until the run ends inside it by more
+  // than any gap could bridge.
+  const std::vector<ResidualPoint>& points = *points_;
+  const auto observer_side = [&](std::uint32_t source_id)
+  {
+    const ResidualSource* src = sourceById(source_id);
+    return src != nullptr && fit_line.signedDistance(src->laser.translation()) > 0.0 ? 1 : -1;
+  };
+  const double half_width = params_.band_sigmas * max_sigma_;
+  const int side = observer_side(points[seed].source);
+  const Vec2 dir(-fit_line.ny, fit_line.nx);
+  const Vec2 foot = Vec2(fit_line.nx, fit_line.ny) * fit_line.radius;
+  const double t_seed = dir.dot(points[seed].p - foot);
+  // A cell's points come mostly from one keyframe: its side of the line is looked up once per run of them.
+  std::uint32_t last_source = std::numeric_limits<std::uint32_t>::max();
+  int last_side = 0;
+  // A longer stretch adds the points of the cells the shorter one did not visit to its sorted band.
+  std::vector<Candidate> band, fresh, scratch;
+  std::optional<Stretch> visited;
+  for (;; stretch *= 2.0)
+  {
+    fresh.clear();
+    forEachNear(
+        foot, dir, t_seed - stretch, t_seed + stretch, half_width,
+        [&](std::uint32_t j)
+        {
+          const ResidualPoint& w = points[j];
+          if (w.used || fit_line.distance(w.p) > params_.band_sigmas * w.sigma) return;
+          if (w.source != last_source)
+          {
+            last_source = w.source;
+            last_side = observer_side(w.source);
+          }
+          if (last_side != side) return;
+          fresh.push_back({j, dir.dot(w.p - foot)});
+        },
+        visited ? &*visited : nullptr);
+    sortAlong(fresh, scratch);
+    scratch.resize(band.size() + fresh.size());
+    std::merge(band.begin(), band.end(), fresh.begin(), fresh.end(), scratch.begin(), alongThenIndex);
+    band.swap(scratch);
+    visited = Stretch{t_seed - stretch, t_seed + stretch};
+    if (!runThrough(seed, band, run)) return false;
+    if (run.front().along - (t_seed - stretch) > bridge() && (t_seed + stretch) - run.back().along > bridge())
+      return true;
+  }
 }
 
 bool ResidualLineFinder::runThrough(std::size_t seed, const std::vector<Candidate>& band,

@@ -130,6 +130,12 @@ class ResidualLineFinder
                    const Stretch* visited = nullptr) const;
   bool seedLine(std::size_t seed, LineNormal& best) const;
   bool growRun(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const;
+  /// The run through the seed of the band along `fit_line`, searched over a `stretch` either side of the seed
+  /// that doubles until the run ends inside it (`stretch` is left at that); false when the seed is not in it.
+  bool runAlong(std::size_t seed, const LineNormal& fit_line, double& stretch,
+                std::vector<Candidate>& run) const;
+  /// [m] the widest gap any two neighbouring points of a line may leave.
+  double bridge() const;
   /// The band's candidates (sorted along the line) that the seed reaches without a gap wider than the
   /// points allow; false when the seed is not in the band.
   bool runThrough(std::size_t seed, const std::vector<Candidate>& band, std::vector<Candidate>& run) const;
