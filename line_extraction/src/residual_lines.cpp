@@ -116,6 +116,7 @@ void ResidualLineFinder::forEachNear(const Vec2& origin, const Vec2& dir, double
                      cellIndex(hi.y(), cell)};
   };
   const CellRange range = cellRange(t0, t1);
+  // Without `visited` an empty range, so the test below never reaches `visited`.
   const CellRange before = visited ? cellRange(visited->t0, visited->t1) : CellRange{1, 0, 1, 0};
   const double reach = half_width + cell * 0.7072;
   for (std::int64_t ix = range.x0; ix <= range.x1; ++ix)
