@@ -23,15 +23,16 @@ ClosureGate::ClosureGate(const LaserSlamParams& params)
 
 bool ClosureGate::passesScreening(const LoopMatch& match, std::size_t attempt, SlamCounters& counters)
 {
-  if (match.match->score < params_.loop_min_score)
-  {
-    ++counters.loops_rejected_score;
-    return false;
-  }
+  // Ambiguity first: an ambiguous match comes unrefined (ConstraintBuilder), its score from the coarse field.
   if (params_.ambiguous(match.ambiguity))
   {
     ++counters.loops_ambiguous;
     attempts_[attempt].outcome = ClosureOutcome::kAmbiguous;
+    return false;
+  }
+  if (match.match->score < params_.loop_min_score)
+  {
+    ++counters.loops_rejected_score;
     return false;
   }
   return true;

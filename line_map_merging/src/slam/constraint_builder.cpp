@@ -123,6 +123,12 @@ std::optional<std::pair<MatchResult, double>> ConstraintBuilder::matchLoop(
   TranslationScores spread;
   const auto candidates = correlativeSearch(coarse, scan, guess, wide, 3, &spread);
   if (candidates.empty()) return std::nullopt;
+  double ambiguity = 0.0;
+  if (params_.loop_ambiguity_distance > 0.0 && candidates.front().score > 0.0)
+    ambiguity = spread.bestAwayFrom(candidates.front().pose.translation(), params_.loop_ambiguity_distance) /
+                candidates.front().score;
+  // The gate refuses an ambiguous match whatever its refined score: the fine field is not worth building.
+  if (params_.ambiguous(ambiguity)) return std::make_pair(candidates.front(), ambiguity);
   const LikelihoodGrid fine(points, params_.resolution, params_.sigma, 0.5);
   SearchWindow narrow{params_.loop_resolution,
                       params_.loop_angular_step,
@@ -140,10 +146,6 @@ std::optional<std::pair<MatchResult, double>> ConstraintBuilder::matchLoop(
     if (!best || refined.score > best->score) best = refined;
   }
   if (!best) return std::nullopt;
-  double ambiguity = 0.0;
-  if (params_.loop_ambiguity_distance > 0.0 && candidates.front().score > 0.0)
-    ambiguity = spread.bestAwayFrom(candidates.front().pose.translation(), params_.loop_ambiguity_distance) /
-                candidates.front().score;
   return std::make_pair(*best, ambiguity);
 }
 

@@ -36,7 +36,8 @@ struct LoopMatch
 {
   std::size_t from = 0, to = 0;
   /// The refined match: `to`'s pose in `from`'s frame; nothing when the submap had too few points or
-  /// the search found nothing.
+  /// the search found nothing. An ambiguous one is the coarse search's best, not refined: the loop gate
+  /// refuses it before its score.
   std::optional<MatchResult> match;
   double ambiguity = 0.0;  ///< best coarse score away from the peak / the peak's (0: not checked)
   TranslationShape shape;  ///< of the match (matchShape)
@@ -84,7 +85,8 @@ class ConstraintBuilder
                                                  std::size_t j, std::size_t k);
   /// The suspect edges no loop closure in the graph spans.
   std::vector<SuspectEdge> openSuspects(const PoseGraph& graph) const;
-  /// The refined match and its ambiguity (best coarse score away from the peak / the peak's).
+  /// The refined match and its ambiguity (best coarse score away from the peak / the peak's); an ambiguous
+  /// one unrefined.
   std::optional<std::pair<MatchResult, double>> matchLoop(const std::vector<SlamKeyframe>& keyframes,
                                                           const PoseGraph& graph, std::size_t candidate,
                                                           std::size_t current, const linemap::Pose2& guess,

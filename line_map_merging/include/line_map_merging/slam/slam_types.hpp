@@ -63,7 +63,7 @@ struct ClosureAttempt
 {
   std::size_t from = 0, to = 0;  ///< keyframe indices, from < to
   ClosureOutcome outcome = ClosureOutcome::kRejectedScore;
-  double score = 0.0;  ///< the refined match's mean field value
+  double score = 0.0;  ///< the refined match's mean field value (an ambiguous one's: the coarse field's)
 };
 
 struct SlamKeyframe
