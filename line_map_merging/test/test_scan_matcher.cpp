@@ -238,3 +238,62 @@ TEST(ScanMatcher, EmptyInputsGiveNoMatch)
   EXPECT_TRUE(correlativeSearch(grid, {}, Pose2(), SearchWindow{}, 1).empty());
   EXPECT_EQ(refineMatch(grid, {}, Pose2(1, 2, 3), Pose2(), RefinementParams{}).score, 0.0);
 }
+
+// Every translation's score is the mean field value of the scan's points in their shifted cells, those off
+// the grid counting 0, summed in the points' order: a direct lookup per point is the reference, and both
+// the wide window (the loop's coarse search, summed over a zero-padded copy of the grid) and the narrow one
+// (the front end's, tested point by point) must equal it bit for bit, points far off the grid included.
+TEST(ScanMatcher, EveryTranslationScoresTheMeanOfItsShiftedCells)
+{
+  std::vector<Vec2> walls;
+  for (double t = 0.0; t <= 4.0; t += 0.05)
+  {
+    walls.emplace_back(t, 0.0);
+    walls.emplace_back(t, 3.0);
+    if (t <= 3.0)
+    {
+      walls.emplace_back(0.0, t);
+      walls.emplace_back(4.0, t);
+    }
+  }
+  const LikelihoodGrid grid(walls, 0.1, 0.1, 0.5);
+  std::vector<Vec2> scan;
+  for (std::size_t i = 0; i < walls.size(); i += 3) scan.push_back(walls[i] - Vec2(2.03, 1.46));
+  for (const Vec2& far : {Vec2(30.0, 0.0), Vec2(-0.2, 25.0), Vec2(2.4, 0.9)}) scan.push_back(far);
+  const Pose2 centre(1.95, 1.52, 0.02);
+  for (const SearchWindow window : {SearchWindow{1.0, 0.06, 0.1, 0.015, 0.0, 0.0},   // 441 translations
+                                    SearchWindow{0.1, 0.06, 0.1, 0.015, 0.0, 0.0}})  // 9 translations
+  {
+    line_map_merging::TranslationScores spread;
+    const auto found = correlativeSearch(grid, scan, centre, window, 1, &spread);
+    ASSERT_EQ(found.size(), 1u);
+    const int reach = spread.reach, side = 2 * reach + 1;
+    ASSERT_EQ(reach, static_cast<int>(std::lround(window.linear / 0.1)));
+    std::vector<double> expected(static_cast<std::size_t>(side) * side, 0.0);
+    for (int a = -4; a <= 4; ++a)
+    {
+      const double theta = centre.theta + a * window.angular_step;
+      const double c = std::cos(theta), s = std::sin(theta);
+      for (int oy = -reach; oy <= reach; ++oy)
+        for (int ox = -reach; ox <= reach; ++ox)
+        {
+          double sum = 0.0;
+          for (const Vec2& p : scan)
+          {
+            const long x = std::lround((c * p.x() - s * p.y() + centre.x - grid.origin().x()) / 0.1) + ox;
+            const long y = std::lround((s * p.x() + c * p.y() + centre.y - grid.origin().y()) / 0.1) + oy;
+            if (x >= 0 && y >= 0 && x < grid.width() && y < grid.height())
+              sum += grid.cells()[static_cast<std::size_t>(y * grid.width() + x)];
+          }
+          double& e = expected[static_cast<std::size_t>((oy + reach) * side + ox + reach)];
+          e = std::max(e, sum * (1.0 / static_cast<double>(scan.size())));
+        }
+    }
+    for (std::size_t i = 0; i < expected.size(); ++i)
+      ASSERT_EQ(spread.best[i], expected[i]) << "translation " << i;
+    // The room's walls, seen from its middle, score highest where the scan was taken from.
+    EXPECT_NEAR(found.front().pose.x, 2.03, 0.051);
+    EXPECT_NEAR(found.front().pose.y, 1.46, 0.051);
+    EXPECT_GT(found.front().score, 0.5);
+  }
+}

@@ -135,6 +135,89 @@ double TranslationScores::bestAwayFrom(const linemap::Vec2& at, double distance)
   return best_score;
 }
 
+namespace
+{
+/// The summed field values of the points (cells ix, iy at the window's centre) under every translation of
+/// the window, row-major (y outer): each point's cell shifted by whole cells, those off the grid adding
+/// nothing. Every sum adds its points in their order.
+class TranslationSums
+{
+ public:
+  TranslationSums(const LikelihoodGrid& grid, int step, int reach, std::size_t points)
+      : grid_(grid), step_(step), reach_(reach), side_(2 * reach + 1)
+  {
+    // A wide window over a small grid (the loop's coarse search): each point's row of shifted cells is
+    // contiguous in a copy of the grid padded with zeros as far as any shift reaches, so a point adds to
+    // a whole row of translations without bounds tests. A narrow window over a large grid (the front
+    // end) costs less tested point by point than the copy would.
+    const double work = static_cast<double>(side_) * side_ * static_cast<double>(points);
+    margin_ = reach * step;
+    padded_width_ = grid.width() + 4 * margin_;
+    const double copy = static_cast<double>(padded_width_) * (grid.height() + 4 * margin_);
+    if (work <= 4.0 * copy) return;
+    padded_.assign(static_cast<std::size_t>(copy), 0.0);
+    for (int y = 0; y < grid.height(); ++y)
+      std::copy_n(grid.cells().data() + static_cast<std::size_t>(y) * grid.width(), grid.width(),
+                  padded_.data() + static_cast<std::size_t>(y + 2 * margin_) * padded_width_ + 2 * margin_);
+  }
+
+  void sum(const std::vector<int>& ix, const std::vector<int>& iy, std::vector<double>& sums)
+  {
+    sums.assign(static_cast<std::size_t>(side_) * side_, 0.0);
+    if (padded_.empty())
+      sumTested(ix, iy, sums);
+    else
+      sumPadded(ix, iy, sums);
+  }
+
+ private:
+  void sumTested(const std::vector<int>& ix, const std::vector<int>& iy, std::vector<double>& sums) const
+  {
+    const int w = grid_.width(), h = grid_.height();
+    const double* cells = grid_.cells().data();
+    for (int oy = -reach_; oy <= reach_; ++oy)
+      for (int ox = -reach_; ox <= reach_; ++ox)
+      {
+        const int dx = ox * step_, dy = oy * step_;
+        double sum = 0.0;
+        for (std::size_t i = 0; i < ix.size(); ++i)
+        {
+          const int x = ix[i] + dx, y = iy[i] + dy;
+          if (x >= 0 && y >= 0 && x < w && y < h) sum += cells[static_cast<std::size_t>(y) * w + x];
+        }
+        sums[static_cast<std::size_t>((oy + reach_) * side_ + ox + reach_)] = sum;
+      }
+  }
+
+  void sumPadded(const std::vector<int>& ix, const std::vector<int>& iy, std::vector<double>& sums)
+  {
+    // A point farther off the grid than any shift adds nothing anywhere; the rest read zeros where the
+    // tested sum skips them, and x + 0.0 is x: the same sums, bit for bit.
+    starts_.clear();
+    const int w = grid_.width(), h = grid_.height();
+    for (std::size_t i = 0; i < ix.size(); ++i)
+      if (ix[i] >= -margin_ && ix[i] < w + margin_ && iy[i] >= -margin_ && iy[i] < h + margin_)
+        starts_.push_back(static_cast<std::size_t>(iy[i] + margin_) * padded_width_ + (ix[i] + margin_));
+    for (int oy = 0; oy < side_; ++oy)
+    {
+      double* row = sums.data() + static_cast<std::size_t>(oy) * side_;
+      const std::size_t shift = static_cast<std::size_t>(oy * step_) * padded_width_;
+      for (const std::size_t start : starts_)
+      {
+        const double* cells = padded_.data() + start + shift;
+        for (int ox = 0; ox < side_; ++ox) row[ox] += cells[ox * step_];
+      }
+    }
+  }
+
+  const LikelihoodGrid& grid_;
+  int step_, reach_, side_;
+  int margin_ = 0, padded_width_ = 0;
+  std::vector<double> padded_;
+  std::vector<std::size_t> starts_;
+};
+}  // namespace
+
 std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
                                            const std::vector<linemap::Vec2>& points,
                                            const linemap::Pose2& center, const SearchWindow& window,
@@ -148,8 +231,6 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
   const double astep = window.angular_step > 0.0 ? window.angular_step : 0.01;
   const int areach = static_cast<int>(std::floor(window.angular / astep + 1e-9));
   const double inv_n = 1.0 / static_cast<double>(points.size());
-  const int w = grid.width(), h = grid.height();
-  const double* cells = grid.cells().data();
   const int side = 2 * reach + 1;
   if (spread)
   {
@@ -158,6 +239,8 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
     spread->reach = reach;
     spread->best.assign(static_cast<std::size_t>(side) * side, 0.0);
   }
+  TranslationSums translations(grid, step, reach, points.size());
+  std::vector<double> sums;
   // Cell of every rotated point at the window's centre; translations then shift whole cells.
   std::vector<int> ix(points.size()), iy(points.size());
   // Ranked by penalised score; `keep` is small, so a sorted vector is enough.
@@ -172,20 +255,16 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
       ix[i] = static_cast<int>(std::lround((c * p.x() - s * p.y() + center.x - grid.origin().x()) / res));
       iy[i] = static_cast<int>(std::lround((s * p.x() + c * p.y() + center.y - grid.origin().y()) / res));
     }
+    translations.sum(ix, iy, sums);
     for (int oy = -reach; oy <= reach; ++oy)
       for (int ox = -reach; ox <= reach; ++ox)
       {
         const int dx = ox * step, dy = oy * step;
-        double sum = 0.0;
-        for (std::size_t i = 0; i < points.size(); ++i)
-        {
-          const int x = ix[i] + dx, y = iy[i] + dy;
-          if (x >= 0 && y >= 0 && x < w && y < h) sum += cells[static_cast<std::size_t>(y) * w + x];
-        }
-        const double score = sum * inv_n;
+        const std::size_t at_translation = static_cast<std::size_t>((oy + reach) * side + ox + reach);
+        const double score = sums[at_translation] * inv_n;
         if (spread)
         {
-          double& cell = spread->best[static_cast<std::size_t>((oy + reach) * side + ox + reach)];
+          double& cell = spread->best[at_translation];
           cell = std::max(cell, score);
         }
         const double tx = dx * res, ty = dy * res;
