@@ -137,85 +137,35 @@ double TranslationScores::bestAwayFrom(const linemap::Vec2& at, double distance)
 
 namespace
 {
-/// The summed field values of the points (cells ix, iy at the window's centre) under every translation of
-/// the window, row-major (y outer): each point's cell shifted by whole cells, those off the grid adding
-/// nothing. Every sum adds its points in their order.
-class TranslationSums
+int floorDiv(int a, int b)
 {
- public:
-  TranslationSums(const LikelihoodGrid& grid, int step, int reach, std::size_t points)
-      : grid_(grid), step_(step), reach_(reach), side_(2 * reach + 1)
-  {
-    // A wide window over a small grid (the loop's coarse search): each point's row of shifted cells is
-    // contiguous in a copy of the grid padded with zeros as far as any shift reaches, so a point adds to
-    // a whole row of translations without bounds tests. A narrow window over a large grid (the front
-    // end) costs less tested point by point than the copy would.
-    const double work = static_cast<double>(side_) * side_ * static_cast<double>(points);
-    margin_ = reach * step;
-    padded_width_ = grid.width() + 4 * margin_;
-    const double copy = static_cast<double>(padded_width_) * (grid.height() + 4 * margin_);
-    if (work <= 4.0 * copy) return;
-    padded_.assign(static_cast<std::size_t>(copy), 0.0);
-    for (int y = 0; y < grid.height(); ++y)
-      std::copy_n(grid.cells().data() + static_cast<std::size_t>(y) * grid.width(), grid.width(),
-                  padded_.data() + static_cast<std::size_t>(y + 2 * margin_) * padded_width_ + 2 * margin_);
-  }
+  return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
 
-  void sum(const std::vector<int>& ix, const std::vector<int>& iy, std::vector<double>& sums)
+/// The summed field values of the points (cells ix, iy at the window's centre) under every translation of
+/// the window, row-major (y outer), in `sums`: each point's cell shifted by whole cells, those off the grid
+/// adding nothing. Point by point, each adding to every translation that keeps it on the grid (its rows and
+/// columns clipped once, not tested per translation): every sum still adds its points in their order.
+void translationSums(const LikelihoodGrid& grid, int step, int reach, const std::vector<int>& ix,
+                     const std::vector<int>& iy, std::vector<double>& sums)
+{
+  const int side = 2 * reach + 1, w = grid.width(), h = grid.height();
+  const double* cells = grid.cells().data();
+  sums.assign(static_cast<std::size_t>(side) * side, 0.0);
+  for (std::size_t i = 0; i < ix.size(); ++i)
   {
-    sums.assign(static_cast<std::size_t>(side_) * side_, 0.0);
-    if (padded_.empty())
-      sumTested(ix, iy, sums);
-    else
-      sumPadded(ix, iy, sums);
-  }
-
- private:
-  void sumTested(const std::vector<int>& ix, const std::vector<int>& iy, std::vector<double>& sums) const
-  {
-    const int w = grid_.width(), h = grid_.height();
-    const double* cells = grid_.cells().data();
-    for (int oy = -reach_; oy <= reach_; ++oy)
-      for (int ox = -reach_; ox <= reach_; ++ox)
-      {
-        const int dx = ox * step_, dy = oy * step_;
-        double sum = 0.0;
-        for (std::size_t i = 0; i < ix.size(); ++i)
-        {
-          const int x = ix[i] + dx, y = iy[i] + dy;
-          if (x >= 0 && y >= 0 && x < w && y < h) sum += cells[static_cast<std::size_t>(y) * w + x];
-        }
-        sums[static_cast<std::size_t>((oy + reach_) * side_ + ox + reach_)] = sum;
-      }
-  }
-
-  void sumPadded(const std::vector<int>& ix, const std::vector<int>& iy, std::vector<double>& sums)
-  {
-    // A point farther off the grid than any shift adds nothing anywhere; the rest read zeros where the
-    // tested sum skips them, and x + 0.0 is x: the same sums, bit for bit.
-    starts_.clear();
-    const int w = grid_.width(), h = grid_.height();
-    for (std::size_t i = 0; i < ix.size(); ++i)
-      if (ix[i] >= -margin_ && ix[i] < w + margin_ && iy[i] >= -margin_ && iy[i] < h + margin_)
-        starts_.push_back(static_cast<std::size_t>(iy[i] + margin_) * padded_width_ + (ix[i] + margin_));
-    for (int oy = 0; oy < side_; ++oy)
+    // The shifts o with 0 <= i + o * step < size.
+    const auto first = [&](int at) { return std::max(-reach, -floorDiv(at, step)); };
+    const auto last = [&](int at, int size) { return std::min(reach, floorDiv(size - 1 - at, step)); };
+    const int ox0 = first(ix[i]), ox1 = last(ix[i], w), oy0 = first(iy[i]), oy1 = last(iy[i], h);
+    for (int oy = oy0; oy <= oy1; ++oy)
     {
-      double* row = sums.data() + static_cast<std::size_t>(oy) * side_;
-      const std::size_t shift = static_cast<std::size_t>(oy * step_) * padded_width_;
-      for (const std::size_t start : starts_)
-      {
-        const double* cells = padded_.data() + start + shift;
-        for (int ox = 0; ox < side_; ++ox) row[ox] += cells[ox * step_];
-      }
+      const double* row = cells + static_cast<std::size_t>(iy[i] + oy * step) * w;
+      double* out = sums.data() + static_cast<std::size_t>(oy + reach) * side + reach;
+      for (int ox = ox0; ox <= ox1; ++ox) out[ox] += row[ix[i] + ox * step];
     }
   }
-
-  const LikelihoodGrid& grid_;
-  int step_, reach_, side_;
-  int margin_ = 0, padded_width_ = 0;
-  std::vector<double> padded_;
-  std::vector<std::size_t> starts_;
-};
+}
 }  // namespace
 
 std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
@@ -239,7 +189,6 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
     spread->reach = reach;
     spread->best.assign(static_cast<std::size_t>(side) * side, 0.0);
   }
-  TranslationSums translations(grid, step, reach, points.size());
   std::vector<double> sums;
   // Cell of every rotated point at the window's centre; translations then shift whole cells.
   std::vector<int> ix(points.size()), iy(points.size());
@@ -255,7 +204,7 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
       ix[i] = static_cast<int>(std::lround((c * p.x() - s * p.y() + center.x - grid.origin().x()) / res));
       iy[i] = static_cast<int>(std::lround((s * p.x() + c * p.y() + center.y - grid.origin().y()) / res));
     }
-    translations.sum(ix, iy, sums);
+    translationSums(grid, step, reach, ix, iy, sums);
     for (int oy = -reach; oy <= reach; ++oy)
       for (int ox = -reach; ox <= reach; ++ox)
       {
