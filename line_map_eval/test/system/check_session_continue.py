@@ -96,8 +96,8 @@ class CheckSessionContinue(unittest.TestCase):
         # changed_world.test give theirs as ~session.
         pipeline, slam, merging, key = lt.start_session_pipeline("session_continue", session, by_service=True)
         try:
-            # Played at twice the log's speed: the scans searched wait for the global search, and the merger
-            # drops those the SLAM has not posed within its tf_timeout once it is found (until it caught up).
+            # Played at twice the log's speed: the scans searched wait for the global search; the merger waits
+            # for the SLAM to pose each later one however long that takes (lt.SESSION_TF_TIMEOUT).
             lt.play(bag, RATE)
             limit = lt.work_limit(bag_seconds, RATE)
 
@@ -106,7 +106,7 @@ class CheckSessionContinue(unittest.TestCase):
                 return int(m.group(1)) if m else None
 
             # The scans before the robot was found only search; every later one goes to the SLAM; the merger
-            # merges new keyframes into the saved map (how many of the scans it had to drop is not asserted).
+            # merges new keyframes into the saved map.
             lt.wait_until(lambda: found_at() is not None and int(slam.get("scans", "0")) + found_at() >= SECOND
                           and paths and len(paths[-1].poses) > len(saved) + 20
                           and int(merging.get("adjustments", "0")) >= 1

@@ -633,18 +633,34 @@ def session_keyframes(session):
     return [(t, p[0], p[1]) for t, p in zip(stamps, poses)], map_keyframes
 
 
+# The merger's wait for a segment set's transform in the session pipelines [s]: it waits as long as the SLAM
+# takes to pose the scan. The SLAM searches the saved map scan by scan, then catches up with the scans queued
+# meanwhile; at the default 0.5 s the merger dropped every set while it did, and on a busy machine the SLAM
+# never caught up with the bag, so the merger had no new keyframe at all (a CI run).
+SESSION_TF_TIMEOUT = 3600.0
+
+
 def start_session_pipeline(name, session, search_scans=400, by_service=False):
     """linemap.launch slam:=true session:=SESSION session_search_scans:=SEARCH_SCANS, its output in the artefact
     NAME_roslaunch.log; BY_SERVICE: the pipeline starts without a session, which is then given through the SLAM's
-    ~load_session (start SEARCH). Returns (the roslaunch process, the SLAM's and the merger's diagnostics as they
-    arrive, the SLAM's session key) once both report; the caller stops the process."""
+    ~load_session (start SEARCH). The merger waits SESSION_TF_TIMEOUT for a scan's transform, so what it maps
+    does not depend on how fast the machine is. Returns (the roslaunch process, the SLAM's and the merger's
+    diagnostics as they arrive, the SLAM's session key) once both report; the caller stops the process."""
     diagnostics = component_diagnostics(slam="laser slam", merging="line map merging")
     slam, merging = diagnostics["slam"], diagnostics["merging"]
     launch_log = open(os.path.join(artifact_dir(), name + "_roslaunch.log"), "w")
-    pipeline = subprocess.Popen(["roslaunch", os.path.join(repo_root(), "launch", "linemap.launch"), "slam:=true"]
-                                + ([] if by_service else ["session:=" + session])
-                                + ["session_search_scans:=%d" % search_scans, "evaluate:=false", "output:=log"],
-                                stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
+    args = {"slam": "true", "session_search_scans": str(search_scans), "evaluate": "false", "output": "log"}
+    if not by_service:
+        args["session"] = session
+    launch = os.path.join(tempfile.mkdtemp(prefix=name + "_launch_"), "pipeline.launch")
+    with open(launch, "w") as f:
+        f.write('<launch>\n  <include file="%s">\n%s  </include>\n'
+                '  <param name="line_map_merging/tf_timeout" value="%s"/>\n</launch>\n' % (
+                    os.path.join(repo_root(), "launch", "linemap.launch"),
+                    "".join('    <arg name="%s" value="%s"/>\n' % kv for kv in sorted(args.items())),
+                    SESSION_TF_TIMEOUT))
+    pipeline = subprocess.Popen(["roslaunch", launch], stdout=launch_log, stderr=subprocess.STDOUT,
+                                start_new_session=True)
     key = "session " + session
     try:
         if by_service:

@@ -65,10 +65,17 @@ LocalizationSegmentIndex::LocalizationSegmentIndex(std::vector<Segment2> segment
   }
   cell_start_.reserve(lists.size() + 1);
   cell_start_.push_back(0);
+  std::size_t listed = 0;
+  for (const auto& l : lists) listed += l.size();
+  candidates_.reserve(listed);
   for (const auto& l : lists)
   {
-    cell_segments_.insert(cell_segments_.end(), l.begin(), l.end());
-    cell_start_.push_back(cell_segments_.size());
+    for (const std::size_t i : l)
+    {
+      const Vec2 d = segments_[i].end - segments_[i].start;
+      candidates_.push_back({segments_[i].start.x(), segments_[i].start.y(), d.x(), d.y(), d.squaredNorm(), i});
+    }
+    cell_start_.push_back(candidates_.size());
   }
 }
 
@@ -80,22 +87,26 @@ std::optional<LocalizationSegmentIndex::Nearest> LocalizationSegmentIndex::neare
   const int y = static_cast<int>(std::floor((p.y() - origin_.y()) / cell_size_));
   if (x < 0 || y < 0 || x >= width_ || y >= height_) return std::nullopt;
   const std::size_t cell = static_cast<std::size_t>(y) * width_ + x;
-  std::optional<Nearest> best;
-  double best_d2 = reach_ * reach_;
+  // The same arithmetic as closestOnSegment() and linemap::cross(), on the stored direction; among equally
+  // near segments the last listed wins.
+  const Candidate* best = nullptr;
+  double best_d2 = reach_ * reach_, best_t = 0.0;
   for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k)
   {
-    const auto& s = segments_[cell_segments_[k]];
-    if (sensor && cross(s.end - s.start, *sensor - s.start) < 0.0) continue;
-    const Vec2 c = closestOnSegment(p, s.start, s.end);
-    const double d2 = (p - c).squaredNorm();
+    const Candidate& s = candidates_[k];
+    if (sensor && s.dx * (sensor->y() - s.ay) - s.dy * (sensor->x() - s.ax) < 0.0) continue;
+    const double t = std::clamp(((p.x() - s.ax) * s.dx + (p.y() - s.ay) * s.dy) / s.length2, 0.0, 1.0);
+    const double ex = p.x() - (s.ax + t * s.dx), ey = p.y() - (s.ay + t * s.dy);
+    const double d2 = ex * ex + ey * ey;
     if (d2 <= best_d2)
     {
       best_d2 = d2;
-      best = Nearest{cell_segments_[k], c, 0.0};
+      best_t = t;
+      best = &s;
     }
   }
-  if (best) best->distance = std::sqrt(best_d2);
-  return best;
+  if (!best) return std::nullopt;
+  return Nearest{best->segment, Vec2(best->ax + best_t * best->dx, best->ay + best_t * best->dy), std::sqrt(best_d2)};
 }
 
 namespace

@@ -47,8 +47,16 @@ class LocalizationSegmentIndex
   linemap::Vec2 origin_ = linemap::Vec2::Zero(), lower_ = linemap::Vec2::Zero(),
                 upper_ = linemap::Vec2::Zero();
   int width_ = 0, height_ = 0;
-  std::vector<std::size_t> cell_start_;  ///< CSR layout: cell i lists cell_segments_[start[i], start[i+1])
-  std::vector<std::size_t> cell_segments_;
+  /// A segment as a cell lists it: its start, direction (end - start) and squared length, stored in the
+  /// cell's run, so that a query reads one contiguous block (a map of overlapping keyframe scans lists many
+  /// hundreds of segments in a cell).
+  struct Candidate
+  {
+    double ax, ay, dx, dy, length2;
+    std::size_t segment;
+  };
+  std::vector<std::size_t> cell_start_;  ///< CSR layout: cell i lists candidates_[start[i], start[i+1])
+  std::vector<Candidate> candidates_;
 };
 
 struct SegmentMatchParams
