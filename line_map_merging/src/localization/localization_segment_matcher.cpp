@@ -73,7 +73,8 @@ LocalizationSegmentIndex::LocalizationSegmentIndex(std::vector<Segment2> segment
     for (const std::size_t i : l)
     {
       const Vec2 d = segments_[i].end - segments_[i].start;
-      candidates_.push_back({segments_[i].start.x(), segments_[i].start.y(), d.x(), d.y(), d.squaredNorm(), i});
+      candidates_.push_back(
+          {segments_[i].start.x(), segments_[i].start.y(), d.x(), d.y(), d.squaredNorm(), i});
     }
     cell_start_.push_back(candidates_.size());
   }
@@ -106,7 +107,8 @@ std::optional<LocalizationSegmentIndex::Nearest> LocalizationSegmentIndex::neare
     }
   }
   if (!best) return std::nullopt;
-  return Nearest{best->segment, Vec2(best->ax + best_t * best->dx, best->ay + best_t * best->dy), std::sqrt(best_d2)};
+  return Nearest{best->segment, Vec2(best->ax + best_t * best->dx, best->ay + best_t * best->dy),
+                 std::sqrt(best_d2)};
 }
 
 namespace
