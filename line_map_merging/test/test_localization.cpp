@@ -92,6 +92,93 @@ TEST(LocalizationSegmentIndex, NearestSegmentAndFreeSide)
   EXPECT_TRUE(index.nearest({5.0, -0.1}, &inside));
 }
 
+// The reference: every segment measured, the nearest within reach kept (by squared distance), and among
+// equally near ones the last.
+std::optional<LocalizationSegmentIndex::Nearest> nearestByBruteForce(const std::vector<Segment2>& segments,
+                                                                     const Vec2& p, double reach,
+                                                                     const Vec2* sensor)
+{
+  std::optional<LocalizationSegmentIndex::Nearest> best;
+  double best_d2 = reach * reach;
+  for (std::size_t i = 0; i < segments.size(); ++i)
+  {
+    const auto& s = segments[i];
+    if (sensor && linemap::cross(s.end - s.start, *sensor - s.start) < 0.0) continue;
+    const Vec2 d = s.end - s.start;
+    const double t = std::clamp((p - s.start).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    const Vec2 c = s.start + t * d;
+    const double d2 = (p - c).squaredNorm();
+    if (d2 <= best_d2)
+    {
+      best_d2 = d2;
+      best = LocalizationSegmentIndex::Nearest{i, c, std::sqrt(d2)};
+    }
+  }
+  return best;
+}
+
+TEST(LocalizationSegmentIndex, RingSearchFindsWhatMeasuringEverySegmentFinds)
+{
+  // Many short overlapping pieces of a few walls, as the keyframe scans of a saved session give, plus exact
+  // duplicates (equally near: the later one must win) and scattered clutter, the nearest of which
+  // lies anywhere up to reach and beyond.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> along(0.0, 1.0), jitter(-0.02, 0.02), anywhere(-1.0, 9.0);
+  std::vector<Segment2> segments;
+  const std::vector<Segment2> walls{{{0, 0}, {8, 0}}, {{8, 0}, {8, 6}}, {{8, 6}, {0, 6}}, {{3, 1}, {3, 5}}};
+  for (int view = 0; view < 12; ++view)
+    for (const auto& w : walls)
+    {
+      const Vec2 direction = (w.end - w.start).normalized();
+      for (double a = along(rng) * 0.05; a < w.length(); a += 0.06)
+      {
+        const Vec2 a0 = w.start + a * direction, a1 = w.start + std::min(w.length(), a + 0.05) * direction;
+        segments.push_back({a0 + Vec2(jitter(rng), jitter(rng)), a1 + Vec2(jitter(rng), jitter(rng))});
+      }
+    }
+  const std::size_t pieces = segments.size();
+  for (std::size_t i = 0; i < 40; ++i)
+  {
+    const Segment2 copy = segments[i * 37 % pieces];
+    segments.push_back(copy);
+  }
+  for (int i = 0; i < 400; ++i)
+  {
+    const Vec2 a(anywhere(rng), anywhere(rng));
+    segments.push_back({a, a + Vec2(jitter(rng) * 10.0, jitter(rng) * 10.0)});
+  }
+  const double reach = 0.3;
+  const Vec2 sensor(4.0, 3.0);
+  std::uniform_real_distribution<double> query(-1.5, 9.5);
+  for (const double cell : {0.05, 0.1, 0.5, 2.0})
+  {
+    const LocalizationSegmentIndex index(segments, cell, reach);
+    int found = 0;
+    for (int q = 0; q < 4000; ++q)
+    {
+      // Half the queries near a wall (within reach or just beyond), half anywhere, some outside the map.
+      const auto& w = walls[static_cast<std::size_t>(q) % walls.size()];
+      const Vec2 normal = Vec2(-(w.end - w.start).y(), (w.end - w.start).x()).normalized();
+      const Vec2 p = q % 2 == 0 ? Vec2(w.start + along(rng) * (w.end - w.start) + normal * (along(rng) - 0.5))
+                                : Vec2(query(rng), query(rng));
+      for (const Vec2* from : {static_cast<const Vec2*>(nullptr), &sensor})
+      {
+        const auto got = index.nearest(p, from);
+        const auto expected = nearestByBruteForce(segments, p, reach, from);
+        ASSERT_EQ(got.has_value(), expected.has_value()) << "cell " << cell << " at " << p.transpose();
+        if (!got) continue;
+        ++found;
+        EXPECT_EQ(got->segment, expected->segment) << "cell " << cell << " at " << p.transpose();
+        EXPECT_NEAR(got->distance, expected->distance, 1e-12);
+        EXPECT_NEAR((got->closest - expected->closest).norm(), 0.0, 1e-12);
+      }
+    }
+    // Both kinds of answer were asked for.
+    EXPECT_GT(found, 2000);
+    EXPECT_LT(found, 7000);
+  }
+}
+
 TEST(LocalizationSegmentMatcher, LocalizesFromAPerturbedGuess)
 {
   const auto map = lRoom();

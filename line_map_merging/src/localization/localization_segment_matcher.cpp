@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace line_map_merging
 {
@@ -39,16 +40,14 @@ LocalizationSegmentIndex::LocalizationSegmentIndex(std::vector<Segment2> segment
     lower_ = lower_.cwiseMin(s.start).cwiseMin(s.end);
     upper_ = upper_.cwiseMax(s.start).cwiseMax(s.end);
   }
-  origin_ = lower_ - Vec2::Constant(reach + cell_size);
-  width_ = static_cast<int>(std::ceil((upper_.x() - origin_.x() + reach + cell_size) / cell_size)) + 1;
-  height_ = static_cast<int>(std::ceil((upper_.y() - origin_.y() + reach + cell_size) / cell_size)) + 1;
-  // A cell lists a segment when some point of the cell may lie within reach of it: the distance from
-  // the cell's centre minus half its diagonal.
-  const double slack = reach + 0.5 * std::sqrt(2.0) * cell_size;
-  std::vector<std::vector<std::size_t>> lists(static_cast<std::size_t>(width_) * height_);
-  for (std::size_t i = 0; i < segments_.size(); ++i)
+  origin_ = lower_ - Vec2::Constant(cell_size);
+  width_ = static_cast<int>(std::ceil((upper_.x() - origin_.x()) / cell_size)) + 2;
+  height_ = static_cast<int>(std::ceil((upper_.y() - origin_.y()) / cell_size)) + 2;
+  // A cell lists the segments that may pass through it: those within half its diagonal of its centre (a
+  // little more, so that rounding never leaves one out). Counted first, then filled: no list a cell.
+  const double slack = 0.5 * std::sqrt(2.0) * cell_size * (1.0 + 1e-9);
+  const auto for_each_cell = [&](const Segment2& s, auto&& take)
   {
-    const auto& s = segments_[i];
     const Vec2 lo = s.start.cwiseMin(s.end) - Vec2::Constant(slack);
     const Vec2 hi = s.start.cwiseMax(s.end) + Vec2::Constant(slack);
     const int x0 = std::max(0, static_cast<int>(std::floor((lo.x() - origin_.x()) / cell_size)));
@@ -60,23 +59,23 @@ LocalizationSegmentIndex::LocalizationSegmentIndex(std::vector<Segment2> segment
       {
         const Vec2 centre = origin_ + Vec2((x + 0.5) * cell_size, (y + 0.5) * cell_size);
         if ((closestOnSegment(centre, s.start, s.end) - centre).norm() <= slack)
-          lists[static_cast<std::size_t>(y) * width_ + x].push_back(i);
+          take(static_cast<std::size_t>(y) * width_ + x);
       }
-  }
-  cell_start_.reserve(lists.size() + 1);
-  cell_start_.push_back(0);
-  std::size_t listed = 0;
-  for (const auto& l : lists) listed += l.size();
-  candidates_.reserve(listed);
-  for (const auto& l : lists)
+  };
+  const std::size_t cells = static_cast<std::size_t>(width_) * height_;
+  std::vector<std::size_t> count(cells + 1, 0);
+  for (const auto& s : segments_) for_each_cell(s, [&](std::size_t cell) { ++count[cell + 1]; });
+  for (std::size_t c = 0; c < cells; ++c) count[c + 1] += count[c];
+  if (count[cells] > std::numeric_limits<std::uint32_t>::max())
+    throw std::length_error("localization segment index: too many cell entries; raise match/index_cell");
+  cell_start_.assign(count.begin(), count.end());
+  candidates_.resize(count[cells]);
+  // In segment order, so that every cell lists its segments in the input's order.
+  for (std::size_t i = 0; i < segments_.size(); ++i)
   {
-    for (const std::size_t i : l)
-    {
-      const Vec2 d = segments_[i].end - segments_[i].start;
-      candidates_.push_back(
-          {segments_[i].start.x(), segments_[i].start.y(), d.x(), d.y(), d.squaredNorm(), i});
-    }
-    cell_start_.push_back(candidates_.size());
+    const Vec2 d = segments_[i].end - segments_[i].start;
+    const Candidate entry{segments_[i].start.x(), segments_[i].start.y(), d.x(), d.y(), d.squaredNorm(), i};
+    for_each_cell(segments_[i], [&](std::size_t cell) { candidates_[count[cell]++] = entry; });
   }
 }
 
@@ -84,27 +83,58 @@ std::optional<LocalizationSegmentIndex::Nearest> LocalizationSegmentIndex::neare
                                                                                    const Vec2* sensor) const
 {
   if (segments_.empty() || !p.allFinite()) return std::nullopt;
-  const int x = static_cast<int>(std::floor((p.x() - origin_.x()) / cell_size_));
-  const int y = static_cast<int>(std::floor((p.y() - origin_.y()) / cell_size_));
-  if (x < 0 || y < 0 || x >= width_ || y >= height_) return std::nullopt;
-  const std::size_t cell = static_cast<std::size_t>(y) * width_ + x;
-  // The same arithmetic as closestOnSegment() and linemap::cross(), on the stored direction; among equally
-  // near segments the last listed wins.
+  if (p.x() < lower_.x() - reach_ || p.y() < lower_.y() - reach_ || p.x() > upper_.x() + reach_ ||
+      p.y() > upper_.y() + reach_)
+    return std::nullopt;
+  // Rings of cells around the point's cell, nearest first, until no unsearched cell can hold a nearer
+  // segment: one is at least as far as the edge of the square searched (beyond the grid there is none).
+  const double fx = (p.x() - origin_.x()) / cell_size_, fy = (p.y() - origin_.y()) / cell_size_;
+  const int cx = static_cast<int>(std::floor(fx)), cy = static_cast<int>(std::floor(fy));
+  // The arithmetic of closestOnSegment() and linemap::cross(); the nearest wins, and among equally near
+  // segments the one listed last in the input (so any cell layout gives the same answer).
   const Candidate* best = nullptr;
   double best_d2 = reach_ * reach_, best_t = 0.0;
-  for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k)
+  const auto visit = [&](int x, int y)
   {
-    const Candidate& s = candidates_[k];
-    if (sensor && s.dx * (sensor->y() - s.ay) - s.dy * (sensor->x() - s.ax) < 0.0) continue;
-    const double t = std::clamp(((p.x() - s.ax) * s.dx + (p.y() - s.ay) * s.dy) / s.length2, 0.0, 1.0);
-    const double ex = p.x() - (s.ax + t * s.dx), ey = p.y() - (s.ay + t * s.dy);
-    const double d2 = ex * ex + ey * ey;
-    if (d2 <= best_d2)
+    const std::size_t cell = static_cast<std::size_t>(y) * width_ + x;
+    for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k)
     {
-      best_d2 = d2;
-      best_t = t;
-      best = &s;
+      const Candidate& s = candidates_[k];
+      if (sensor && s.dx * (sensor->y() - s.ay) - s.dy * (sensor->x() - s.ax) < 0.0) continue;
+      const double t = std::clamp(((p.x() - s.ax) * s.dx + (p.y() - s.ay) * s.dy) / s.length2, 0.0, 1.0);
+      const double ex = p.x() - (s.ax + t * s.dx), ey = p.y() - (s.ay + t * s.dy);
+      const double d2 = ex * ex + ey * ey;
+      if (d2 < best_d2 || (d2 == best_d2 && (!best || s.segment > best->segment)))
+      {
+        best_d2 = d2;
+        best_t = t;
+        best = &s;
+      }
     }
+  };
+  const double infinity = std::numeric_limits<double>::infinity();
+  for (int k = 0;; ++k)
+  {
+    const int x0 = cx - k, x1 = cx + k, y0 = cy - k, y1 = cy + k;
+    const int row0 = std::max(y0, 0), row1 = std::min(y1, height_ - 1);
+    const int col0 = std::max(x0, 0), col1 = std::min(x1, width_ - 1);
+    for (int y = row0; y <= row1; ++y)
+    {
+      if (y == y0 || y == y1)
+        for (int x = col0; x <= col1; ++x) visit(x, y);
+      else
+      {
+        if (x0 >= 0 && x0 < width_) visit(x0, y);
+        if (x1 >= 0 && x1 < width_ && x1 != x0) visit(x1, y);
+      }
+    }
+    const double clear = std::min({x0 <= 0 ? infinity : (fx - x0) * cell_size_,
+                                   x1 >= width_ - 1 ? infinity : (x1 + 1 - fx) * cell_size_,
+                                   y0 <= 0 ? infinity : (fy - y0) * cell_size_,
+                                   y1 >= height_ - 1 ? infinity : (y1 + 1 - fy) * cell_size_});
+    // A margin for rounding: a segment just beyond the square may compute as near as one inside it.
+    const double sure = clear * (1.0 - 1e-9) - 1e-12;
+    if (sure > reach_ || (best && sure > 0.0 && best_d2 < sure * sure)) break;
   }
   if (!best) return std::nullopt;
   return Nearest{best->segment, Vec2(best->ax + best_t * best->dx, best->ay + best_t * best->dy),

@@ -32,7 +32,7 @@ struct LocalizerParams
   double max_range = 20.0;      ///< [m] farther scan points are dropped
   std::size_t min_points = 20;  ///< fewer valid points: the scan is not matched (pose predicted)
   SegmentMatchParams match;
-  double index_cell = 0.5;  ///< [m] cell of the segment index
+  double index_cell = 0.1;  ///< [m] cell of the segment index
   // Odometry prior: standard deviations of the predicted motion, a floor plus a share of the motion.
   double odom_sigma_xy = 0.02;            ///< [m]
   double odom_sigma_xy_per_m = 0.1;       ///< [m/m]

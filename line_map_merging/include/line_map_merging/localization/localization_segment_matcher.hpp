@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -15,8 +16,10 @@
 
 namespace line_map_merging
 {
-/// A uniform grid over the map whose cells list the segments within `reach` of them: the candidates
-/// of a point's nearest-segment query are those of its cell only.
+/// A uniform grid over the map whose cells list the segments passing through them. A nearest-segment query
+/// searches rings of cells around the point, nearest first, and stops once no unsearched cell can hold a
+/// nearer segment (or one within `reach`): a map of overlapping keyframe scans has many hundreds of segments
+/// within reach of a point, and only those near it are measured.
 class LocalizationSegmentIndex
 {
  public:
@@ -55,7 +58,7 @@ class LocalizationSegmentIndex
     double ax, ay, dx, dy, length2;
     std::size_t segment;
   };
-  std::vector<std::size_t> cell_start_;  ///< CSR layout: cell i lists candidates_[start[i], start[i+1])
+  std::vector<std::uint32_t> cell_start_;  ///< CSR layout: cell i lists candidates_[start[i], start[i+1])
   std::vector<Candidate> candidates_;
 };
 
