@@ -24,6 +24,16 @@ Vec2 closestOnSegment(const Vec2& p, const Vec2& a, const Vec2& b)
   return a + t * d;
 }
 
+// How far the point at grid coordinates (fx, fy) (in cells) lies from every cell outside the square of cells
+// [x0, x1] x [y0, y1] of a width x height grid [m]; beyond the grid's edge there is no cell.
+double clearance(double fx, double fy, int x0, int x1, int y0, int y1, int width, int height, double cell)
+{
+  const double infinity = std::numeric_limits<double>::infinity();
+  return std::min({x0 <= 0 ? infinity : (fx - x0) * cell, x1 >= width - 1 ? infinity : (x1 + 1 - fx) * cell,
+                   y0 <= 0 ? infinity : (fy - y0) * cell,
+                   y1 >= height - 1 ? infinity : (y1 + 1 - fy) * cell});
+}
+
 using linemap::cross;
 }  // namespace
 
@@ -112,7 +122,6 @@ std::optional<LocalizationSegmentIndex::Nearest> LocalizationSegmentIndex::neare
       }
     }
   };
-  const double infinity = std::numeric_limits<double>::infinity();
   for (int k = 0;; ++k)
   {
     const int x0 = cx - k, x1 = cx + k, y0 = cy - k, y1 = cy + k;
@@ -128,10 +137,7 @@ std::optional<LocalizationSegmentIndex::Nearest> LocalizationSegmentIndex::neare
         if (x1 >= 0 && x1 < width_ && x1 != x0) visit(x1, y);
       }
     }
-    const double clear = std::min({x0 <= 0 ? infinity : (fx - x0) * cell_size_,
-                                   x1 >= width_ - 1 ? infinity : (x1 + 1 - fx) * cell_size_,
-                                   y0 <= 0 ? infinity : (fy - y0) * cell_size_,
-                                   y1 >= height_ - 1 ? infinity : (y1 + 1 - fy) * cell_size_});
+    const double clear = clearance(fx, fy, x0, x1, y0, y1, width_, height_, cell_size_);
     // A margin for rounding: a segment just beyond the square may compute as near as one inside it.
     const double sure = clear * (1.0 - 1e-9) - 1e-12;
     if (sure > reach_ || (best && sure > 0.0 && best_d2 < sure * sure)) break;
