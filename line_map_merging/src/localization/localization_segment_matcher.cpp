@@ -34,7 +34,6 @@ double clearance(double fx, double fy, int x0, int x1, int y0, int y1, int width
                    y1 >= height - 1 ? infinity : (y1 + 1 - fy) * cell});
 }
 
-using linemap::cross;
 }  // namespace
 
 LocalizationSegmentIndex::LocalizationSegmentIndex(std::vector<Segment2> segments, double cell_size,
@@ -54,7 +53,8 @@ LocalizationSegmentIndex::LocalizationSegmentIndex(std::vector<Segment2> segment
   width_ = static_cast<int>(std::ceil((upper_.x() - origin_.x()) / cell_size)) + 2;
   height_ = static_cast<int>(std::ceil((upper_.y() - origin_.y()) / cell_size)) + 2;
   // A cell lists the segments that may pass through it: those within half its diagonal of its centre (a
-  // little more, so that rounding never leaves one out). Counted first, then filled: no list a cell.
+  // little more, so that rounding never leaves one out). Counted first, then filled in place: no list is
+  // built per cell.
   const double slack = 0.5 * std::sqrt(2.0) * cell_size * (1.0 + 1e-9);
   const auto for_each_cell = [&](const Segment2& s, auto&& take)
   {
