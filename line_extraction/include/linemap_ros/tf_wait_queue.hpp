@@ -13,8 +13,10 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "linemap_ros/param_loader.hpp"
@@ -43,13 +45,18 @@ class TfWaitQueue
   using Event = ros::MessageEvent<const M>;
   using Ready = std::function<void(const Event&)>;
   using Failed = std::function<void(const Event&, const std::string& why)>;
+  /// ROS time and wall time now.
+  using Clock = std::function<std::pair<ros::Time, ros::WallTime>()>;
 
-  /// `capacity`: the oldest held message is dropped beyond it. `max_wait`: a message held longer on
-  /// both clocks, ROS time since its receipt and wall time since it was added, is dropped; zero waits
-  /// without a limit. ROS time alone would give a tf publisher (a SLAM optimising) only a few
+  /// `capacity`: the oldest held message is dropped beyond it. `max_wait`: a message is dropped when,
+  /// for longer than this on both clocks, it has waited (ROS time since its receipt, wall time since it
+  /// was added) and its chain of transforms has not moved on (the latest time tf can place its frame at);
+  /// zero waits without a limit. ROS time alone would give a tf publisher (a SLAM optimising) only a few
   /// milliseconds of wall time when a bag plays fast, and scans were dropped so; wall time alone would
-  /// drop what waits while the bag is paused. A message stamped before the buffer's data for its chain is
-  /// dropped too: it never fits (extrapolatesIntoThePast).
+  /// drop what waits while the bag is paused. A chain that moves on is a publisher catching up (a SLAM
+  /// behind its scans after a search): its messages wait for it, however far behind it is. A message
+  /// stamped before the buffer's data for its chain is dropped too: it never fits
+  /// (extrapolatesIntoThePast).
   TfWaitQueue(tf2::BufferCore& tf, std::string target_frame, std::size_t capacity, ros::Duration max_wait,
               ros::NodeHandle& nh, Ready ready, Failed failed)
       : tf_(tf),
@@ -87,9 +94,14 @@ class TfWaitQueue
                                   {}, noDelay());
   }
 
+  /// The clocks waits are measured on (a test's own; by default ROS time and wall time).
+  void useClock(Clock clock) { clock_ = std::move(clock); }
+
   /// On the callback queue given at construction (a subscription callback of the same node handle).
-  /// `added`: the wall time the wait starts from (a test may date it back).
-  void add(const Event& event, const ros::WallTime& added = ros::WallTime::now())
+  void add(const Event& event) { add(event, clock_().second); }
+
+  /// The same with `added`, the wall time the wait starts from (a test may date it back).
+  void add(const Event& event, const ros::WallTime& added)
   {
     held_.push_back({event, added});
     if (held_.size() > capacity_)
@@ -106,6 +118,7 @@ class TfWaitQueue
   {
     const std::size_t n = held_.size();
     held_.clear();
+    progress_.clear();
     return n;
   }
 
@@ -120,9 +133,8 @@ class TfWaitQueue
   /// a second across the log's gaps and looked like time jumping back.)
   void release()
   {
-    const ros::Time now = ros::Time::now();
-    const ros::WallTime wall_now = ros::WallTime::now();
-    std::vector<std::string> waiting_frames;
+    const auto [now, wall_now] = clock_();
+    std::vector<std::string> waiting_frames, followed_frames;
     for (auto it = held_.begin(); it != held_.end();)
     {
       const M& msg = *it->event.getConstMessage();
@@ -130,13 +142,12 @@ class TfWaitQueue
       const bool behind =
           std::find(waiting_frames.begin(), waiting_frames.end(), frame) != waiting_frames.end();
       std::string why;
-      if (!max_wait_.isZero() && now - it->event.getReceiptTime() > max_wait_ &&
-          (wall_now - it->added).toSec() > max_wait_.toSec())
-        why = "waited longer than " + std::to_string(max_wait_.toSec()) + " s for tf";
-      else if (!behind && (frame == target_ || tf_.canTransform(target_, frame, msg.header.stamp)))
+      if (!behind && (frame == target_ || tf_.canTransform(target_, frame, msg.header.stamp)))
         why.clear();
       else if (neverPlaceable(frame, msg.header.stamp))
         why = "stamped before the tf buffer's data";
+      else if (waitedTooLong(*it, frame, now, wall_now, followed_frames))
+        why = "waited longer than " + std::to_string(max_wait_.toSec()) + " s for tf to move on";
       else
       {
         if (!behind) waiting_frames.push_back(frame);
@@ -147,6 +158,49 @@ class TfWaitQueue
       it = held_.erase(it);
       why.empty() ? ready_(event) : failed_(event, why + " (" + target_ + " -> " + frame + ")");
     }
+  }
+
+  struct Held
+  {
+    Event event;
+    ros::WallTime added;
+  };
+
+  /// Whether `held` waited longer than the limit, on both clocks, since it came and since its frame's
+  /// chain last moved on. The chain is looked at once per pass (`followed_frames`).
+  bool waitedTooLong(const Held& held, const std::string& frame, const ros::Time& now,
+                     const ros::WallTime& wall_now, std::vector<std::string>& followed_frames)
+  {
+    if (max_wait_.isZero()) return false;
+    if (std::find(followed_frames.begin(), followed_frames.end(), frame) == followed_frames.end())
+    {
+      followed_frames.push_back(frame);
+      follow(frame, now, wall_now);
+    }
+    ros::Time since = held.event.getReceiptTime();
+    ros::WallTime wall_since = held.added;
+    if (const auto p = progress_.find(frame); p != progress_.end())
+    {
+      since = std::max(since, p->second.moved);
+      wall_since = std::max(wall_since, p->second.wall_moved);
+    }
+    return now - since > max_wait_ && (wall_now - wall_since).toSec() > max_wait_.toSec();
+  }
+
+  /// Notes when the latest time tf can place `frame` at changes (data newer, or older after a jump).
+  void follow(const std::string& frame, const ros::Time& now, const ros::WallTime& wall_now)
+  {
+    ros::Time latest;
+    try
+    {
+      latest = tf_.lookupTransform(target_, frame, ros::Time(0)).header.stamp;
+    }
+    catch (const tf2::TransformException&)
+    {
+      return;  // no chain yet: nothing moves
+    }
+    auto [p, added] = progress_.try_emplace(frame, Progress{latest, now, wall_now});
+    if (!added && p->second.latest != latest) p->second = {latest, now, wall_now};
   }
 
   bool neverPlaceable(const std::string& frame, const ros::Time& stamp) const
@@ -183,11 +237,14 @@ class TfWaitQueue
   ros::CallbackQueueInterface* queue_;
   Ready ready_;
   Failed failed_;
-  struct Held
+  Clock clock_ = [] { return std::make_pair(ros::Time::now(), ros::WallTime::now()); };
+  /// Per frame: the latest time tf can place it at, and when that last changed on both clocks.
+  struct Progress
   {
-    Event event;
-    ros::WallTime added;
+    ros::Time latest, moved;
+    ros::WallTime wall_moved;
   };
+  std::map<std::string, Progress> progress_;
   std::deque<Held> held_;
   std::atomic<bool> scheduled_{false};
   boost::signals2::connection changed_;

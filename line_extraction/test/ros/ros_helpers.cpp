@@ -150,6 +150,48 @@ TEST_F(TfWaitQueueTest, LimitMustPassOnBothClocks)
   EXPECT_EQ(delivered, (std::vector<double>{1.0, 2.0}));
 }
 
+TEST_F(TfWaitQueueTest, MessageWaitsWhileItsChainMovesOnAndIsDroppedWhenItStops)
+{
+  // A SLAM catching up after a search: its map -> laser comes later than the limit after each scan, but
+  // keeps moving on. The clocks are the test's own: both advance together here.
+  auto queue = make(100, 0.5);
+  ros::Time now(100.0);
+  ros::WallTime wall_now(1000.0);
+  queue->useClock([&] { return std::make_pair(now, wall_now); });
+  const auto wait = [&](double seconds)
+  {
+    now += ros::Duration(seconds);
+    wall_now += ros::WallDuration(seconds);
+  };
+  setTf(0.0);
+  setTf(1.0);
+  callbacks.callAvailable();
+  queue->add(scan(5.0, "laser", now));
+  for (double t : {2.0, 3.0, 4.0})
+  {
+    wait(0.4);  // 1.2 s since receipt in all, never 0.5 s without tf moving on
+    setTf(t);
+    callbacks.callAvailable();
+  }
+  EXPECT_TRUE(dropped.empty());
+  wait(0.4);
+  setTf(6.0);
+  callbacks.callAvailable();
+  EXPECT_EQ(delivered, (std::vector<double>{5.0}));
+
+  // The publisher stops: another frame's tf comes, this chain's does not move on.
+  queue->add(scan(8.0, "laser", now));
+  wait(0.3);
+  setTf(1.0, "laser2");
+  callbacks.callAvailable();
+  EXPECT_TRUE(dropped.empty());  // 0.3 s: still within the limit
+  wait(0.3);
+  setTf(2.0, "laser2");
+  callbacks.callAvailable();
+  ASSERT_EQ(dropped, (std::vector<double>{8.0}));
+  EXPECT_NE(reasons[0].find("waited longer"), std::string::npos) << reasons[0];
+}
+
 TEST_F(TfWaitQueueTest, BeyondCapacityTheOldestIsDropped)
 {
   auto queue = make(2);
