@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "config_files.hpp"
 #include "line_map_eval/batch/batch.hpp"
 #include "line_map_eval/batch/progress.hpp"
 #include "line_map_eval/batch/report.hpp"
@@ -93,34 +94,6 @@ void usage(std::ostream& out)
          "  --replay          (a .bag) feed the bag's messages in bag order to the online mapper and\n"
          "                    evaluator the nodelets run (one --merger, default cae); writes "
          "DIR/replay.json\n";
-}
-
-bool hasConfig(const fs::path& dir)
-{
-  return fs::exists(dir / kConfigFiles[0]);
-}
-
-/// The repository's config directory: explicit, from the environment, or searched upwards from
-/// the executable (devel/lib/line_map_eval/ inside a build directory of the repository) and the
-/// working directory.
-fs::path findConfigDir(const std::string& explicit_dir)
-{
-  if (!explicit_dir.empty()) return explicit_dir;
-  if (const char* env = std::getenv("LINEMAP_CONFIG_DIR")) return env;
-  if (const char* root = std::getenv("LINEMAP_ROOT"))
-    if (hasConfig(fs::path(root) / "config")) return fs::path(root) / "config";
-  std::vector<fs::path> starts;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) starts.push_back(exe.parent_path());
-  starts.push_back(fs::current_path(ec));
-  for (fs::path dir : starts)
-    for (; !dir.empty(); dir = dir.parent_path())
-    {
-      if (hasConfig(dir / "config")) return dir / "config";
-      if (dir == dir.parent_path()) break;
-    }
-  return {};
 }
 
 /// The command line.

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "config_files.hpp"
 #include "line_map_eval/batch/batch.hpp"
 #include "line_map_eval/batch/slam_figure.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
@@ -47,8 +48,9 @@ void usage(std::ostream& out)
          "  --corrected LOG     the corrected keyframes, other scans by relative odometry to the nearest\n"
          "  --trajectory FILE   'timestamp x y theta' per line\n"
          "  --param key=value   a SLAM parameter by its config/slam.yaml name (e.g. loop/min_score=0.6)\n"
-         "  --config FILE       the SLAM parameter file (default: $LINEMAP_ROOT/config/slam.yaml or\n"
-         "                      ./config/slam.yaml when present)\n"
+         "  --config FILE       the SLAM parameter file (default: slam.yaml in $LINEMAP_CONFIG_DIR,\n"
+         "                      $LINEMAP_ROOT/config, or the config/ found upwards from the executable\n"
+         "                      or the working directory, as linemap_batch finds it)\n"
          "  --write FILE        write the (last) SLAM or localized trajectory of every scan as\n"
          "                      'timestamp x y theta'\n"
          "  --out DIR           where each SLAM run's figure goes: DIR/slam.svg, .png (without odometry\n"
@@ -86,16 +88,6 @@ Trajectory readTrajectory(const std::string& path)
     t.push_back({s, {x, y, th}});
   }
   return t;
-}
-
-// The given file, else `name` under $LINEMAP_ROOT or the working directory when present.
-std::vector<std::string> configFiles(const std::string& given, const std::string& name)
-{
-  if (!given.empty()) return {given};
-  const char* root = std::getenv("LINEMAP_ROOT");
-  for (const fs::path& p : {root ? fs::path(root) / name : fs::path(), fs::path(name)})
-    if (!p.empty() && fs::exists(p)) return {p.string()};
-  return {};
 }
 
 void writeTrajectory(const std::string& path, const Trajectory& t)
@@ -226,7 +218,7 @@ struct Evaluation
 void reportSlam(const Evaluation& ev)
 {
   const Arguments& a = ev.args;
-  linemap::ParamSet params = loadParameterFiles(configFiles(a.config, "config/slam.yaml"));
+  linemap::ParamSet params = loadParameterFiles(configFiles(a.config, "slam.yaml", "linemap_relations"));
   for (const auto& o : a.overrides) applyOverride(params, o);
   const auto slam_params = line_map_merging::LaserSlamParams::fromParams(params);
   for (const bool with_odom : {true, false})
@@ -255,10 +247,10 @@ void reportSlam(const Evaluation& ev)
 void reportTwoSessions(const Evaluation& ev)
 {
   const Arguments& a = ev.args;
-  linemap::ParamSet params = loadParameterFiles(configFiles(a.config, "config/slam.yaml"));
+  linemap::ParamSet params = loadParameterFiles(configFiles(a.config, "slam.yaml", "linemap_relations"));
   for (const auto& o : a.overrides) applyOverride(params, o);
   linemap::ParamSet loc_params =
-      loadParameterFiles(configFiles(a.localize_config, "config/localization.yaml"));
+      loadParameterFiles(configFiles(a.localize_config, "localization.yaml", "linemap_relations"));
   for (const auto& o : a.localize_overrides) applyOverride(loc_params, o);
   const std::size_t cut = ev.recording.scans.size() / 2;
   const TwoSessionRun r = runTwoSessions(
@@ -286,7 +278,7 @@ void reportLocalization(const Evaluation& ev, const std::vector<linemap::Segment
 {
   const Arguments& a = ev.args;
   linemap::ParamSet loc_params =
-      loadParameterFiles(configFiles(a.localize_config, "config/localization.yaml"));
+      loadParameterFiles(configFiles(a.localize_config, "localization.yaml", "linemap_relations"));
   for (const auto& o : a.localize_overrides) applyOverride(loc_params, o);
   const auto params = line_map_merging::LocalizerParams::fromParams(loc_params);
   const LocalizationRunResult r = runLocalization(ev.recording, segments, params, a.initial_pose);

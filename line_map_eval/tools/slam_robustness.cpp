@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "config_files.hpp"
 #include "line_map_eval/batch/batch.hpp"
 #include "line_map_eval/datasets/carmen_log.hpp"
 #include "line_map_eval/datasets/carmen_recording.hpp"
@@ -56,8 +57,9 @@ void usage(std::ostream& out)
          "  --jobs J         runs in parallel (default 1; CPU times are per run either way)\n"
          "  --only WHAT      only these groups (repeatable); the defaults always run\n"
          "  --keys K1,K2     only these parameters\n"
-         "  --config FILE    the SLAM parameter file (default: $LINEMAP_ROOT/config/slam.yaml or\n"
-         "                   ./config/slam.yaml)\n"
+         "  --config FILE    the SLAM parameter file (default: slam.yaml in the config directory\n"
+         "                   linemap_batch finds: $LINEMAP_CONFIG_DIR, $LINEMAP_ROOT/config, or\n"
+         "                   upwards from the executable or the working directory)\n"
          "  --param key=value  a changed default for every run\n"
          "  --sensor FILE    (a world) its laser replaced by this sensor profile\n"
          "  --csv FILE       every run as a CSV row\n"
@@ -117,16 +119,6 @@ bool parseArguments(int argc, char** argv, Arguments& a)
   if (!isWorldFile(a.positional[0]) && a.positional.size() != 2)
     throw std::invalid_argument("a CARMEN log needs its RELATIONS file");
   return true;
-}
-
-std::string configFile(const std::string& given)
-{
-  if (!given.empty()) return given;
-  const char* root = std::getenv("LINEMAP_ROOT");
-  for (const fs::path& p :
-       {root ? fs::path(root) / "config/slam.yaml" : fs::path(), fs::path("config/slam.yaml")})
-    if (!p.empty() && fs::exists(p)) return p.string();
-  throw std::invalid_argument("config/slam.yaml not found: give --config or run from the repository root");
 }
 
 /// The recording, the stamp each scan is known by in the relations, and the relations.
@@ -189,7 +181,7 @@ std::vector<RobustnessVariant> variants(const Arguments& a, const linemap::Param
 
 int run(const Arguments& a)
 {
-  linemap::ParamSet defaults = loadParameterFiles({configFile(a.config)});
+  linemap::ParamSet defaults = loadParameterFiles(configFiles(a.config, "slam.yaml", "slam_robustness"));
   for (const auto& o : a.overrides) applyOverride(defaults, o);
   const Input input = loadInput(a);
   if (!a.figures.empty()) fs::create_directories(a.figures);

@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
-#include <limits>
 
 #include "line_map_merging/slam/scan_matcher.hpp"
 #include "line_map_merging/slam/scan_surfaces.hpp"
@@ -39,10 +38,10 @@ struct LaserSlamParams
   /// With lambda > 0 the local map's field is of the keyframes' surfaces (scanSurfaces), not of their
   /// points alone: a wall at grazing incidence is then a line, not a row of dots that holds a scan at
   /// the keyframe's pose along a corridor. 0: the points alone.
-  SurfaceParams surfaces{10.0 * linemap::kPi / 180.0, 0.01};
-  double max_odometry_step = 0.5;    ///< [m] odometry moving more between two scans is a jump
-  double max_odometry_turn = 0.5;    ///< [rad]
-  double time_jump_tolerance = 1.0;  ///< [s] a stamp this much before the last one: time jumped back
+  SurfaceParams surfaces{0.1745, 0.01};  ///< lambda about 10 degrees, as config/slam.yaml writes it
+  double max_odometry_step = 0.5;        ///< [m] odometry moving more between two scans is a jump
+  double max_odometry_turn = 0.5;        ///< [rad]
+  double time_jump_tolerance = 1.0;      ///< [s] a stamp this much before the last one: time jumped back
   /// What a match determines, as a weight per direction of the translation (its score's curvature;
   /// TranslationShape): a direction fixed at least this fraction as sharply as the best one counts
   /// fully, a weaker one in proportion. The front end takes the match's translation in the
@@ -103,12 +102,12 @@ struct LaserSlamParams
   double loop_max_error_theta = 0.1;  ///< [rad]
   /// A closure the estimate misses by more than these needs a second one implying the same correction
   /// (within agreement_*) from one of the next pending_keyframes keyframes; both then go in under a
-  /// loss as wide as twice the correction. Off by default (infinite): on the Intel and ACES corridors,
-  /// closures sliding along a corridor corroborated each other.
-  double loop_corroborate_xy = std::numeric_limits<double>::infinity();     ///< [m]
-  double loop_corroborate_theta = std::numeric_limits<double>::infinity();  ///< [rad]
-  double loop_agreement_xy = 0.1;                                           ///< [m]
-  double loop_agreement_theta = 0.03;                                       ///< [rad]
+  /// loss as wide as twice the correction. Off by default (1e9, as config/slam.yaml writes it): on the
+  /// Intel and ACES corridors, closures sliding along a corridor corroborated each other.
+  double loop_corroborate_xy = 1.0e9;     ///< [m]
+  double loop_corroborate_theta = 1.0e9;  ///< [rad]
+  double loop_agreement_xy = 0.1;         ///< [m]
+  double loop_agreement_theta = 0.03;     ///< [rad]
   std::size_t loop_pending_keyframes = 10;
   /// A closure refused as inconsistent with the chain waits this many keyframes for others: when
   /// loop_consensus of the waiting ones, from as many different keyframes, agree with each other
