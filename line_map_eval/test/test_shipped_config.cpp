@@ -1,10 +1,12 @@
-// The SLAM's built-in parameter defaults are the shipped config/slam.yaml's: a tool or a program that runs
+// The SLAM's and the localizer's built-in parameter defaults are the shipped config/slam.yaml's and
+// config/localization.yaml's: a tool or a program that runs
 // the library without the file (not found, or not given) maps as the documented figures were measured.
 // Once, config/slam.yaml's surface_lambda (0.1745) and the built-in 10 degrees differed in the fifth digit,
 // and linemap_relations started outside the repository reported another Intel error than the README.
 #include <gtest/gtest.h>
 
 #include "line_map_eval/batch/batch.hpp"
+#include "line_map_merging/localization/line_map_localizer.hpp"
 #include "line_map_merging/slam/laser_slam_params.hpp"
 
 using line_map_merging::LaserSlamParams;
@@ -89,5 +91,63 @@ TEST(ShippedConfig, SlamDefaultsAreTheConfigFiles)
   EXPECT_SAME(loop_consensus_keyframes);
   EXPECT_SAME(loop_consistent_xy);
   EXPECT_SAME(loop_consistent_theta);
+#undef EXPECT_SAME
+}
+
+TEST(ShippedConfig, LocalizerDefaultsAreTheConfigFile)
+{
+  const line_map_merging::LocalizerParams built_in;
+  const auto shipped = line_map_merging::LocalizerParams::fromParams(
+      line_map_eval::loadParameterFiles({LINEMAP_SOURCE_DIR "/config/localization.yaml"}));
+#define EXPECT_SAME(field) EXPECT_EQ(built_in.field, shipped.field) << #field
+  EXPECT_SAME(max_range);
+  EXPECT_SAME(min_points);
+  EXPECT_SAME(match.max_distance);
+  EXPECT_SAME(match.refine_distance);
+  EXPECT_SAME(match.loss_scale);
+  EXPECT_SAME(match.point_sigma);
+  EXPECT_SAME(match.inlier_distance);
+  EXPECT_SAME(match.max_iterations);
+  EXPECT_SAME(match.check_free_side);
+  EXPECT_SAME(index_cell);
+  EXPECT_SAME(odom_sigma_xy);
+  EXPECT_SAME(odom_sigma_xy_per_m);
+  EXPECT_SAME(odom_sigma_theta);
+  EXPECT_SAME(odom_sigma_theta_per_rad);
+  EXPECT_SAME(odom_sigma_theta_per_m);
+  EXPECT_SAME(no_odom_sigma_xy);
+  EXPECT_SAME(no_odom_sigma_theta);
+  EXPECT_SAME(max_odometry_step);
+  EXPECT_SAME(max_odometry_turn);
+  EXPECT_SAME(time_jump_tolerance);
+  EXPECT_SAME(retry_inlier_share);
+  expectSameWindow(built_in.retry_window, shipped.retry_window, "retry_window");
+  expectSameWindow(built_in.jump_window, shipped.jump_window, "jump_window");
+  EXPECT_SAME(lost_inlier_share);
+  EXPECT_SAME(lost_scans);
+  EXPECT_SAME(doubt_share);
+  EXPECT_SAME(doubt_research_every);
+  EXPECT_SAME(doubt_hypotheses);
+  EXPECT_SAME(global.coarse_resolution);
+  EXPECT_SAME(global.coarse_sigma);
+  EXPECT_SAME(global.coarse_angular_step);
+  EXPECT_SAME(global.fine_resolution);
+  EXPECT_SAME(global.fine_sigma);
+  EXPECT_SAME(global.fine_angular_step);
+  EXPECT_SAME(global.max_points);
+  EXPECT_SAME(global.candidates);
+  EXPECT_SAME(global.separation);
+  EXPECT_SAME(global.separation_angle);
+  EXPECT_SAME(global.sample_spacing);
+  EXPECT_SAME(hypothesis_min_share);
+  EXPECT_SAME(hypothesis_smoothing);
+  EXPECT_SAME(hypotheses);
+  EXPECT_SAME(research_every);
+  EXPECT_SAME(research_every_apart);
+  EXPECT_SAME(accept_share);
+  EXPECT_SAME(accept_margin);
+  EXPECT_SAME(accept_travel);
+  EXPECT_SAME(accept_turn);
+  EXPECT_SAME(accept_scans);
 #undef EXPECT_SAME
 }
