@@ -2,14 +2,30 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 
 #include "linemap/small_helpers.hpp"
 
 namespace linemap
 {
+void ParamSet::note(const std::string& key, const std::string& fallback) const
+{
+  if (!fallbacks_) return;
+  // Two readers of one key with different fallbacks are both noted: "a|b".
+  auto [it, inserted] = fallbacks_->emplace(key, fallback);
+  if (!inserted && ("|" + it->second + "|").find("|" + fallback + "|") == std::string::npos)
+    it->second += "|" + fallback;
+}
+
 double ParamSet::getDouble(const std::string& key, double fallback) const
 {
+  if (fallbacks_)
+  {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.17g", fallback);
+    note(key, text);
+  }
   auto it = values_.find(key);
   if (it == values_.end()) return fallback;
   const std::optional<double> v = toNumber(it->second);
@@ -27,6 +43,7 @@ double ParamSet::getNonNegative(const std::string& key, double fallback) const
 
 int ParamSet::getInt(const std::string& key, int fallback) const
 {
+  note(key, std::to_string(fallback));
   auto it = values_.find(key);
   if (it == values_.end()) return fallback;
   const char* begin = it->second.c_str();
@@ -40,6 +57,7 @@ int ParamSet::getInt(const std::string& key, int fallback) const
 
 bool ParamSet::getBool(const std::string& key, bool fallback) const
 {
+  note(key, fallback ? "true" : "false");
   auto it = values_.find(key);
   if (it == values_.end()) return fallback;
   const std::string& s = it->second;
@@ -50,6 +68,7 @@ bool ParamSet::getBool(const std::string& key, bool fallback) const
 
 std::string ParamSet::getString(const std::string& key, const std::string& fallback) const
 {
+  note(key, fallback);
   auto it = values_.find(key);
   return it == values_.end() ? fallback : it->second;
 }

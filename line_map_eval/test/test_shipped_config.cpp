@@ -5,8 +5,30 @@
 // and linemap_relations started outside the repository reported another Intel error than the README.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "line_extraction/extractor.hpp"
+#include "line_extraction/line_extractor.hpp"
+#include "line_extraction/sensor_model.hpp"
+#include "line_extraction/submap_extraction.hpp"
 #include "line_map_eval/batch/batch.hpp"
+#include "line_map_eval/metrics/ground_truth_metrics.hpp"
+#include "line_map_eval/metrics/lookup_table.hpp"
+#include "line_map_eval/metrics/map_metrics.hpp"
+#include "line_map_eval/metrics/map_quality.hpp"
+#include "line_map_eval/metrics/structure_coverage.hpp"
+#include "line_map_eval/online/map_evaluator.hpp"
+#include "line_map_eval/online/online_evaluator.hpp"
 #include "line_map_merging/localization/line_map_localizer.hpp"
+#include "line_map_merging/mergers/merger.hpp"
+#include "line_map_merging/online/concurrent_mapper.hpp"
+#include "line_map_merging/online/keyframe_gate.hpp"
+#include "line_map_merging/online/map_level_lines.hpp"
+#include "line_map_merging/online/online_mapper.hpp"
 #include "line_map_merging/slam/laser_slam_params.hpp"
 
 using line_map_merging::LaserSlamParams;
@@ -150,4 +172,94 @@ TEST(ShippedConfig, LocalizerDefaultsAreTheConfigFile)
   EXPECT_SAME(accept_turn);
   EXPECT_SAME(accept_scans);
 #undef EXPECT_SAME
+}
+
+namespace
+{
+/// Whether a file's text and a fallback the code asked with are one setting: numbers within half a unit of
+/// the file's last written digit (the files round an angle of whole degrees to the digits they write),
+/// other values as written (booleans, names).
+bool sameValue(const std::string& file, const std::string& fallback)
+{
+  char* end_file = nullptr;
+  char* end_fallback = nullptr;
+  const double a = std::strtod(file.c_str(), &end_file), b = std::strtod(fallback.c_str(), &end_fallback);
+  if (file.empty() || *end_file != '\0' || fallback.empty() || *end_fallback != '\0') return file == fallback;
+  const std::size_t exponent_at = file.find_first_of("eE");
+  const std::string mantissa = file.substr(0, exponent_at);
+  const std::size_t point = mantissa.find('.');
+  const int decimals = point == std::string::npos ? 0 : static_cast<int>(mantissa.size() - point - 1);
+  const int exponent = exponent_at == std::string::npos ? 0 : std::atoi(file.c_str() + exponent_at + 1);
+  return std::fabs(a - b) <= 0.5 * std::pow(10.0, exponent - decimals);
+}
+
+/// The keys of `params` (a config file) whose value differs from the fallback the code reads it with.
+std::map<std::string, std::string> differing(const linemap::ParamSet& params,
+                                             const std::map<std::string, std::string>& fallbacks)
+{
+  std::map<std::string, std::string> out;
+  for (const auto& [key, fallback] : fallbacks)
+  {
+    if (fallback.find('|') != std::string::npos)
+      out[key] = "read with different built-in defaults: " + fallback;
+    else if (params.has(key) && !sameValue(params.values().at(key), fallback))
+      out[key] = "file " + params.values().at(key) + ", built in " + fallback;
+  }
+  return out;
+}
+}  // namespace
+
+// The same for every parameter the extraction, the mergers and the evaluation read
+// (config/line_extraction.yaml, line_map_merging.yaml, line_map_eval.yaml, read together as linemap_batch and
+// the launch files do): the fallback each getter is asked with is what a nodelet started without the files
+// uses.
+TEST(ShippedConfig, PipelineDefaultsAreTheConfigFiles)
+{
+  linemap::ParamSet params = line_map_eval::loadParameterFiles(
+      {LINEMAP_SOURCE_DIR "/config/line_extraction.yaml", LINEMAP_SOURCE_DIR "/config/line_map_merging.yaml",
+       LINEMAP_SOURCE_DIR "/config/line_map_eval.yaml"});
+  std::map<std::string, std::string> fallbacks;
+  params.noteFallbacks(&fallbacks);
+  line_extraction::PipelineParams::fromParams(params);
+  line_extraction::SubmapParams::fromParams(params);
+  line_extraction::SensorModel::fromParams(params);
+  for (const auto& name : line_extraction::extractorNames()) line_extraction::makeExtractor(name, params);
+  for (const auto& name : line_map_merging::mergerNames())
+  {
+    line_map_merging::makeMerger(name, params);
+    line_map_merging::ConcurrentMapper::fromParams(name, params);
+  }
+  line_map_merging::KeyframeGateParams::fromParams(params);
+  line_map_merging::MapLevelParams::fromParams(params);
+  line_map_merging::OnlineMapperParams::fromParams(params);
+  line_map_eval::CoverageParams::fromParams(params);
+  line_map_eval::QualityParams::fromParams(params);
+  line_map_eval::LookupTableParams::fromParams(params);
+  line_map_eval::GroundTruthParams::fromParams(params);
+  line_map_eval::StructureParams::fromParams(params);
+  line_map_eval::EvaluatorParams::fromParams(params);
+  line_map_eval::OnlineEvaluatorParams::fromParams(params);
+  EXPECT_GT(fallbacks.size(), 50u);  // the getters did note what they read
+  for (const auto& [key, what] : differing(params, fallbacks)) ADD_FAILURE() << key << ": " << what;
+}
+
+// The batch tool reads the three pipeline files into one set, as the nodelets read each into their own
+// namespace: a key two files set differently would reach one component with the other's value (the
+// evaluator's cores once ran the merger's MP-GMA on one thread in every batch run).
+TEST(ShippedConfig, NoKeyIsSetDifferentlyByTwoPipelineFiles)
+{
+  const std::vector<std::string> names = {"line_extraction.yaml", "line_map_merging.yaml",
+                                          "line_map_eval.yaml"};
+  std::vector<linemap::ParamSet> files;
+  for (const auto& name : names)
+    files.push_back(line_map_eval::loadParameterFiles({std::string(LINEMAP_SOURCE_DIR "/config/") + name}));
+  for (std::size_t i = 0; i < files.size(); ++i)
+    for (std::size_t j = i + 1; j < files.size(); ++j)
+      for (const auto& [key, value] : files[i].values())
+      {
+        if (files[j].has(key))
+        {
+          EXPECT_EQ(value, files[j].values().at(key)) << key << " in " << names[i] << " and " << names[j];
+        }
+      }
 }

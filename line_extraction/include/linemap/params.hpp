@@ -29,8 +29,15 @@ class ParamSet
   bool getBool(const std::string& key, bool fallback) const;
   std::string getString(const std::string& key, const std::string& fallback) const;
 
+  /// From now on every getter also notes, by key, the fallback it was asked with: what the code uses where
+  /// the files are silent (test_shipped_config compares these with config/*.yaml). Different fallbacks
+  /// of one key are joined by '|'. Null: no notes.
+  void noteFallbacks(std::map<std::string, std::string>* into) { fallbacks_ = into; }
+
  private:
+  void note(const std::string& key, const std::string& fallback) const;
   std::map<std::string, std::string> values_;
+  std::map<std::string, std::string>* fallbacks_ = nullptr;
 };
 
 }  // namespace linemap

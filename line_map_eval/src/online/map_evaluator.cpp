@@ -11,8 +11,9 @@ EvaluatorParams EvaluatorParams::fromParams(const linemap::ParamSet& params)
 {
   EvaluatorParams p;
   p.gate = line_map_merging::KeyframeGateParams::fromParams(params);
-  p.stamp_tolerance = params.getDouble("stamp_tolerance", p.stamp_tolerance);
-  if (!(p.stamp_tolerance >= 0.0)) throw linemap::ParameterError("parameter 'stamp_tolerance' must be >= 0");
+  p.stamp_tolerance = params.getDouble("eval/stamp_tolerance", p.stamp_tolerance);
+  if (!(p.stamp_tolerance >= 0.0))
+    throw linemap::ParameterError("parameter 'eval/stamp_tolerance' must be >= 0");
   p.max_gap = params.getDouble("trajectory_max_gap", p.max_gap);
   if (!(p.max_gap >= 0.0)) throw linemap::ParameterError("parameter 'trajectory_max_gap' must be >= 0");
   p.correction = line_map_merging::correctionModeFromString(

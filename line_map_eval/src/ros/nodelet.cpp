@@ -71,7 +71,11 @@ class LineMapEvalNodelet : public nodelet::Nodelet
     // A map that arrived within min_period of the last evaluation is published by this timer.
     // The evaluation's parallel loops (structure classification) run on at most `threads` cores, so that
     // the extractor and the merger keep one on a small machine.
-    const int threads = pnh.param("threads", 1);
+    if (pnh.hasParam("threads") || pnh.hasParam("stamp_tolerance"))
+      NODELET_WARN(
+          "line_map_eval: ~threads and ~stamp_tolerance are now ~eval/threads and ~eval/stamp_tolerance; "
+          "the former are ignored");
+    const int threads = pnh.param("eval/threads", 1);
     arena_ = std::make_unique<tbb::task_arena>(threads > 0 ? threads : tbb::info::default_concurrency());
     publish_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.05, pnh.param("min_period", 1.0))),
                                         [this](const ros::WallTimerEvent&) { publish(); });

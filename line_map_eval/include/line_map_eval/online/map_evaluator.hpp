@@ -38,7 +38,7 @@ struct EvaluatorParams
   line_map_merging::FusionParams fusion;  ///< error assignment, redundant pairs, length coverage
   CoverageParams coverage;
 
-  /// Keys "keyframe_distance", "keyframe_angle", "stamp_tolerance", "trajectory_max_gap",
+  /// Keys "keyframe_distance", "keyframe_angle", "eval/stamp_tolerance", "trajectory_max_gap",
   /// "trajectory_correction", "keyframe_source", "keyframe_buffer", "eval/...", "fusion/...".
   static EvaluatorParams fromParams(const linemap::ParamSet& params);
 };
