@@ -11,7 +11,6 @@ namespace linemap
 {
 void ParamSet::note(const std::string& key, const std::string& fallback) const
 {
-  if (!fallbacks_) return;
   // Two readers of one key with different fallbacks are both noted: "a|b".
   auto [it, inserted] = fallbacks_->emplace(key, fallback);
   if (!inserted && ("|" + it->second + "|").find("|" + fallback + "|") == std::string::npos)
@@ -43,7 +42,7 @@ double ParamSet::getNonNegative(const std::string& key, double fallback) const
 
 int ParamSet::getInt(const std::string& key, int fallback) const
 {
-  note(key, std::to_string(fallback));
+  if (fallbacks_) note(key, std::to_string(fallback));
   auto it = values_.find(key);
   if (it == values_.end()) return fallback;
   const char* begin = it->second.c_str();
@@ -57,7 +56,7 @@ int ParamSet::getInt(const std::string& key, int fallback) const
 
 bool ParamSet::getBool(const std::string& key, bool fallback) const
 {
-  note(key, fallback ? "true" : "false");
+  if (fallbacks_) note(key, fallback ? "true" : "false");
   auto it = values_.find(key);
   if (it == values_.end()) return fallback;
   const std::string& s = it->second;
@@ -68,7 +67,7 @@ bool ParamSet::getBool(const std::string& key, bool fallback) const
 
 std::string ParamSet::getString(const std::string& key, const std::string& fallback) const
 {
-  note(key, fallback);
+  if (fallbacks_) note(key, fallback);
   auto it = values_.find(key);
   return it == values_.end() ? fallback : it->second;
 }
