@@ -179,6 +179,48 @@ std::vector<RobustnessVariant> variants(const Arguments& a, const linemap::Param
   return out;
 }
 
+/// Every run's line, the summary and the failures, on stdout.
+void printRuns(const Arguments& a, const std::vector<RobustnessRun>& runs, const RobustnessSummary& s)
+{
+  const bool world = isWorldFile(a.positional[0]);
+  const double deg = 180.0 / linemap::kPi;
+  std::cout << fs::path(a.positional[0]).filename().string() << (a.odometry ? "" : ", no odometry") << ": "
+            << runs.size() << " runs\n"
+            << std::left << std::setw(48) << "run" << std::right
+            << "  trans [m] mean ± std   rot [deg]  x defaults\n";
+  for (const auto& r : runs)
+    std::cout << std::left << std::setw(48) << r.variant.label << std::right << std::fixed
+              << std::setprecision(4) << std::setw(9) << r.error.translation_mean << " ± " << std::setw(6)
+              << r.error.translation_std << std::setprecision(2) << std::setw(9)
+              << r.error.rotation_mean * deg << std::setw(10)
+              << (s.defaults > 0.0 ? r.error.translation_mean / s.defaults : 0.0) << "  "
+              << line_map_merging::closureSummary(r.counters)
+              << (world ? ", " + std::to_string(r.false_closures) + " false" : std::string()) << ", "
+              << std::setprecision(1) << r.cpu_seconds << " s CPU\n";
+  std::cout << std::setprecision(4) << "defaults " << s.defaults << " m; median " << s.median
+            << " m, 90th percentile " << s.p90 << " m, worst " << s.worst << " m (" << s.worst_label << ", "
+            << std::setprecision(2) << (s.defaults > 0.0 ? s.worst / s.defaults : 0.0) << "x the defaults)\n"
+            << s.failures << " failures (worse than 2x the defaults or above 0.1 m)"
+            << (s.failures ? ":" : "") << "\n";
+  for (const auto& r : runs)
+    if (!r.failure.empty()) std::cout << "  " << r.variant.label << ": " << r.failure << "\n";
+}
+
+/// Every run as a CSV row in `path`.
+void writeCsv(const std::string& path, const std::vector<RobustnessRun>& runs)
+{
+  const double deg = 180.0 / linemap::kPi;
+  std::ofstream csv(path);
+  csv << "run,translation_mean,translation_std,rotation_mean_deg,relations_used,closures,inconsistent,cpu_"
+         "s,"
+         "failure\n";
+  for (const auto& r : runs)
+    csv << '"' << r.variant.label << "\"," << r.error.translation_mean << "," << r.error.translation_std
+        << "," << r.error.rotation_mean * deg << "," << r.error.used << "," << r.counters.loops_accepted
+        << "," << r.counters.loops_inconsistent << "," << r.cpu_seconds << ",\"" << r.failure << "\"\n";
+  if (!csv) throw std::runtime_error(path + ": cannot write");
+}
+
 int run(const Arguments& a)
 {
   linemap::ParamSet defaults = loadParameterFiles(configFiles(a.config, "slam.yaml", "slam_robustness"));
@@ -205,41 +247,9 @@ int run(const Arguments& a)
   std::vector<std::thread> threads;
   for (std::size_t j = 0; j < std::min(a.jobs, todo.size()); ++j) threads.emplace_back(worker);
   for (auto& t : threads) t.join();
-  const RobustnessSummary s = summarize(runs);
-  const bool world = isWorldFile(a.positional[0]);
-  const double deg = 180.0 / linemap::kPi;
-  std::cout << fs::path(a.positional[0]).filename().string() << (a.odometry ? "" : ", no odometry") << ": "
-            << runs.size() << " runs\n"
-            << std::left << std::setw(48) << "run" << std::right
-            << "  trans [m] mean ± std   rot [deg]  x defaults\n";
-  for (const auto& r : runs)
-    std::cout << std::left << std::setw(48) << r.variant.label << std::right << std::fixed
-              << std::setprecision(4) << std::setw(9) << r.error.translation_mean << " ± " << std::setw(6)
-              << r.error.translation_std << std::setprecision(2) << std::setw(9)
-              << r.error.rotation_mean * deg << std::setw(10)
-              << (s.defaults > 0.0 ? r.error.translation_mean / s.defaults : 0.0) << "  "
-              << line_map_merging::closureSummary(r.counters)
-              << (world ? ", " + std::to_string(r.false_closures) + " false" : std::string()) << ", "
-              << std::setprecision(1) << r.cpu_seconds << " s CPU\n";
-  std::cout << std::setprecision(4) << "defaults " << s.defaults << " m; median " << s.median
-            << " m, 90th percentile " << s.p90 << " m, worst " << s.worst << " m (" << s.worst_label << ", "
-            << std::setprecision(2) << (s.defaults > 0.0 ? s.worst / s.defaults : 0.0) << "x the defaults)\n"
-            << s.failures << " failures (worse than 2x the defaults or above 0.1 m)"
-            << (s.failures ? ":" : "") << "\n";
-  for (const auto& r : runs)
-    if (!r.failure.empty()) std::cout << "  " << r.variant.label << ": " << r.failure << "\n";
-  if (!a.csv.empty())
-  {
-    std::ofstream csv(a.csv);
-    csv << "run,translation_mean,translation_std,rotation_mean_deg,relations_used,closures,inconsistent,cpu_"
-           "s,"
-           "failure\n";
-    for (const auto& r : runs)
-      csv << '"' << r.variant.label << "\"," << r.error.translation_mean << "," << r.error.translation_std
-          << "," << r.error.rotation_mean * deg << "," << r.error.used << "," << r.counters.loops_accepted
-          << "," << r.counters.loops_inconsistent << "," << r.cpu_seconds << ",\"" << r.failure << "\"\n";
-    if (!csv) throw std::runtime_error(a.csv + ": cannot write");
-  }
+  const RobustnessSummary summary = summarize(runs);  // marks each run's failure
+  printRuns(a, runs, summary);
+  if (!a.csv.empty()) writeCsv(a.csv, runs);
   return 0;
 }
 }  // namespace
