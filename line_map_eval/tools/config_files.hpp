@@ -11,13 +11,18 @@
 
 namespace line_map_eval
 {
+/// The pipeline's parameter files in a config directory, in the order linemap_batch reads them; the first
+/// marks a config directory.
+inline constexpr const char* kPipelineConfigFiles[] = {"line_extraction.yaml", "line_map_merging.yaml",
+                                                       "line_map_eval.yaml"};
+
 /// The repository's config directory: explicit, $LINEMAP_CONFIG_DIR, $LINEMAP_ROOT/config, or the first
-/// config/ holding line_extraction.yaml searched upwards from the executable (devel/lib/line_map_eval/
+/// config/ holding the first pipeline file searched upwards from the executable (devel/lib/line_map_eval/
 /// inside a build directory of the repository) and from the working directory; empty when none is found.
 inline std::filesystem::path findConfigDir(const std::string& explicit_dir = "")
 {
   namespace fs = std::filesystem;
-  const auto has_config = [](const fs::path& dir) { return fs::exists(dir / "line_extraction.yaml"); };
+  const auto has_config = [](const fs::path& dir) { return fs::exists(dir / kPipelineConfigFiles[0]); };
   if (!explicit_dir.empty()) return explicit_dir;
   if (const char* env = std::getenv("LINEMAP_CONFIG_DIR")) return env;
   if (const char* root = std::getenv("LINEMAP_ROOT"))

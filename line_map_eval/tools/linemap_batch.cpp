@@ -38,7 +38,6 @@ using namespace line_map_eval;
 
 namespace
 {
-const char* const kConfigFiles[] = {"line_extraction.yaml", "line_map_merging.yaml", "line_map_eval.yaml"};
 
 void usage(std::ostream& out)
 {
@@ -177,7 +176,7 @@ void loadParameters(Arguments& a, linemap::ParamSet& slam_params, linemap::Param
     std::cerr
         << "linemap_batch: no config directory found (use --config-dir); running on built-in defaults\n";
   else
-    for (const char* name : kConfigFiles)
+    for (const char* name : kPipelineConfigFiles)
       if (fs::exists(dir / name))
         files.push_back((dir / name).string());
       else
