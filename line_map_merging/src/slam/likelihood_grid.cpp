@@ -5,6 +5,65 @@
 
 namespace line_map_merging
 {
+/// The field's cells, by tiles of kTile x kTile, as squared distances [m^2] to the nearest point or join
+/// while they are written: a tile starts at the reach (nothing near) when something first writes into it,
+/// and the rest stay 0. The field of a building is mostly empty space, which then costs nothing more.
+class LikelihoodGrid::NearestDistances
+{
+ public:
+  static constexpr int kTile = 8;
+
+  NearestDistances(std::vector<double>& cells, int width, int height, double start)
+      : cells_(cells),
+        width_(width),
+        height_(height),
+        tiles_x_((width + kTile - 1) / kTile),
+        start_(start),
+        started_(static_cast<std::size_t>(tiles_x_) * ((height + kTile - 1) / kTile), 0)
+  {
+  }
+
+  /// Row iy of the cells, its cells x0..x1 started.
+  double* row(int iy, int x0, int x1)
+  {
+    const int ty = iy / kTile;
+    for (int tx = x0 / kTile; tx <= x1 / kTile; ++tx)
+    {
+      auto& started = started_[static_cast<std::size_t>(ty) * tiles_x_ + tx];
+      if (started) continue;
+      started = 1;
+      const int cx0 = tx * kTile, cx1 = std::min(width_, cx0 + kTile);
+      for (int y = ty * kTile; y < std::min(height_, (ty + 1) * kTile); ++y)
+        std::fill(&cells_[static_cast<std::size_t>(y) * width_ + cx0],
+                  &cells_[static_cast<std::size_t>(y) * width_] + cx1, start_);
+    }
+    return &cells_[static_cast<std::size_t>(iy) * width_];
+  }
+
+  /// Every cell of every started tile replaced by f(its squared distance).
+  template <typename F>
+  void convert(F&& f)
+  {
+    for (std::size_t t = 0; t < started_.size(); ++t)
+    {
+      if (!started_[t]) continue;
+      const int tx = static_cast<int>(t % tiles_x_), ty = static_cast<int>(t / tiles_x_);
+      const int cx0 = tx * kTile, cx1 = std::min(width_, cx0 + kTile);
+      for (int y = ty * kTile; y < std::min(height_, (ty + 1) * kTile); ++y)
+      {
+        double* line = &cells_[static_cast<std::size_t>(y) * width_];
+        for (int x = cx0; x < cx1; ++x) line[x] = f(line[x]);
+      }
+    }
+  }
+
+ private:
+  std::vector<double>& cells_;
+  int width_, height_, tiles_x_;
+  double start_;
+  std::vector<unsigned char> started_;
+};
+
 LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points, double resolution, double sigma,
                                double margin)
     : LikelihoodGrid(points, {}, resolution, sigma, margin)
@@ -27,24 +86,27 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points,
   }
   // Beyond 3 sigma the value is below 1.2 %: not worth writing.
   const double reach = 3.0 * sigma;
+  const double k = -0.5 / (sigma * sigma);
   margin = std::max(margin, reach + 2.0 * resolution);
   origin_ = {min_x - margin, min_y - margin};
   width_ = static_cast<int>(std::ceil((max_x - min_x + 2.0 * margin) * inv_resolution_)) + 1;
   height_ = static_cast<int>(std::ceil((max_y - min_y + 2.0 * margin) * inv_resolution_)) + 1;
-  // Nearest squared distance per cell first, one exp per cell after (far fewer than per point).
+  // Nearest squared distance per cell first, one exp per cell after (far fewer than per point), in the
+  // tiles some point or join reaches: the rest of the field is 0.
   const double reach2 = reach * reach;
-  cells_.assign(static_cast<std::size_t>(width_) * height_, reach2);
+  cells_.assign(static_cast<std::size_t>(width_) * height_, 0.0);
+  NearestDistances nearest(cells_, width_, height_, reach2);
   const int r = static_cast<int>(std::ceil(reach * inv_resolution_));
-  const double k = -0.5 / (sigma * sigma);
   for (const auto& p : points)
   {
     const double fx = (p.x() - origin_.x()) * inv_resolution_, fy = (p.y() - origin_.y()) * inv_resolution_;
-    const int cx = static_cast<int>(std::lround(fx)), cy = static_cast<int>(std::lround(fy));
+    const int cx = static_cast<int>(roundHalfAway(fx)), cy = static_cast<int>(roundHalfAway(fy));
+    const int x0 = std::max(0, cx - r), x1 = std::min(width_ - 1, cx + r);
     for (int iy = std::max(0, cy - r); iy <= std::min(height_ - 1, cy + r); ++iy)
     {
       const double dy = (iy - fy) * resolution_;
-      double* row = &cells_[static_cast<std::size_t>(iy) * width_];
-      for (int ix = std::max(0, cx - r); ix <= std::min(width_ - 1, cx + r); ++ix)
+      double* row = nearest.row(iy, x0, x1);
+      for (int ix = x0; ix <= x1; ++ix)
       {
         const double dx = (ix - fx) * resolution_;
         row[ix] = std::min(row[ix], dx * dx + dy * dy);
@@ -54,11 +116,11 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points,
   // A join shorter than sigma adds little to its end points' discs (the field sags by under an eighth
   // between them) and most joins are that short: only the longer ones are written.
   for (const auto& s : joins)
-    if ((s.end - s.start).squaredNorm() >= sigma * sigma) writeJoin(s, r);
-  for (double& c : cells_) c = c >= reach2 ? 0.0 : std::exp(k * c);
+    if ((s.end - s.start).squaredNorm() >= sigma * sigma) writeJoin(s, r, nearest);
+  nearest.convert([&](double d2) { return d2 >= reach2 ? 0.0 : std::exp(k * d2); });
 }
 
-void LikelihoodGrid::writeJoin(const linemap::Segment2& s, int r)
+void LikelihoodGrid::writeJoin(const linemap::Segment2& s, int r, NearestDistances& nearest) const
 {
   // In cell units from the join's start a: a cell's offset p projects to t = p.u / |u|^2 along it.
   const double ax = (s.start.x() - origin_.x()) * inv_resolution_,
@@ -88,9 +150,11 @@ void LikelihoodGrid::writeJoin(const linemap::Segment2& s, int r)
       lo = std::max(lo, c - half);
       hi = std::min(hi, c + half);
     }
-    double* row = &cells_[static_cast<std::size_t>(iy) * width_];
-    for (int ix = std::max(0, static_cast<int>(std::floor(lo)));
-         ix <= std::min(width_ - 1, static_cast<int>(hi)); ++ix)
+    const int x0 = std::max(0, static_cast<int>(std::floor(lo))),
+              x1 = std::min(width_ - 1, static_cast<int>(hi));
+    if (x0 > x1) continue;
+    double* row = nearest.row(iy, x0, x1);
+    for (int ix = x0; ix <= x1; ++ix)
     {
       const double px = ix - ax;
       const double t = (px * ux + py * uy) * inv_len2;

@@ -46,27 +46,52 @@ struct FieldCost
   double scale_;
 };
 
+/// One cubic Hermite (Catmull-Rom) spline at x in [0, 1] between p1 and p2, in the operations and the order
+/// of Ceres' CubicHermiteSpline, value only.
+inline double hermiteValue(double p0, double p1, double p2, double p3, double x)
+{
+  const double a = 0.5 * (-p0 + 3.0 * p1 - 3.0 * p2 + p3);
+  const double b = 0.5 * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3);
+  const double c = 0.5 * (-p0 + p2);
+  return p1 + x * (c + x * (b + x * a));
+}
+
+/// The value `Interpolator::Evaluate(r, c, &f)` gives, bit for bit, without the column derivatives it
+/// computes alongside and never returns: the scoring passes read the field far more often than the solver.
+double bicubicValue(const LikelihoodGrid& grid, double r, double c)
+{
+  const int row = static_cast<int>(std::floor(r)), col = static_cast<int>(std::floor(c));
+  const double* cells = grid.cells().data();
+  const int w = grid.width(), h = grid.height();
+  int cols[4];
+  for (int j = 0; j < 4; ++j) cols[j] = std::min(std::max(0, col - 1 + j), w - 1);
+  const double x = c - col;
+  double f[4];
+  for (int i = 0; i < 4; ++i)
+  {
+    const double* line = cells + static_cast<std::size_t>(std::min(std::max(0, row - 1 + i), h - 1)) * w;
+    f[i] = hermiteValue(line[cols[0]], line[cols[1]], line[cols[2]], line[cols[3]], x);
+  }
+  return hermiteValue(f[0], f[1], f[2], f[3], r - row);
+}
+
 /// Mean interpolated field value of the points at `pose`.
-double interpolatedScore(const Interpolator& field, const LikelihoodGrid& grid,
-                         const std::vector<linemap::Vec2>& points, const linemap::Pose2& pose)
+double interpolatedScore(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
+                         const linemap::Pose2& pose)
 {
   double sum = 0.0;
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
   for (const auto& p : points)
-  {
-    double v;
-    field.Evaluate((s * p.x() + c * p.y() + pose.y - grid.origin().y()) / grid.resolution(),
-                   (c * p.x() - s * p.y() + pose.x - grid.origin().x()) / grid.resolution(), &v);
-    sum += v;
-  }
+    sum += bicubicValue(grid, (s * p.x() + c * p.y() + pose.y - grid.origin().y()) / grid.resolution(),
+                        (c * p.x() - s * p.y() + pose.x - grid.origin().x()) / grid.resolution());
   return sum / static_cast<double>(points.size());
 }
 
-/// How sharply the score falls off around `pose`: minus its Hessian over (x, y, theta) by central
-/// differences (one cell, 0.01 rad), negative curvatures clipped to zero. The least-squares J^T J
+/// How sharply the score falls off around `pose`, where it is `centre`: minus its Hessian over (x, y, theta)
+/// by central differences (one cell, 0.01 rad), negative curvatures clipped to zero. The least-squares J^T J
 /// would not do: at the peak of a field the points' gradients vanish, whatever the scan determines.
-Eigen::Matrix3d scoreCurvature(const Interpolator& field, const LikelihoodGrid& grid,
-                               const std::vector<linemap::Vec2>& points, const linemap::Pose2& pose)
+Eigen::Matrix3d scoreCurvature(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
+                               const linemap::Pose2& pose, double centre)
 {
   const double h[3] = {grid.resolution(), grid.resolution(), 0.01};
   auto at = [&](int i, double di, int j, double dj)
@@ -74,10 +99,8 @@ Eigen::Matrix3d scoreCurvature(const Interpolator& field, const LikelihoodGrid& 
     double d[3] = {0.0, 0.0, 0.0};
     d[i] += di;
     d[j] += dj;
-    return interpolatedScore(field, grid, points,
-                             linemap::Pose2(pose.x + d[0], pose.y + d[1], pose.theta + d[2]));
+    return interpolatedScore(grid, points, linemap::Pose2(pose.x + d[0], pose.y + d[1], pose.theta + d[2]));
   };
-  const double centre = interpolatedScore(field, grid, points, pose);
   Eigen::Matrix3d hessian;
   for (int i = 0; i < 3; ++i)
   {
@@ -189,6 +212,7 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
     spread->reach = reach;
     spread->best.assign(static_cast<std::size_t>(side) * side, 0.0);
   }
+  const bool unit_or_less = window.translation_penalty >= 0.0 && window.rotation_penalty >= 0.0;
   std::vector<double> sums;
   // Cell of every rotated point at the window's centre; translations then shift whole cells.
   std::vector<int> ix(points.size()), iy(points.size());
@@ -201,8 +225,8 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
     for (std::size_t i = 0; i < points.size(); ++i)
     {
       const auto& p = points[i];
-      ix[i] = static_cast<int>(std::lround((c * p.x() - s * p.y() + center.x - grid.origin().x()) / res));
-      iy[i] = static_cast<int>(std::lround((s * p.x() + c * p.y() + center.y - grid.origin().y()) / res));
+      ix[i] = static_cast<int>(roundHalfAway((c * p.x() - s * p.y() + center.x - grid.origin().x()) / res));
+      iy[i] = static_cast<int>(roundHalfAway((s * p.x() + c * p.y() + center.y - grid.origin().y()) / res));
     }
     translationSums(grid, step, reach, ix, iy, sums);
     for (int oy = -reach; oy <= reach; ++oy)
@@ -216,6 +240,8 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
           double& cell = spread->best[at_translation];
           cell = std::max(cell, score);
         }
+        // A penalty factor is at most 1: a score not above the last kept one cannot enter.
+        if (unit_or_less && ranked.size() == keep && score <= ranked.back().first) continue;
         const double tx = dx * res, ty = dy * res;
         const double ranked_score =
             score *
@@ -252,17 +278,8 @@ MatchResult refineMatch(const LikelihoodGrid& grid, const std::vector<linemap::V
                            nullptr, pose);
   solveSilently(problem, ceres::DENSE_QR, params.max_iterations);
   result.pose = {pose[0], pose[1], linemap::normalizeAngle(pose[2])};
-  result.curvature = scoreCurvature(field, grid, points, result.pose);
-  double sum = 0.0;
-  const double c = std::cos(result.pose.theta), s = std::sin(result.pose.theta);
-  for (const auto& p : points)
-  {
-    double v;
-    field.Evaluate((s * p.x() + c * p.y() + result.pose.y - grid.origin().y()) / grid.resolution(),
-                   (c * p.x() - s * p.y() + result.pose.x - grid.origin().x()) / grid.resolution(), &v);
-    sum += v;
-  }
-  result.score = sum / static_cast<double>(points.size());
+  result.score = interpolatedScore(grid, points, result.pose);
+  result.curvature = scoreCurvature(grid, points, result.pose, result.score);
   return result;
 }
 

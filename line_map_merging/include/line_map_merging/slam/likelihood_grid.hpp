@@ -13,6 +13,16 @@
 
 namespace line_map_merging
 {
+/// std::lround's result (halves away from zero) without its library call: the field's lookups round
+/// every scan point, and the call costs more than the lookup.
+inline long roundHalfAway(double v)
+{
+  if (!(std::fabs(v) < 4.0e18)) return std::lround(v);  // out of long's range, or NaN: as lround does
+  const long toward_zero = static_cast<long>(v);
+  const double fraction = v - static_cast<double>(toward_zero);  // exact for every |v| < 2^63
+  return toward_zero + (fraction >= 0.5 ? 1 : 0) - (fraction <= -0.5 ? 1 : 0);
+}
+
 class LikelihoodGrid
 {
  public:
@@ -37,16 +47,17 @@ class LikelihoodGrid
   /// Value of the cell containing p; 0 outside the grid.
   double nearest(double x, double y) const
   {
-    const long ix = std::lround((x - origin_.x()) * inv_resolution_);
-    const long iy = std::lround((y - origin_.y()) * inv_resolution_);
+    const long ix = roundHalfAway((x - origin_.x()) * inv_resolution_);
+    const long iy = roundHalfAway((y - origin_.y()) * inv_resolution_);
     if (ix < 0 || iy < 0 || ix >= width_ || iy >= height_) return 0.0;
     return cells_[static_cast<std::size_t>(iy) * width_ + ix];
   }
 
  private:
+  class NearestDistances;
   /// Lowers the cells within r cells of the join `s`, and nearer its inside than its ends, to their
   /// squared distance [m^2] to it.
-  void writeJoin(const linemap::Segment2& s, int r);
+  void writeJoin(const linemap::Segment2& s, int r, NearestDistances& nearest) const;
 
   double resolution_ = 0.05, inv_resolution_ = 20.0;
   linemap::Vec2 origin_ = linemap::Vec2::Zero();
