@@ -1,7 +1,6 @@
 #include "line_map_merging/slam/scan_matcher.hpp"
 
 #include <ceres/ceres.h>
-#include <ceres/cubic_interpolation.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,16 +11,57 @@ namespace line_map_merging
 {
 namespace
 {
-using Interpolator = ceres::BiCubicInterpolator<ceres::Grid2D<double, 1>>;
+
+/// One cubic Hermite (Catmull-Rom) spline at x in [0, 1] between p1 and p2, in the operations and the order
+/// of Ceres' CubicHermiteSpline: the value, and its derivative when asked.
+inline double hermite(double p0, double p1, double p2, double p3, double x, double* dfdx = nullptr)
+{
+  const double a = 0.5 * (-p0 + 3.0 * p1 - 3.0 * p2 + p3);
+  const double b = 0.5 * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3);
+  const double c = 0.5 * (-p0 + p2);
+  if (dfdx) *dfdx = c + x * (2.0 * b + 3.0 * a * x);
+  return p1 + x * (c + x * (b + x * a));
+}
+
+/// What Ceres' BiCubicInterpolator over the grid's cells (Grid2D, clamped at the borders) gives at row r,
+/// column c, bit for bit: the value, and with `dfdr` its derivatives by r and c. Inlined, and without the
+/// column derivatives when only the value is asked for: the scoring passes read the field far more often
+/// than the solver.
+double bicubic(const LikelihoodGrid& grid, double r, double c, double* dfdr = nullptr, double* dfdc = nullptr)
+{
+  const int row = static_cast<int>(std::floor(r)), col = static_cast<int>(std::floor(c));
+  const double* cells = grid.cells().data();
+  const int w = grid.width(), h = grid.height();
+  int cols[4];
+  for (int j = 0; j < 4; ++j) cols[j] = std::min(std::max(0, col - 1 + j), w - 1);
+  const double x = c - col;
+  double f[4], df[4];
+  for (int i = 0; i < 4; ++i)
+  {
+    const double* line = cells + static_cast<std::size_t>(std::min(std::max(0, row - 1 + i), h - 1)) * w;
+    f[i] = hermite(line[cols[0]], line[cols[1]], line[cols[2]], line[cols[3]], x, dfdr ? &df[i] : nullptr);
+  }
+  const double value = hermite(f[0], f[1], f[2], f[3], r - row, dfdr);
+  if (dfdr) *dfdc = hermite(df[0], df[1], df[2], df[3], r - row);
+  return value;
+}
+
+/// The field at (r, c) as Ceres' interpolator gives it to a Jet: the derivatives chained to r's and c's.
+template <typename JetT>
+JetT bicubic(const LikelihoodGrid& grid, const JetT& r, const JetT& c)
+{
+  double dfdr, dfdc;
+  JetT f;
+  f.a = bicubic(grid, r.a, c.a, &dfdr, &dfdc);
+  f.v = dfdr * r.v + dfdc * c.v;
+  return f;
+}
 
 // One residual per point: 1 - field value, scaled so that all points together weigh 1.
 struct FieldCost
 {
-  FieldCost(const Interpolator& field, const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points)
-      : field_(field),
-        grid_(grid),
-        points_(points),
-        scale_(1.0 / std::sqrt(static_cast<double>(points.size())))
+  FieldCost(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points)
+      : grid_(grid), points_(points), scale_(1.0 / std::sqrt(static_cast<double>(points.size())))
   {
   }
   template <typename T>
@@ -34,46 +74,15 @@ struct FieldCost
       const auto& p = points_[i];
       const T x = c * p.x() - s * p.y() + pose[0];
       const T y = s * p.x() + c * p.y() + pose[1];
-      T value;
-      field_.Evaluate((y - grid_.origin().y()) * inv, (x - grid_.origin().x()) * inv, &value);
+      const T value = bicubic(grid_, (y - grid_.origin().y()) * inv, (x - grid_.origin().x()) * inv);
       residual[i] = scale_ * (1.0 - value);
     }
     return true;
   }
-  const Interpolator& field_;
   const LikelihoodGrid& grid_;
   const std::vector<linemap::Vec2>& points_;
   double scale_;
 };
-
-/// One cubic Hermite (Catmull-Rom) spline at x in [0, 1] between p1 and p2, in the operations and the order
-/// of Ceres' CubicHermiteSpline, value only.
-inline double hermiteValue(double p0, double p1, double p2, double p3, double x)
-{
-  const double a = 0.5 * (-p0 + 3.0 * p1 - 3.0 * p2 + p3);
-  const double b = 0.5 * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3);
-  const double c = 0.5 * (-p0 + p2);
-  return p1 + x * (c + x * (b + x * a));
-}
-
-/// The value `Interpolator::Evaluate(r, c, &f)` gives, bit for bit, without the column derivatives it
-/// computes alongside and never returns: the scoring passes read the field far more often than the solver.
-double bicubicValue(const LikelihoodGrid& grid, double r, double c)
-{
-  const int row = static_cast<int>(std::floor(r)), col = static_cast<int>(std::floor(c));
-  const double* cells = grid.cells().data();
-  const int w = grid.width(), h = grid.height();
-  int cols[4];
-  for (int j = 0; j < 4; ++j) cols[j] = std::min(std::max(0, col - 1 + j), w - 1);
-  const double x = c - col;
-  double f[4];
-  for (int i = 0; i < 4; ++i)
-  {
-    const double* line = cells + static_cast<std::size_t>(std::min(std::max(0, row - 1 + i), h - 1)) * w;
-    f[i] = hermiteValue(line[cols[0]], line[cols[1]], line[cols[2]], line[cols[3]], x);
-  }
-  return hermiteValue(f[0], f[1], f[2], f[3], r - row);
-}
 
 /// Mean interpolated field value of the points at `pose`.
 double interpolatedScore(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
@@ -82,8 +91,8 @@ double interpolatedScore(const LikelihoodGrid& grid, const std::vector<linemap::
   double sum = 0.0;
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
   for (const auto& p : points)
-    sum += bicubicValue(grid, (s * p.x() + c * p.y() + pose.y - grid.origin().y()) / grid.resolution(),
-                        (c * p.x() - s * p.y() + pose.x - grid.origin().x()) / grid.resolution());
+    sum += bicubic(grid, (s * p.x() + c * p.y() + pose.y - grid.origin().y()) / grid.resolution(),
+                   (c * p.x() - s * p.y() + pose.x - grid.origin().x()) / grid.resolution());
   return sum / static_cast<double>(points.size());
 }
 
@@ -169,8 +178,11 @@ int floorDiv(int a, int b)
 /// the window, row-major (y outer), in `sums`: each point's cell shifted by whole cells, those off the grid
 /// adding nothing. Point by point, each adding to every translation that keeps it on the grid (its rows and
 /// columns clipped once, not tested per translation): every sum still adds its points in their order.
-void translationSums(const LikelihoodGrid& grid, int step, int reach, const std::vector<int>& ix,
-                     const std::vector<int>& iy, std::vector<double>& sums)
+/// Built for AVX2 too where the processor has it: the additions are the same, four at a time.
+__attribute__((target_clones("avx2", "default"))) void translationSums(const LikelihoodGrid& grid, int step,
+                                                                       int reach, const std::vector<int>& ix,
+                                                                       const std::vector<int>& iy,
+                                                                       std::vector<double>& sums)
 {
   const int side = 2 * reach + 1, w = grid.width(), h = grid.height();
   const double* cells = grid.cells().data();
@@ -266,12 +278,10 @@ MatchResult refineMatch(const LikelihoodGrid& grid, const std::vector<linemap::V
 {
   MatchResult result{initial, 0.0};
   if (grid.empty() || points.empty()) return result;
-  ceres::Grid2D<double, 1> data(grid.cells().data(), 0, grid.height(), 0, grid.width());
-  Interpolator field(data);
   double pose[3] = {initial.x, initial.y, initial.theta};
   ceres::Problem problem;
   problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FieldCost, ceres::DYNAMIC, 3>(
-                               new FieldCost(field, grid, points), static_cast<int>(points.size())),
+                               new FieldCost(grid, points), static_cast<int>(points.size())),
                            nullptr, pose);
   problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorCost, 3, 3>(
                                new PriorCost(prior, params.translation_weight, params.rotation_weight)),

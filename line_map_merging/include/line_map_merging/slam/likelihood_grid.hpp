@@ -1,8 +1,8 @@
 // A smoothed occupancy likelihood field for scan matching (ROS-free): every cell holds
 // exp(-d^2 / 2 sigma^2) of the distance d from its centre to the nearest map point or surface
 // segment, so a scan point's score falls off smoothly with its distance to the map. The correlative search
-// reads it at the nearest cell; the refinement reads it through Ceres' bicubic interpolator, which needs the
-// smooth field (a binary grid has no gradient).
+// reads it at the nearest cell; the refinement reads it bicubically interpolated (as Ceres interpolates),
+// which needs the smooth field (a binary grid has no gradient).
 #pragma once
 
 #include <cmath>
