@@ -1,8 +1,11 @@
 // Likelihood field and scan matcher against closed forms: the field of one point is the Gaussian of
 // the distance; a scan cast from a known pose is found again from a displaced prior.
+#include <ceres/cubic_interpolation.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <random>
 
 #include "line_map_merging/slam/likelihood_grid.hpp"
 #include "line_map_merging/slam/scan_matcher.hpp"
@@ -55,6 +58,112 @@ TEST(LikelihoodGrid, OneSegmentIsTheGaussianOfTheDistanceToIt)
       near += expected > 0.5 ? 1 : 0;
     }
   EXPECT_GT(near, 1000);
+}
+
+TEST(LikelihoodGrid, RoundsAsLround)
+{
+  const double below_half = std::nextafter(0.5, 0.0);
+  for (double v : {0.0,
+                   -0.0,
+                   0.5,
+                   -0.5,
+                   1.5,
+                   -1.5,
+                   2.5,
+                   -2.5,
+                   below_half,
+                   -below_half,
+                   0.49,
+                   0.51,
+                   -0.51,
+                   1e-300,
+                   123456.5,
+                   -123456.5,
+                   4503599627370495.5,
+                   4503599627370497.0,
+                   -7.0e15,
+                   3.9e18,
+                   -3.9e18})
+    EXPECT_EQ(line_map_merging::roundHalfAway(v), std::lround(v)) << v;
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> any(-1e4, 1e4);
+  for (int i = 0; i < 100000; ++i)
+  {
+    const double v = any(random);
+    ASSERT_EQ(line_map_merging::roundHalfAway(v), std::lround(v)) << v;
+  }
+}
+
+/// Random walls and clutter: many tiles, written by points and by joins, up to the grid's edges.
+LikelihoodGrid clutteredField(std::vector<Vec2>& points, std::vector<linemap::Segment2>& joins, double res,
+                              double sigma)
+{
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> where(0.0, 6.0), step(0.005, 0.2);
+  for (int wall = 0; wall < 12; ++wall)
+  {
+    const Vec2 a(where(random), where(random)), b(where(random), where(random));
+    Vec2 last = a;
+    points.push_back(a);
+    for (double t = step(random); t < 1.0; t += step(random))
+    {
+      const Vec2 q = a + t * (b - a);
+      points.push_back(q);
+      joins.push_back({last, q});
+      last = q;
+    }
+  }
+  for (int i = 0; i < 200; ++i) points.emplace_back(where(random), where(random));
+  return LikelihoodGrid(points, joins, res, sigma, 0.0);
+}
+
+TEST(LikelihoodGrid, EveryCellIsTheGaussianOfItsNearestDistance)
+{
+  const double res = 0.025, sigma = 0.03;
+  std::vector<Vec2> points;
+  std::vector<linemap::Segment2> joins;
+  const LikelihoodGrid grid = clutteredField(points, joins, res, sigma);
+  int written = 0;
+  for (int iy = 0; iy < grid.height(); ++iy)
+    for (int ix = 0; ix < grid.width(); ++ix)
+    {
+      const Vec2 centre = grid.origin() + Vec2(ix * res, iy * res);
+      double d = std::numeric_limits<double>::infinity();
+      for (const Vec2& p : points) d = std::min(d, (p - centre).norm());
+      // Joins shorter than sigma are left to their end points' discs (the field's documented shortcut).
+      for (const auto& j : joins)
+        if ((j.end - j.start).norm() >= sigma)
+          d = std::min(d, linemap::distanceToSegment(centre, j.start, j.end));
+      const double expected = d >= 3.0 * sigma ? 0.0 : std::exp(-d * d / (2.0 * sigma * sigma));
+      ASSERT_NEAR(grid.cells()[static_cast<std::size_t>(iy) * grid.width() + ix], expected, 1e-9)
+          << "cell " << ix << ", " << iy;
+      written += expected > 0.0 ? 1 : 0;
+    }
+  EXPECT_GT(written, grid.width() * grid.height() / 10);
+}
+
+TEST(LikelihoodGrid, InterpolatesAsCeres)
+{
+  std::vector<Vec2> points;
+  std::vector<linemap::Segment2> joins;
+  const LikelihoodGrid grid = clutteredField(points, joins, 0.025, 0.03);
+  const ceres::Grid2D<double, 1> cells(grid.cells().data(), 0, grid.height(), 0, grid.width());
+  const ceres::BiCubicInterpolator<ceres::Grid2D<double, 1>> reference(cells);
+  std::mt19937 random(5);
+  // Inside, on cell centres, and beyond the border (where the border cells repeat).
+  std::uniform_real_distribution<double> row(-3.0, grid.height() + 3.0), col(-3.0, grid.width() + 3.0);
+  for (int i = 0; i < 20000; ++i)
+  {
+    const double r = i % 10 == 0 ? std::floor(row(random)) : row(random);
+    const double c = i % 10 == 0 ? std::floor(col(random)) : col(random);
+    double f, dfdr, dfdc;
+    reference.Evaluate(r, c, &f, &dfdr, &dfdc);
+    double g_dr, g_dc;
+    ASSERT_EQ(grid.interpolate(r, c), f) << r << ", " << c;
+    ASSERT_EQ(grid.interpolate(r, c, &g_dr, &g_dc), f);
+    ASSERT_EQ(g_dr, dfdr);
+    ASSERT_EQ(g_dc, dfdc);
+  }
 }
 
 // A wall seen at grazing incidence from 1 m is one chain of segments however far apart its points lie;

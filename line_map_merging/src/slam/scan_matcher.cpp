@@ -12,47 +12,17 @@ namespace line_map_merging
 namespace
 {
 
-/// One cubic Hermite (Catmull-Rom) spline at x in [0, 1] between p1 and p2, in the operations and the order
-/// of Ceres' CubicHermiteSpline: the value, and its derivative when asked.
-inline double hermite(double p0, double p1, double p2, double p3, double x, double* dfdx = nullptr)
-{
-  const double a = 0.5 * (-p0 + 3.0 * p1 - 3.0 * p2 + p3);
-  const double b = 0.5 * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3);
-  const double c = 0.5 * (-p0 + p2);
-  if (dfdx) *dfdx = c + x * (2.0 * b + 3.0 * a * x);
-  return p1 + x * (c + x * (b + x * a));
-}
-
-/// What Ceres' BiCubicInterpolator over the grid's cells (Grid2D, clamped at the borders) gives at row r,
-/// column c, bit for bit: the value, and with `dfdr` its derivatives by r and c. Inlined, and without the
-/// column derivatives when only the value is asked for: the scoring passes read the field far more often
-/// than the solver.
-double bicubic(const LikelihoodGrid& grid, double r, double c, double* dfdr = nullptr, double* dfdc = nullptr)
-{
-  const int row = static_cast<int>(std::floor(r)), col = static_cast<int>(std::floor(c));
-  const double* cells = grid.cells().data();
-  const int w = grid.width(), h = grid.height();
-  int cols[4];
-  for (int j = 0; j < 4; ++j) cols[j] = std::min(std::max(0, col - 1 + j), w - 1);
-  const double x = c - col;
-  double f[4], df[4];
-  for (int i = 0; i < 4; ++i)
-  {
-    const double* line = cells + static_cast<std::size_t>(std::min(std::max(0, row - 1 + i), h - 1)) * w;
-    f[i] = hermite(line[cols[0]], line[cols[1]], line[cols[2]], line[cols[3]], x, dfdr ? &df[i] : nullptr);
-  }
-  const double value = hermite(f[0], f[1], f[2], f[3], r - row, dfdr);
-  if (dfdr) *dfdc = hermite(df[0], df[1], df[2], df[3], r - row);
-  return value;
-}
-
 /// The field at (r, c) as Ceres' interpolator gives it to a Jet: the derivatives chained to r's and c's.
+double bicubic(const LikelihoodGrid& grid, double r, double c)
+{
+  return grid.interpolate(r, c);
+}
 template <typename JetT>
 JetT bicubic(const LikelihoodGrid& grid, const JetT& r, const JetT& c)
 {
   double dfdr, dfdc;
   JetT f;
-  f.a = bicubic(grid, r.a, c.a, &dfdr, &dfdc);
+  f.a = grid.interpolate(r.a, c.a, &dfdr, &dfdc);
   f.v = dfdr * r.v + dfdc * c.v;
   return f;
 }

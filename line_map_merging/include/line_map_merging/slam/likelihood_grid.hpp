@@ -44,6 +44,12 @@ class LikelihoodGrid
   /// Row-major (row = y index) cell values in [0, 1].
   const std::vector<double>& cells() const { return cells_; }
 
+  /// The field bicubically interpolated at row r, column c (cell units from the origin; the border cells
+  /// repeat outwards), with its derivatives by r and c where asked for: bit for bit what Ceres'
+  /// BiCubicInterpolator over a Grid2D of cells() gives, without the column derivatives it computes for a
+  /// value alone. The scoring passes read the field far more often than the solver.
+  double interpolate(double r, double c, double* dfdr = nullptr, double* dfdc = nullptr) const;
+
   /// Value of the cell containing p; 0 outside the grid.
   double nearest(double x, double y) const
   {
@@ -58,6 +64,8 @@ class LikelihoodGrid
   /// Lowers the cells within r cells of the join `s`, and nearer its inside than its ends, to their
   /// squared distance [m^2] to it.
   void writeJoin(const linemap::Segment2& s, int r, NearestDistances& nearest) const;
+
+  static constexpr int kTile = 8;  ///< cells are written by tiles of kTile x kTile
 
   double resolution_ = 0.05, inv_resolution_ = 20.0;
   linemap::Vec2 origin_ = linemap::Vec2::Zero();
