@@ -163,36 +163,4 @@ void LikelihoodGrid::writeJoin(const linemap::Segment2& s, int r, NearestDistanc
   }
 }
 
-namespace
-{
-/// One cubic Hermite (Catmull-Rom) spline at x in [0, 1] between p1 and p2, in the operations and the order
-/// of Ceres' CubicHermiteSpline: the value, and its derivative when asked.
-inline double hermite(double p0, double p1, double p2, double p3, double x, double* dfdx = nullptr)
-{
-  const double a = 0.5 * (-p0 + 3.0 * p1 - 3.0 * p2 + p3);
-  const double b = 0.5 * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3);
-  const double c = 0.5 * (-p0 + p2);
-  if (dfdx) *dfdx = c + x * (2.0 * b + 3.0 * a * x);
-  return p1 + x * (c + x * (b + x * a));
-}
-}  // namespace
-
-double LikelihoodGrid::interpolate(double r, double c, double* dfdr, double* dfdc) const
-{
-  const int row = static_cast<int>(std::floor(r)), col = static_cast<int>(std::floor(c));
-  int cols[4];
-  for (int j = 0; j < 4; ++j) cols[j] = std::min(std::max(0, col - 1 + j), width_ - 1);
-  const double x = c - col;
-  double f[4], df[4];
-  for (int i = 0; i < 4; ++i)
-  {
-    const double* line =
-        cells_.data() + static_cast<std::size_t>(std::min(std::max(0, row - 1 + i), height_ - 1)) * width_;
-    f[i] = hermite(line[cols[0]], line[cols[1]], line[cols[2]], line[cols[3]], x, dfdc ? &df[i] : nullptr);
-  }
-  const double value = hermite(f[0], f[1], f[2], f[3], r - row, dfdr);
-  if (dfdc) *dfdc = hermite(df[0], df[1], df[2], df[3], r - row);
-  return value;
-}
-
 }  // namespace line_map_merging

@@ -5,6 +5,7 @@
 // which needs the smooth field (a binary grid has no gradient).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <vector>
@@ -48,7 +49,34 @@ class LikelihoodGrid
   /// repeat outwards), with its derivatives by r and c where asked for: bit for bit what Ceres'
   /// BiCubicInterpolator over a Grid2D of cells() gives, without the column derivatives it computes for a
   /// value alone. The scoring passes read the field far more often than the solver.
-  double interpolate(double r, double c, double* dfdr = nullptr, double* dfdc = nullptr) const;
+  double interpolate(double r, double c, double* dfdr = nullptr, double* dfdc = nullptr) const
+  {
+    const int row = static_cast<int>(std::floor(r)), col = static_cast<int>(std::floor(c));
+    const double x = c - col;
+    double f[4], df[4];
+    if (row >= 1 && col >= 1 && row + 2 < height_ && col + 2 < width_)
+    {
+      const double* line = cells_.data() + static_cast<std::size_t>(row - 1) * width_ + (col - 1);
+      for (int i = 0; i < 4; ++i, line += width_)
+        f[i] = hermite(line[0], line[1], line[2], line[3], x, dfdc ? &df[i] : nullptr);
+    }
+    else  // the border cells repeat outwards
+    {
+      int cols[4];
+      for (int j = 0; j < 4; ++j) cols[j] = std::min(std::max(0, col - 1 + j), width_ - 1);
+      for (int i = 0; i < 4; ++i)
+      {
+        const double* line =
+            cells_.data() +
+            static_cast<std::size_t>(std::min(std::max(0, row - 1 + i), height_ - 1)) * width_;
+        f[i] =
+            hermite(line[cols[0]], line[cols[1]], line[cols[2]], line[cols[3]], x, dfdc ? &df[i] : nullptr);
+      }
+    }
+    const double value = hermite(f[0], f[1], f[2], f[3], r - row, dfdr);
+    if (dfdc) *dfdc = hermite(df[0], df[1], df[2], df[3], r - row, nullptr);
+    return value;
+  }
 
   /// Value of the cell containing p; 0 outside the grid.
   double nearest(double x, double y) const
@@ -66,6 +94,17 @@ class LikelihoodGrid
   void writeJoin(const linemap::Segment2& s, int r, NearestDistances& nearest) const;
 
   static constexpr int kTile = 8;  ///< cells are written by tiles of kTile x kTile
+
+  /// One cubic Hermite (Catmull-Rom) spline at x in [0, 1] between p1 and p2, in the operations and the
+  /// order of Ceres' CubicHermiteSpline: the value, and its derivative where asked for.
+  static double hermite(double p0, double p1, double p2, double p3, double x, double* dfdx)
+  {
+    const double a = 0.5 * (-p0 + 3.0 * p1 - 3.0 * p2 + p3);
+    const double b = 0.5 * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3);
+    const double c = 0.5 * (-p0 + p2);
+    if (dfdx) *dfdx = c + x * (2.0 * b + 3.0 * a * x);
+    return p1 + x * (c + x * (b + x * a));
+  }
 
   double resolution_ = 0.05, inv_resolution_ = 20.0;
   linemap::Vec2 origin_ = linemap::Vec2::Zero();
