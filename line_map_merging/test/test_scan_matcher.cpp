@@ -96,10 +96,10 @@ TEST(LikelihoodGrid, RoundsAsLround)
 
 /// Random walls and clutter: many tiles, written by points and by joins, up to the grid's edges.
 LikelihoodGrid clutteredField(std::vector<Vec2>& points, std::vector<linemap::Segment2>& joins, double res,
-                              double sigma)
+                              double sigma, unsigned seed = 11, double size = 6.0)
 {
-  std::mt19937 random(11);
-  std::uniform_real_distribution<double> where(0.0, 6.0), step(0.005, 0.2);
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> where(0.0, size), step(0.005, 0.2);
   for (int wall = 0; wall < 12; ++wall)
   {
     const Vec2 a(where(random), where(random)), b(where(random), where(random));
@@ -117,12 +117,10 @@ LikelihoodGrid clutteredField(std::vector<Vec2>& points, std::vector<linemap::Se
   return LikelihoodGrid(points, joins, res, sigma, 0.0);
 }
 
-TEST(LikelihoodGrid, EveryCellIsTheGaussianOfItsNearestDistance)
+/// Every cell of `grid` against the brute-force field of `points` and `joins`; returns the cells near one.
+int expectBruteForceField(const LikelihoodGrid& grid, const std::vector<Vec2>& points,
+                          const std::vector<linemap::Segment2>& joins, double res, double sigma)
 {
-  const double res = 0.025, sigma = 0.03;
-  std::vector<Vec2> points;
-  std::vector<linemap::Segment2> joins;
-  const LikelihoodGrid grid = clutteredField(points, joins, res, sigma);
   int written = 0;
   for (int iy = 0; iy < grid.height(); ++iy)
     for (int ix = 0; ix < grid.width(); ++ix)
@@ -135,11 +133,48 @@ TEST(LikelihoodGrid, EveryCellIsTheGaussianOfItsNearestDistance)
         if ((j.end - j.start).norm() >= sigma)
           d = std::min(d, linemap::distanceToSegment(centre, j.start, j.end));
       const double expected = d >= 3.0 * sigma ? 0.0 : std::exp(-d * d / (2.0 * sigma * sigma));
-      ASSERT_NEAR(grid.cells()[static_cast<std::size_t>(iy) * grid.width() + ix], expected, 1e-9)
-          << "cell " << ix << ", " << iy;
+      const double got = grid.cells()[static_cast<std::size_t>(iy) * grid.width() + ix];
+      if (std::fabs(got - expected) > 1e-9)
+      {
+        ADD_FAILURE() << "cell " << ix << ", " << iy << ": " << got << " instead of " << expected;
+        return written;
+      }
       written += expected > 0.0 ? 1 : 0;
     }
-  EXPECT_GT(written, grid.width() * grid.height() / 10);
+  return written;
+}
+
+TEST(LikelihoodGrid, EveryCellIsTheGaussianOfItsNearestDistance)
+{
+  const double res = 0.025, sigma = 0.03;
+  std::vector<Vec2> points;
+  std::vector<linemap::Segment2> joins;
+  const LikelihoodGrid grid = clutteredField(points, joins, res, sigma);
+  EXPECT_GT(expectBruteForceField(grid, points, joins, res, sigma), grid.width() * grid.height() / 10);
+}
+
+TEST(LikelihoodGrid, AFieldBuiltWhereAnotherWasIsItsOwn)
+{
+  // Fields give their cells to the next one: what the last wrote must not show through in the next.
+  const double res = 0.025, sigma = 0.03;
+  std::vector<Vec2> points, smaller_points, larger_points;
+  std::vector<linemap::Segment2> joins, smaller_joins, larger_joins;
+  LikelihoodGrid grid = clutteredField(points, joins, res, sigma, 3, 8.0);
+  grid = clutteredField(smaller_points, smaller_joins, res, sigma, 4, 5.0);  // the first one's cells, smaller
+  EXPECT_GT(expectBruteForceField(grid, smaller_points, smaller_joins, res, sigma), 1000);
+  const LikelihoodGrid copy = grid;
+  grid = clutteredField(larger_points, larger_joins, res, sigma, 5, 9.0);  // grown
+  EXPECT_GT(expectBruteForceField(grid, larger_points, larger_joins, res, sigma), 1000);
+  EXPECT_GT(expectBruteForceField(copy, smaller_points, smaller_joins, res, sigma), 1000);
+  {
+    std::vector<Vec2> sparse{{0.0, 0.0}, {7.0, 7.0}};
+    const LikelihoodGrid temporary(sparse, res, sigma, 0.0);
+    EXPECT_GT(expectBruteForceField(temporary, sparse, {}, res, sigma), 20);
+  }
+  std::vector<Vec2> last_points;
+  std::vector<linemap::Segment2> last_joins;
+  const LikelihoodGrid last = clutteredField(last_points, last_joins, res, sigma, 6, 7.0);
+  EXPECT_GT(expectBruteForceField(last, last_points, last_joins, res, sigma), 1000);
 }
 
 TEST(LikelihoodGrid, InterpolatesAsCeres)

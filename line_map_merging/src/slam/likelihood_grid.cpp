@@ -11,14 +11,16 @@ namespace line_map_merging
 class LikelihoodGrid::NearestDistances
 {
  public:
-  NearestDistances(std::vector<double>& cells, int width, int height, double start)
+  NearestDistances(std::vector<double>& cells, std::vector<unsigned char>& started, int width, int height,
+                   double start)
       : cells_(cells),
         width_(width),
         height_(height),
         tiles_x_((width + kTile - 1) / kTile),
         start_(start),
-        started_(static_cast<std::size_t>(tiles_x_) * ((height + kTile - 1) / kTile), 0)
+        started_(started)
   {
+    started_.assign(static_cast<std::size_t>(tiles_x_) * ((height + kTile - 1) / kTile), 0);
   }
 
   /// Row iy of the cells, its cells x0..x1 started.
@@ -59,8 +61,107 @@ class LikelihoodGrid::NearestDistances
   std::vector<double>& cells_;
   int width_, height_, tiles_x_;
   double start_;
-  std::vector<unsigned char> started_;
+  std::vector<unsigned char>& started_;
 };
+
+namespace
+{
+/// Buffers of zeros the fields of this thread gave back (their written tiles zeroed again): a new field
+/// takes one instead of allocating and zeroing its whole area, which would cost more than writing it.
+struct ZeroBuffers
+{
+  static constexpr std::size_t kMaxBuffers = 4;
+  std::vector<std::vector<double>> free;
+  ~ZeroBuffers();
+};
+thread_local bool zero_buffers_alive = false;
+thread_local ZeroBuffers zero_buffers;
+ZeroBuffers::~ZeroBuffers()
+{
+  zero_buffers_alive = false;
+}
+
+std::vector<double> takeZeros(std::size_t n)
+{
+  auto& free = zero_buffers.free;
+  zero_buffers_alive = true;
+  if (free.empty()) return std::vector<double>(n, 0.0);
+  // The smallest that holds n, else the largest (grown: the new part is zeroed as it comes).
+  std::size_t pick = 0;
+  for (std::size_t i = 1; i < free.size(); ++i)
+  {
+    const bool holds = free[i].capacity() >= n, picked_holds = free[pick].capacity() >= n;
+    if (holds ? (!picked_holds || free[i].capacity() < free[pick].capacity())
+              : (!picked_holds && free[i].capacity() > free[pick].capacity()))
+      pick = i;
+  }
+  std::vector<double> zeros = std::move(free[pick]);
+  free.erase(free.begin() + static_cast<std::ptrdiff_t>(pick));
+  zeros.resize(n, 0.0);  // shrinking leaves zeros beyond the end; growing writes them
+  return zeros;
+}
+
+void giveBackZeros(std::vector<double>&& zeros)
+{
+  if (!zero_buffers_alive || zeros.capacity() == 0) return;
+  auto& free = zero_buffers.free;
+  if (free.size() == ZeroBuffers::kMaxBuffers)
+  {
+    // Keep the largest: a smaller field fits in them.
+    const auto smallest = std::min_element(
+        free.begin(), free.end(), [](const auto& a, const auto& b) { return a.capacity() < b.capacity(); });
+    if (smallest->capacity() >= zeros.capacity()) return;
+    free.erase(smallest);
+  }
+  free.push_back(std::move(zeros));
+}
+}  // namespace
+
+LikelihoodGrid::~LikelihoodGrid()
+{
+  release();
+}
+
+LikelihoodGrid& LikelihoodGrid::operator=(LikelihoodGrid&& other) noexcept
+{
+  if (this != &other)
+  {
+    release();
+    resolution_ = other.resolution_;
+    inv_resolution_ = other.inv_resolution_;
+    origin_ = other.origin_;
+    width_ = other.width_;
+    height_ = other.height_;
+    cells_ = std::move(other.cells_);
+    written_tiles_ = std::move(other.written_tiles_);
+    other.cells_.clear();
+    other.written_tiles_.clear();
+  }
+  return *this;
+}
+
+void LikelihoodGrid::release() noexcept
+{
+  if (cells_.empty() || written_tiles_.empty()) return;
+  try
+  {
+    const int tiles_x = (width_ + kTile - 1) / kTile;
+    for (std::size_t t = 0; t < written_tiles_.size(); ++t)
+    {
+      if (!written_tiles_[t]) continue;
+      const int x0 = static_cast<int>(t % tiles_x) * kTile, y0 = static_cast<int>(t / tiles_x) * kTile;
+      for (int y = y0; y < std::min(height_, y0 + kTile); ++y)
+        std::fill_n(cells_.begin() + static_cast<std::ptrdiff_t>(y) * width_ + x0,
+                    std::min(kTile, width_ - x0), 0.0);
+    }
+    written_tiles_.clear();
+    giveBackZeros(std::move(cells_));
+  }
+  catch (...)  // a pool that cannot grow: the buffer is freed as it would have been
+  {
+  }
+  cells_.clear();
+}
 
 LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points, double resolution, double sigma,
                                double margin)
@@ -92,8 +193,8 @@ LikelihoodGrid::LikelihoodGrid(const std::vector<linemap::Vec2>& points,
   // Nearest squared distance per cell first, one exp per cell after (far fewer than per point), in the
   // tiles some point or join reaches: the rest of the field is 0.
   const double reach2 = reach * reach;
-  cells_.assign(static_cast<std::size_t>(width_) * height_, 0.0);
-  NearestDistances nearest(cells_, width_, height_, reach2);
+  cells_ = takeZeros(static_cast<std::size_t>(width_) * height_);
+  NearestDistances nearest(cells_, written_tiles_, width_, height_, reach2);
   const int r = static_cast<int>(std::ceil(reach * inv_resolution_));
   for (const auto& p : points)
   {

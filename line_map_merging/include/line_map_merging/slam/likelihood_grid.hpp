@@ -28,6 +28,12 @@ class LikelihoodGrid
 {
  public:
   LikelihoodGrid() = default;
+  LikelihoodGrid(const LikelihoodGrid&) = default;
+  LikelihoodGrid& operator=(const LikelihoodGrid&) = default;
+  LikelihoodGrid(LikelihoodGrid&&) noexcept = default;
+  LikelihoodGrid& operator=(LikelihoodGrid&& other) noexcept;
+  /// Gives its cells, zeroed where it wrote them, to the next field this thread builds.
+  ~LikelihoodGrid();
   /// Field of `points` at `resolution` [m] with spread `sigma` [m]; the grid covers the points'
   /// bounding box plus `margin` [m] (so a scan overhanging the map still reads zero, not garbage).
   LikelihoodGrid(const std::vector<linemap::Vec2>& points, double resolution, double sigma, double margin);
@@ -89,6 +95,7 @@ class LikelihoodGrid
 
  private:
   class NearestDistances;
+  void release() noexcept;
   /// Lowers the cells within r cells of the join `s`, and nearer its inside than its ends, to their
   /// squared distance [m^2] to it.
   void writeJoin(const linemap::Segment2& s, int r, NearestDistances& nearest) const;
@@ -110,6 +117,7 @@ class LikelihoodGrid
   linemap::Vec2 origin_ = linemap::Vec2::Zero();
   int width_ = 0, height_ = 0;
   std::vector<double> cells_;
+  std::vector<unsigned char> written_tiles_;  // per tile (row-major), whether the constructor wrote it
 };
 
 }  // namespace line_map_merging
