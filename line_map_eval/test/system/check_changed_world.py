@@ -114,7 +114,11 @@ class CheckChangedWorld(unittest.TestCase):
             # Every scan played: the last map is the one after the merger has had them all.
             lt.wait_until(lambda: int(merging.get("segment sets handled", "0")) >= lt.bag_scans(second)[0] - 5,
                           "the merger finishing the played scans",
-                          lambda: "%s segment sets handled" % merging.get("segment sets handled"), limit)
+                          lambda: "merger: %s; slam: %s" % (
+                              lt.reported(merging, ("segment sets handled", "scans", "dropped scans",
+                                                    "adjustments", "summary")),
+                              lt.reported(slam, sorted(k for k in slam if k not in (key, lt.RECEIVED)))),
+                          limit)
         finally:
             lt.stop(pipeline, 30)
         live = [lt.moved(s, fit) for s in lt.map_segments(maps[-1])]

@@ -204,10 +204,46 @@ def wait_until(predicate, awaited, arrived, limit, step=0.1, gone=None):
             if dead:
                 raise AssertionError("%s while waiting for %s; arrived: %s" % (dead, awaited, arrived()))
         if now >= deadline:
-            raise AssertionError("waited %.0f s (the limit, or what the test's time-limit left) for %s; arrived: %s"
-                                 % (now - t0, awaited, arrived()))
+            stacks = dump_stacks()
+            raise AssertionError("waited %.0f s (the limit, or what the test's time-limit left) for %s; arrived: %s%s"
+                                 % (now - t0, awaited, arrived(), "; thread stacks in " + stacks if stacks else ""))
         time.sleep(step)
     return time.time() - t0
+
+
+def dump_stacks():
+    """Every thread's backtrace of the nodelet managers and project nodes running now (a wait that ran out
+    of time: a node stuck in a lock shows where), into a new artefact stacks_N.txt; its path, or None when
+    none runs or gdb is missing."""
+    import shutil
+    if shutil.which("gdb") is None:
+        return None
+    found = subprocess.run(["pgrep", "-f", "nodelet manager|/devel/lib/line_|/lib/line_map_"],
+                           stdout=subprocess.PIPE, universal_newlines=True).stdout.split()
+    pids = [p for p in found if p != str(os.getpid())]
+    if not pids:
+        return None
+    n = 1
+    while os.path.exists(os.path.join(artifact_dir(), "stacks_%d.txt" % n)):
+        n += 1
+    path = os.path.join(artifact_dir(), "stacks_%d.txt" % n)
+    with open(path, "w") as out:
+        for pid in pids:
+            try:
+                with open("/proc/%s/cmdline" % pid) as f:
+                    out.write("=== %s: %s\n" % (pid, f.read().replace("\0", " ")))
+                out.flush()
+                subprocess.run(["gdb", "-p", pid, "-batch", "-nx", "-ex", "thread apply all bt"], stdout=out,
+                               stderr=subprocess.STDOUT, timeout=120)
+            except (OSError, subprocess.TimeoutExpired) as e:
+                out.write("(no backtrace: %s)\n" % e)
+    return path
+
+
+def reported(diagnostics, keys):
+    """`keys` of a component_diagnostics dict and how long ago it last reported, for a failed wait's message."""
+    age = time.time() - diagnostics[RECEIVED] if RECEIVED in diagnostics else float("inf")
+    return ", ".join(["%s: %s" % (k, diagnostics.get(k)) for k in keys] + ["last report %.0f s ago" % age])
 
 
 def gone_nodes(*topics):
@@ -228,9 +264,14 @@ def gone_nodes(*topics):
     return check
 
 
+# component_diagnostics' key of the wall time its status last came (a node stuck stops reporting).
+RECEIVED = "(received at)"
+
+
 def component_diagnostics(**components):
     """Subscribes to /diagnostics: each keyword names a dict that takes the key-value pairs of the status
-    whose name ends with the given text (e.g. slam="laser slam"), and its message under "summary"."""
+    whose name ends with the given text (e.g. slam="laser slam"), its message under "summary" and the wall
+    time it came under RECEIVED."""
     from diagnostic_msgs.msg import DiagnosticArray
     found = {name: {} for name in components}
 
@@ -240,6 +281,7 @@ def component_diagnostics(**components):
                 if s.name.endswith(suffix):
                     found[name].update({kv.key: kv.value for kv in s.values})
                     found[name]["summary"] = s.message
+                    found[name][RECEIVED] = time.time()
     rospy.Subscriber("/diagnostics", DiagnosticArray, take, queue_size=50)
     return found
 
