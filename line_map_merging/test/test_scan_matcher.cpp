@@ -385,8 +385,9 @@ TEST(ScanMatcher, EmptyInputsGiveNoMatch)
 
 // Every translation's score is the mean field value of the scan's points in their shifted cells, those off
 // the grid counting 0, summed in the points' order: a direct lookup per point is the reference, and both
-// the wide window (the loop's coarse search, summed over a zero-padded copy of the grid) and the narrow one
-// (the front end's, tested point by point) must equal it bit for bit, points far off the grid included.
+// every window must equal it bit for bit, points far off the grid and points partly off it included: steps
+// of one cell and of several (the front end's strided windows of 5 and 13 translations a side have loops of
+// their own), wide windows and narrow ones.
 TEST(ScanMatcher, EveryTranslationScoresTheMeanOfItsShiftedCells)
 {
   std::vector<Vec2> walls;
@@ -405,14 +406,19 @@ TEST(ScanMatcher, EveryTranslationScoresTheMeanOfItsShiftedCells)
   for (std::size_t i = 0; i < walls.size(); i += 3) scan.push_back(walls[i] - Vec2(2.03, 1.46));
   for (const Vec2& far : {Vec2(30.0, 0.0), Vec2(-0.2, 25.0), Vec2(2.4, 0.9)}) scan.push_back(far);
   const Pose2 centre(1.95, 1.52, 0.02);
-  for (const SearchWindow window : {SearchWindow{1.0, 0.06, 0.1, 0.015, 0.0, 0.0},   // 441 translations
-                                    SearchWindow{0.1, 0.06, 0.1, 0.015, 0.0, 0.0}})  // 9 translations
+  for (const SearchWindow window : {SearchWindow{1.0, 0.06, 0.1, 0.015, 0.0, 0.0},   // 21 x 21 translations
+                                    SearchWindow{2.5, 0.06, 0.1, 0.015, 0.0, 0.0},   // 51 x 51
+                                    SearchWindow{0.1, 0.06, 0.1, 0.015, 0.0, 0.0},   // 3 x 3
+                                    SearchWindow{0.4, 0.06, 0.2, 0.015, 0.0, 0.0},   // 5 x 5, every 2nd cell
+                                    SearchWindow{1.2, 0.06, 0.2, 0.015, 0.0, 0.0},   // 13 x 13, every 2nd
+                                    SearchWindow{0.9, 0.06, 0.3, 0.015, 0.0, 0.0}})  // 7 x 7, every 3rd
   {
     line_map_merging::TranslationScores spread;
     const auto found = correlativeSearch(grid, scan, centre, window, 1, &spread);
     ASSERT_EQ(found.size(), 1u);
     const int reach = spread.reach, side = 2 * reach + 1;
-    ASSERT_EQ(reach, static_cast<int>(std::lround(window.linear / 0.1)));
+    const long step = std::lround(window.linear_step / 0.1);
+    ASSERT_EQ(reach, static_cast<int>(std::lround(window.linear / window.linear_step)));
     std::vector<double> expected(static_cast<std::size_t>(side) * side, 0.0);
     for (int a = -4; a <= 4; ++a)
     {
@@ -424,8 +430,10 @@ TEST(ScanMatcher, EveryTranslationScoresTheMeanOfItsShiftedCells)
           double sum = 0.0;
           for (const Vec2& p : scan)
           {
-            const long x = std::lround((c * p.x() - s * p.y() + centre.x - grid.origin().x()) / 0.1) + ox;
-            const long y = std::lround((s * p.x() + c * p.y() + centre.y - grid.origin().y()) / 0.1) + oy;
+            const long x =
+                std::lround((c * p.x() - s * p.y() + centre.x - grid.origin().x()) / 0.1) + ox * step;
+            const long y =
+                std::lround((s * p.x() + c * p.y() + centre.y - grid.origin().y()) / 0.1) + oy * step;
             if (x >= 0 && y >= 0 && x < grid.width() && y < grid.height())
               sum += grid.cells()[static_cast<std::size_t>(y * grid.width() + x)];
           }
@@ -435,9 +443,10 @@ TEST(ScanMatcher, EveryTranslationScoresTheMeanOfItsShiftedCells)
     }
     for (std::size_t i = 0; i < expected.size(); ++i)
       ASSERT_EQ(spread.best[i], expected[i]) << "translation " << i;
-    // The room's walls, seen from its middle, score highest where the scan was taken from.
-    EXPECT_NEAR(found.front().pose.x, 2.03, 0.051);
-    EXPECT_NEAR(found.front().pose.y, 1.46, 0.051);
+    // The room's walls, seen from its middle, score highest where the scan was taken from (to the nearest
+    // translation of the window).
+    EXPECT_NEAR(found.front().pose.x, 2.03, 0.5 * window.linear_step + 0.001);
+    EXPECT_NEAR(found.front().pose.y, 1.46, 0.5 * window.linear_step + 0.001);
     EXPECT_GT(found.front().score, 0.5);
   }
 }

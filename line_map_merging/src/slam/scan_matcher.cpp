@@ -144,32 +144,60 @@ int floorDiv(int a, int b)
   return a >= 0 ? a / b : -((-a + b - 1) / b);
 }
 
-/// The summed field values of the points (cells ix, iy at the window's centre) under every translation of
-/// the window, row-major (y outer), in `sums`: each point's cell shifted by whole cells, those off the grid
-/// adding nothing. Point by point, each adding to every translation that keeps it on the grid (its rows and
-/// columns clipped once, not tested per translation): every sum still adds its points in their order.
-/// Built for AVX2 too where the processor has it: the additions are the same, four at a time.
-__attribute__((target_clones("avx2", "default"))) void translationSums(const LikelihoodGrid& grid, int step,
-                                                                       int reach, const std::vector<int>& ix,
-                                                                       const std::vector<int>& iy,
-                                                                       std::vector<double>& sums)
+/// translationSums for a window of kSide x kSide translations (0: any side). A point on the grid under every
+/// shift, the common case, adds its cells row by row with a loop the compiler unrolls for the front end's
+/// few-cell windows; one partly off the grid adds only its cells on it.
+template <int kSide>
+inline __attribute__((always_inline)) void sumShiftedCells(const LikelihoodGrid& grid, int step, int reach,
+                                                           const std::vector<int>& ix,
+                                                           const std::vector<int>& iy, double* sums)
 {
-  const int side = 2 * reach + 1, w = grid.width(), h = grid.height();
+  const int side = kSide > 0 ? kSide : 2 * reach + 1, w = grid.width(), h = grid.height();
   const double* cells = grid.cells().data();
-  sums.assign(static_cast<std::size_t>(side) * side, 0.0);
+  const std::ptrdiff_t row_step = static_cast<std::ptrdiff_t>(step) * w;
   for (std::size_t i = 0; i < ix.size(); ++i)
   {
     // The shifts o with 0 <= i + o * step < size.
     const auto first = [&](int at) { return std::max(-reach, -floorDiv(at, step)); };
     const auto last = [&](int at, int size) { return std::min(reach, floorDiv(size - 1 - at, step)); };
     const int ox0 = first(ix[i]), ox1 = last(ix[i], w), oy0 = first(iy[i]), oy1 = last(iy[i], h);
+    if (kSide > 0 && ox0 == -reach && ox1 == reach && oy0 == -reach && oy1 == reach)
+    {
+      const double* row =
+          cells + (iy[i] - reach * step) * static_cast<std::ptrdiff_t>(w) + ix[i] - reach * step;
+      double* out = sums;
+      for (int r = 0; r < kSide; ++r, row += row_step, out += kSide)
+        for (int c = 0; c < kSide; ++c) out[c] += row[c * step];
+      continue;
+    }
     for (int oy = oy0; oy <= oy1; ++oy)
     {
       const double* row = cells + static_cast<std::size_t>(iy[i] + oy * step) * w;
-      double* out = sums.data() + static_cast<std::size_t>(oy + reach) * side + reach;
+      double* out = sums + static_cast<std::size_t>(oy + reach) * side + reach;
       for (int ox = ox0; ox <= ox1; ++ox) out[ox] += row[ix[i] + ox * step];
     }
   }
+}
+
+/// The summed field values of the points (cells ix, iy at the window's centre) under every translation of
+/// the window, row-major (y outer), in `sums`: each point's cell shifted by whole cells, those off the grid
+/// adding nothing. Point by point, each adding to every translation that keeps it on the grid (its rows and
+/// columns clipped once, not tested per translation): every sum still adds its points in their order.
+/// The front end's windows (5 and 13 translations a side, strided) have their own unrolled loops. Built for
+/// AVX2 too where the processor has it: the additions are the same, four at a time.
+__attribute__((target_clones("avx2", "default"))) void translationSums(const LikelihoodGrid& grid, int step,
+                                                                       int reach, const std::vector<int>& ix,
+                                                                       const std::vector<int>& iy,
+                                                                       std::vector<double>& sums)
+{
+  const int side = 2 * reach + 1;
+  sums.assign(static_cast<std::size_t>(side) * side, 0.0);
+  if (step > 1 && side == 5)  // a step of one cell reads contiguous cells: the general loop vectorises them
+    sumShiftedCells<5>(grid, step, reach, ix, iy, sums.data());
+  else if (step > 1 && side == 13)
+    sumShiftedCells<13>(grid, step, reach, ix, iy, sums.data());
+  else
+    sumShiftedCells<0>(grid, step, reach, ix, iy, sums.data());
 }
 }  // namespace
 
