@@ -201,13 +201,60 @@ __attribute__((target_clones("avx2", "default"))) void translationSums(const Lik
 }
 }  // namespace
 
+namespace
+{
+/// The `keep` best matches by ranked score, best first; of equal scores the one offered first.
+class BestMatches
+{
+ public:
+  explicit BestMatches(std::size_t keep) : keep_(keep) {}
+
+  /// Whether a match ranked at `score` would enter.
+  bool admits(double score) const { return ranked_.size() < keep_ || score > ranked_.back().first; }
+
+  void offer(double score, const MatchResult& match)
+  {
+    if (!admits(score)) return;
+    const auto at = std::upper_bound(ranked_.begin(), ranked_.end(), score,
+                                     [](double v, const auto& e) { return v > e.first; });
+    ranked_.insert(at, {score, match});
+    if (ranked_.size() > keep_) ranked_.pop_back();
+  }
+
+  std::vector<MatchResult> matches() const
+  {
+    std::vector<MatchResult> out;
+    for (const auto& r : ranked_) out.push_back(r.second);
+    return out;
+  }
+
+ private:
+  std::size_t keep_;
+  std::vector<std::pair<double, MatchResult>> ranked_;  // `keep` is small: a sorted vector is enough
+};
+
+/// The cell of every point rotated by `theta` about the window's centre and moved there.
+void rotatedCells(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
+                  const linemap::Pose2& center, double theta, std::vector<int>& ix, std::vector<int>& iy)
+{
+  const double c = std::cos(theta), s = std::sin(theta), res = grid.resolution();
+  ix.resize(points.size());
+  iy.resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+  {
+    const auto& p = points[i];
+    ix[i] = static_cast<int>(roundHalfAway((c * p.x() - s * p.y() + center.x - grid.origin().x()) / res));
+    iy[i] = static_cast<int>(roundHalfAway((s * p.x() + c * p.y() + center.y - grid.origin().y()) / res));
+  }
+}
+}  // namespace
+
 std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
                                            const std::vector<linemap::Vec2>& points,
                                            const linemap::Pose2& center, const SearchWindow& window,
                                            std::size_t keep, TranslationScores* spread)
 {
-  std::vector<MatchResult> best;
-  if (grid.empty() || points.empty() || keep == 0) return best;
+  if (grid.empty() || points.empty() || keep == 0) return {};
   const double res = grid.resolution();
   const int step = std::max(1, static_cast<int>(std::lround(window.linear_step / res)));
   const int reach = static_cast<int>(std::floor(window.linear / (step * res) + 1e-9));
@@ -215,59 +262,36 @@ std::vector<MatchResult> correlativeSearch(const LikelihoodGrid& grid,
   const int areach = static_cast<int>(std::floor(window.angular / astep + 1e-9));
   const double inv_n = 1.0 / static_cast<double>(points.size());
   const int side = 2 * reach + 1;
-  if (spread)
-  {
-    spread->centre = center.translation();
-    spread->step = step * res;
-    spread->reach = reach;
-    spread->best.assign(static_cast<std::size_t>(side) * side, 0.0);
-  }
+  if (spread) *spread = {center.translation(), step * res, reach, std::vector<double>(side * side, 0.0)};
+  // A penalty factor is then at most 1: a score that cannot enter unpenalised is not penalised.
   const bool unit_or_less = window.translation_penalty >= 0.0 && window.rotation_penalty >= 0.0;
   std::vector<double> sums;
-  // Cell of every rotated point at the window's centre; translations then shift whole cells.
-  std::vector<int> ix(points.size()), iy(points.size());
-  // Ranked by penalised score; `keep` is small, so a sorted vector is enough.
-  std::vector<std::pair<double, MatchResult>> ranked;
+  std::vector<int> ix, iy;  // translations then shift whole cells
+  BestMatches best(keep);
   for (int a = -areach; a <= areach; ++a)
   {
     const double da = a * astep, theta = center.theta + da;
-    const double c = std::cos(theta), s = std::sin(theta);
-    for (std::size_t i = 0; i < points.size(); ++i)
-    {
-      const auto& p = points[i];
-      ix[i] = static_cast<int>(roundHalfAway((c * p.x() - s * p.y() + center.x - grid.origin().x()) / res));
-      iy[i] = static_cast<int>(roundHalfAway((s * p.x() + c * p.y() + center.y - grid.origin().y()) / res));
-    }
+    rotatedCells(grid, points, center, theta, ix, iy);
     translationSums(grid, step, reach, ix, iy, sums);
     for (int oy = -reach; oy <= reach; ++oy)
       for (int ox = -reach; ox <= reach; ++ox)
       {
-        const int dx = ox * step, dy = oy * step;
         const std::size_t at_translation = static_cast<std::size_t>((oy + reach) * side + ox + reach);
         const double score = sums[at_translation] * inv_n;
-        if (spread)
-        {
-          double& cell = spread->best[at_translation];
-          cell = std::max(cell, score);
-        }
-        // A penalty factor is at most 1: a score not above the last kept one cannot enter.
-        if (unit_or_less && ranked.size() == keep && score <= ranked.back().first) continue;
-        const double tx = dx * res, ty = dy * res;
-        const double ranked_score =
+        if (spread) spread->best[at_translation] = std::max(spread->best[at_translation], score);
+        if (unit_or_less && !best.admits(score)) continue;
+        const double tx = ox * step * res, ty = oy * step * res;
+        const double ranked =
             score *
             std::exp(-(window.translation_penalty * (tx * tx + ty * ty) + window.rotation_penalty * da * da));
-        if (ranked.size() == keep && ranked_score <= ranked.back().first) continue;
+        if (!best.admits(ranked)) continue;
         MatchResult m;
         m.pose = {center.x + tx, center.y + ty, linemap::normalizeAngle(theta)};
         m.score = score;
-        auto at = std::upper_bound(ranked.begin(), ranked.end(), ranked_score,
-                                   [](double v, const auto& e) { return v > e.first; });
-        ranked.insert(at, {ranked_score, m});
-        if (ranked.size() > keep) ranked.pop_back();
+        best.offer(ranked, m);
       }
   }
-  for (auto& r : ranked) best.push_back(r.second);
-  return best;
+  return best.matches();
 }
 
 MatchResult refineMatch(const LikelihoodGrid& grid, const std::vector<linemap::Vec2>& points,
