@@ -199,10 +199,7 @@ __attribute__((target_clones("avx2", "default"))) void translationSums(const Lik
   else
     sumShiftedCells<0>(grid, step, reach, ix, iy, sums.data());
 }
-}  // namespace
 
-namespace
-{
 /// The `keep` best matches by ranked score, best first; of equal scores the one offered first.
 class BestMatches
 {
