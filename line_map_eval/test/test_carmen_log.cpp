@@ -457,6 +457,40 @@ TEST(CarmenRecording, RawLaserOdometryFromOdomLines)
   }
 }
 
+// A corrected log of keyframes: the FLASER pose fields are the corrected poses of a robot speeding up along
+// x, x(t) = (t - 10)^2; the ODOM lines, every 0.1 s, report the pose 0.3 s old (the ODOM line stamped tau
+// holds x(tau - 0.3)). The odometry agrees with the poses' steps only interpolated at a scan's stamp plus
+// 0.3 s (there the interpolation hits ODOM samples exactly); without the option the pose fields are the
+// odometry.
+TEST(CarmenRecording, CorrectedLogOdometryFromItsOdomLinesAtTheFittedDelay)
+{
+  TempDir dir;
+  const auto x = [](double t) { return (t - 10.0) * (t - 10.0); };
+  std::ostringstream text;
+  text.precision(17);
+  for (int i = 0; i <= 100; ++i)
+  {
+    const double tau = 9.5 + 0.1 * i;
+    text << "ODOM " << x(tau - 0.3) << " 0 0 0 0 0 " << tau << " h " << tau << "\n";
+  }
+  for (const double t : {10.5, 11.6, 12.7, 13.8, 14.9, 16.0, 17.1, 18.2})
+    text << "FLASER 3 1.5 2.25 3 " << x(t) << " 0 0 " << x(t) << " 0 0 " << t << " host " << t << "\n";
+  const CarmenLog log = readCarmenLog(dir.write("corrected.clf", text.str()));
+  EXPECT_NEAR(fitOdometryDelay(log, 0.5, 0.01), 0.3, 1e-9);
+
+  CarmenRecordingOptions options;
+  options.odometry_from_odom_lines = true;
+  options.odometry_delay = 0.3;
+  CarmenRecordingReport report;
+  const Recording rec = fromCarmen(log, nullptr, options, &report);
+  EXPECT_EQ(report.odometry_source, "ODOM lines");
+  ASSERT_EQ(rec.scans.size(), 8u);
+  for (std::size_t i = 0; i < rec.scans.size(); ++i)
+    EXPECT_NEAR(rec.scans[i].odom.x, x(log.scans[i].timestamp), 1e-9) << "scan " << i;
+  EXPECT_EQ(fromCarmen(log, nullptr, {}, &report).scans[3].odom.x, x(13.8));
+  EXPECT_EQ(report.odometry_source, "scan odometry fields");
+}
+
 TEST(CarmenRecording, FrClinicAlternatesTwoGeometries)
 {
   std::string path;

@@ -72,8 +72,10 @@ TEST(ShippedConfig, SlamDefaultsAreTheConfigFiles)
   EXPECT_SAME(local_map_keyframes);
   EXPECT_SAME(surfaces.lambda);
   EXPECT_SAME(surfaces.range_sigma);
-  EXPECT_SAME(max_odometry_step);
-  EXPECT_SAME(max_odometry_turn);
+  EXPECT_SAME(odometry_jump.step);
+  EXPECT_SAME(odometry_jump.turn);
+  EXPECT_SAME(odometry_jump.speed);
+  EXPECT_SAME(odometry_jump.turn_rate);
   EXPECT_SAME(time_jump_tolerance);
   EXPECT_SAME(isotropic_ratio);
   EXPECT_SAME(min_weight);
@@ -139,8 +141,10 @@ TEST(ShippedConfig, LocalizerDefaultsAreTheConfigFile)
   EXPECT_SAME(odom_sigma_theta_per_m);
   EXPECT_SAME(no_odom_sigma_xy);
   EXPECT_SAME(no_odom_sigma_theta);
-  EXPECT_SAME(max_odometry_step);
-  EXPECT_SAME(max_odometry_turn);
+  EXPECT_SAME(odometry_jump.step);
+  EXPECT_SAME(odometry_jump.turn);
+  EXPECT_SAME(odometry_jump.speed);
+  EXPECT_SAME(odometry_jump.turn_rate);
   EXPECT_SAME(time_jump_tolerance);
   EXPECT_SAME(retry_inlier_share);
   expectSameWindow(built_in.retry_window, shipped.retry_window, "retry_window");

@@ -48,9 +48,10 @@ void usage(std::ostream& out)
          "Prints each run's relations error, then the median, 90th percentile and worst, and every failure\n"
          "(worse than 2x the defaults or above 0.1 m) with the change behind it. Exit 0 whatever the "
          "figures.\n"
-         "  DATASET          a raw CARMEN log with its RELATIONS file, or a world file "
-         "(config/worlds/*.yaml,\n"
-         "                   simulated; relations from its ground truth)\n"
+         "  DATASET          a raw CARMEN log with its RELATIONS file; a corrected CARMEN log with ODOM\n"
+         "                   lines (the SLAM on its scans and odometry, relations from its corrected\n"
+         "                   poses); or a world file (config/worlds/*.yaml, simulated; relations from\n"
+         "                   its ground truth)\n"
          "  --no-odometry    the SLAM on the scans alone\n"
          "  --runs N         seeded runs per fault (default 3)\n"
          "  --seed S         the first seed (default 1)\n"
@@ -116,8 +117,6 @@ bool parseArguments(int argc, char** argv, Arguments& a)
   }
   if (a.positional.empty() || a.positional.size() > 2)
     throw std::invalid_argument("expected DATASET [RELATIONS]");
-  if (!isWorldFile(a.positional[0]) && a.positional.size() != 2)
-    throw std::invalid_argument("a CARMEN log needs its RELATIONS file");
   return true;
 }
 
@@ -151,9 +150,30 @@ Input loadInput(const Arguments& a)
     return in;
   }
   const CarmenLog raw = readCarmenLog(a.positional[0]);
-  in.recording = fromCarmen(raw, nullptr);
-  for (const auto& s : raw.scans) in.stamps.push_back(s.timestamp);
-  in.relations = readRelations(a.positional[1]);
+  if (a.positional.size() == 2)
+  {
+    in.recording = fromCarmen(raw, nullptr);
+    for (const auto& s : raw.scans) in.stamps.push_back(s.timestamp);
+    in.relations = readRelations(a.positional[1]);
+    return in;
+  }
+  // A corrected log of keyframes with the robot's ODOM lines: the SLAM on its scans and odometry, judged
+  // against its corrected poses.
+  if (raw.odometry.size() < 2)
+    throw std::invalid_argument(a.positional[0] +
+                                ": a raw CARMEN log needs its RELATIONS file, a corrected one ODOM lines");
+  if (raw.scans.empty() || !(raw.scans.back().timestamp > raw.scans.front().timestamp))
+    throw std::invalid_argument(a.positional[0] +
+                                ": its scans carry no time stamps: the ODOM lines cannot be placed at them");
+  CarmenRecordingOptions options;
+  options.odometry_from_odom_lines = true;
+  options.odometry_delay = fitOdometryDelay(raw);
+  in.recording = fromCarmen(raw, &raw, options);
+  for (const auto& s : in.recording.scans) in.stamps.push_back(s.stamp);
+  in.relations = truthRelations(in.recording);
+  std::cout << a.positional[0] << ": a corrected log; the SLAM on its ODOM lines (delayed by "
+            << options.odometry_delay << " s, fitted to its poses), judged against its corrected poses ("
+            << in.relations.size() << " relations)\n";
   return in;
 }
 

@@ -124,9 +124,10 @@ TEST(LocalTrajectoryBuilder, OlderScanIsRejectedAndChangesNothing)
 }
 
 // In the middle of a round hall every heading sees the same scan. The robot turns 1 rad between two scans
-// (a gap in the log): the odometry's step exceeds max_odometry_turn, so it counts as a jump, and both its
-// pose and the constant-velocity prediction (no turn) are searched. Both match perfectly; the odometry's
-// measured motion must stand, not the assumption (which keeps the old heading, 1 rad off).
+// 0.1 s apart (a glitch, or a gap in the log the stamps do not show): the odometry's step exceeds
+// max_odometry_turn and what max_odometry_turn_rate allows in 0.1 s, so it counts as a jump, and both its pose
+// and the constant-velocity prediction (no turn) are searched. Both match perfectly; the odometry's measured
+// motion must stand, not the assumption (which keeps the old heading, 1 rad off).
 TEST(LocalTrajectoryBuilder, AcrossAnOdometryJumpTheMeasuredTurnStands)
 {
   std::vector<linemap::Segment2> hall;
@@ -138,7 +139,7 @@ TEST(LocalTrajectoryBuilder, AcrossAnOdometryJumpTheMeasuredTurnStands)
                       linemap::Vec2(4.0 * std::cos(b), 4.0 * std::sin(b)));
   }
   const LaserSlamParams p;
-  ASSERT_GT(1.0, p.max_odometry_turn);
+  ASSERT_GT(1.0, std::max(p.odometry_jump.turn, 0.1 * p.odometry_jump.turn_rate));
   LocalTrajectoryBuilder builder(p);
   SlamCounters counters;
   for (int i = 0; i < 3; ++i)
@@ -153,4 +154,47 @@ TEST(LocalTrajectoryBuilder, AcrossAnOdometryJumpTheMeasuredTurnStands)
     EXPECT_NEAR(linemap::normalizeAngle(r.pose.theta - heading), 0.0, 0.1) << "scan " << i;
   }
   EXPECT_EQ(counters.odometry_jumps, 1u);
+}
+
+// A log of keyframes: scans 2 s apart, the robot moving 0.8 m and turning 0.6 rad between them (0.4 m/s,
+// 0.3 rad/s). Each step exceeds max_odometry_step and max_odometry_turn but not what the speed limits
+// allow in 2 s, so it is motion: a scan too sparse to match is posed by the odometry. Counted as a jump,
+// it would be posed by the constant velocity, which is zero from rest. The same step 0.1 s after the last
+// scan (an odometry glitch) is a jump and moves nothing.
+TEST(LocalTrajectoryBuilder, OdometryOverScansFarApartInTimeIsMotionNotAJump)
+{
+  const LaserSlamParams p;
+  const Pose2 step(0.8, 0.0, 0.6);
+  ASSERT_GT(std::hypot(step.x, step.y), p.odometry_jump.step);
+  ASSERT_GT(step.theta, p.odometry_jump.turn);
+  LocalTrajectoryBuilder builder(p);
+  SlamCounters counters;
+  Pose2 odom, truth;
+  const std::vector<linemap::Vec2> sparse{{3.0, 0.0}, {3.0, 0.5}, {3.0, -0.5}};  // below min_points
+  ASSERT_LT(sparse.size(), p.min_points);
+  double stamp = 10.0;
+  for (int i = 0; i < 5; ++i)
+  {
+    SlamScan s;
+    s.stamp = stamp;
+    s.points = sparse;
+    s.odom = odom;
+    const LocalScanResult r = builder.addScan(s, counters);
+    EXPECT_NEAR(r.pose.x, truth.x, 1e-9) << "scan " << i;
+    EXPECT_NEAR(r.pose.y, truth.y, 1e-9) << "scan " << i;
+    EXPECT_NEAR(linemap::normalizeAngle(r.pose.theta - truth.theta), 0.0, 1e-9) << "scan " << i;
+    odom = odom * step;
+    truth = truth * step;
+    stamp += 2.0;
+  }
+  EXPECT_EQ(counters.odometry_jumps, 0u);
+
+  SlamScan glitch;
+  glitch.stamp = stamp - 2.0 + 0.1;
+  glitch.points = sparse;
+  glitch.odom = odom;  // one more step of odometry, 0.1 s after the last scan
+  const Pose2 before = truth * step.inverse();
+  const LocalScanResult r = builder.addScan(glitch, counters);
+  EXPECT_EQ(counters.odometry_jumps, 1u);
+  EXPECT_LT(std::hypot(r.pose.x - before.x, r.pose.y - before.y), 0.1);
 }

@@ -40,6 +40,16 @@ Pose2 interpolateOdom(const std::vector<const CarmenOdom*>& odom, double t)
   return dt > 0.0 ? linemap::interpolate(a.pose, b.pose, (t - a.timestamp) / dt) : b.pose;
 }
 
+/// The log's ODOM lines in time order.
+std::vector<const CarmenOdom*> sortedOdometry(const CarmenLog& log)
+{
+  std::vector<const CarmenOdom*> odom;
+  for (const CarmenOdom& o : log.odometry) odom.push_back(&o);
+  std::stable_sort(odom.begin(), odom.end(),
+                   [](const CarmenOdom* a, const CarmenOdom* b) { return a->timestamp < b->timestamp; });
+  return odom;
+}
+
 bool sameGeometry(const ScanGeometry& a, const ScanGeometry& b)
 {
   return a.angle_min == b.angle_min && a.angle_increment == b.angle_increment &&
@@ -153,7 +163,9 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
     OdomLines,
     Laser
   } source = Source::Scan;
-  if (posed && !moves([](const CarmenScan& s) { return s.robot_pose; }))
+  if (options.odometry_from_odom_lines && odom_lines_move)
+    source = Source::OdomLines;
+  else if (posed && !moves([](const CarmenScan& s) { return s.robot_pose; }))
   {
     if (odom_lines_move)
       source = Source::OdomLines;
@@ -163,12 +175,7 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
   // RAWLASER scans: ODOM lines interpolated at the scan stamp, like FLASER's odometry.
   const bool raw_scans = raw_laser > 0;
   std::vector<const CarmenOdom*> odom_sorted;
-  if (source == Source::OdomLines || raw_scans)
-  {
-    for (const CarmenOdom& o : raw.odometry) odom_sorted.push_back(&o);
-    std::stable_sort(odom_sorted.begin(), odom_sorted.end(),
-                     [](const CarmenOdom* a, const CarmenOdom* b) { return a->timestamp < b->timestamp; });
-  }
+  if (source == Source::OdomLines || raw_scans) odom_sorted = sortedOdometry(raw);
   const std::string raw_source = odom_sorted.empty() ? "none (no ODOM lines)" : "ODOM lines";
   if (posed)
     info.odometry_source = source == Source::Scan        ? "scan odometry fields"
@@ -203,7 +210,7 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
     else if (source == Source::Scan)
       out.odom = s.robot_pose;
     else if (source == Source::OdomLines)
-      out.odom = interpolateOdom(odom_sorted, s.timestamp);
+      out.odom = interpolateOdom(odom_sorted, s.timestamp + options.odometry_delay);
     else
       out.odom = s.laser_pose * laser_to_base;
   }
@@ -228,6 +235,34 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
   }
   if (report) *report = info;
   return rec;
+}
+
+double fitOdometryDelay(const CarmenLog& log, double max_delay, double step)
+{
+  const std::vector<const CarmenOdom*> odom = sortedOdometry(log);
+  if (odom.empty() || log.scans.size() < 2 || !(step > 0.0)) return 0.0;
+  const auto disagreement = [&](double delay)
+  {
+    double sum = 0.0;
+    for (std::size_t i = 1; i < log.scans.size(); ++i)
+    {
+      const CarmenScan &a = log.scans[i - 1], &b = log.scans[i];
+      const Pose2 posed = a.robot_pose.inverse() * b.robot_pose;
+      const Pose2 odometry =
+          interpolateOdom(odom, a.timestamp + delay).inverse() * interpolateOdom(odom, b.timestamp + delay);
+      sum += std::hypot(posed.x - odometry.x, posed.y - odometry.y);
+    }
+    return sum;
+  };
+  const int steps = static_cast<int>(std::floor(max_delay / step + 1e-9));
+  double best_delay = 0.0, best = disagreement(0.0);
+  for (int k = -steps; k <= steps; ++k)
+    if (const double d = disagreement(k * step); d < best)
+    {
+      best = d;
+      best_delay = k * step;
+    }
+  return best_delay;
 }
 
 }  // namespace line_map_eval

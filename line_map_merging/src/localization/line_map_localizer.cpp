@@ -63,8 +63,10 @@ LocalizerParams LocalizerParams::fromParams(const linemap::ParamSet& p)
   s.odom_sigma_theta_per_m = p.getNonNegative("odometry/sigma_theta_per_m", s.odom_sigma_theta_per_m);
   s.no_odom_sigma_xy = positiveParam(p, "odometry/no_odometry_sigma_xy", s.no_odom_sigma_xy);
   s.no_odom_sigma_theta = positiveParam(p, "odometry/no_odometry_sigma_theta", s.no_odom_sigma_theta);
-  s.max_odometry_step = positiveParam(p, "odometry/max_step", s.max_odometry_step);
-  s.max_odometry_turn = positiveParam(p, "odometry/max_turn", s.max_odometry_turn);
+  s.odometry_jump.step = positiveParam(p, "odometry/max_step", s.odometry_jump.step);
+  s.odometry_jump.turn = positiveParam(p, "odometry/max_turn", s.odometry_jump.turn);
+  s.odometry_jump.speed = p.getNonNegative("odometry/max_speed", s.odometry_jump.speed);
+  s.odometry_jump.turn_rate = p.getNonNegative("odometry/max_turn_rate", s.odometry_jump.turn_rate);
   s.time_jump_tolerance = positiveParam(p, "odometry/time_jump_tolerance", s.time_jump_tolerance);
   s.retry_inlier_share = share(p, "tracking/retry_inlier_share", s.retry_inlier_share);
   s.retry_window.linear = p.getNonNegative("tracking/retry_linear", s.retry_window.linear);
@@ -178,7 +180,7 @@ LocalizerResult LineMapLocalizer::addScan(const LocalizerScan& in)
   scan.points.reserve(in.points.size());
   for (const auto& p : in.points)
     if (p.allFinite() && p.squaredNorm() <= max2 && p.squaredNorm() > 0.0) scan.points.push_back(p);
-  const OdometryMotion motion = odometryMotion(in.odom);
+  const OdometryMotion motion = odometryMotion(in.odom, in.stamp);
   const LocalizerResult result =
       tracking_ ? trackStep(scan, motion.step, motion.jump) : globalStep(scan, motion.step);
   counters_.last_ms = nowMs() - start;
@@ -204,14 +206,15 @@ bool LineMapLocalizer::acceptStamp(double stamp)
   return true;
 }
 
-LineMapLocalizer::OdometryMotion LineMapLocalizer::odometryMotion(const std::optional<Pose2>& reading)
+LineMapLocalizer::OdometryMotion LineMapLocalizer::odometryMotion(const std::optional<Pose2>& reading,
+                                                                  double stamp)
 {
   OdometryMotion motion;
   std::optional<Pose2> odom = reading && finitePose(*reading) ? reading : std::nullopt;
   if (odom && last_odom_)
   {
     const Pose2 s = last_odom_->inverse() * *odom;
-    if (std::hypot(s.x, s.y) <= params_.max_odometry_step && std::fabs(s.theta) <= params_.max_odometry_turn)
+    if (params_.odometry_jump.isMotion(s, stamp - last_odom_stamp_))
       motion.step = s;
     else
     {
@@ -219,7 +222,11 @@ LineMapLocalizer::OdometryMotion LineMapLocalizer::odometryMotion(const std::opt
       motion.jump = s;
     }
   }
-  if (odom) last_odom_ = odom;
+  if (odom)
+  {
+    last_odom_ = odom;
+    last_odom_stamp_ = stamp;
+  }
   return motion;
 }
 

@@ -51,8 +51,10 @@ void readFrontEnd(const linemap::ParamSet& p, LaserSlamParams& s)
   if (!(s.surfaces.lambda >= 0.0 && s.surfaces.lambda < linemap::kPi / 2))
     throw linemap::ParameterError("parameter 'front_end/surface_lambda' must be in [0, pi/2) rad");
   s.surfaces.range_sigma = positiveParam(p, "front_end/range_sigma", s.surfaces.range_sigma);
-  s.max_odometry_step = positiveParam(p, "front_end/max_odometry_step", s.max_odometry_step);
-  s.max_odometry_turn = positiveParam(p, "front_end/max_odometry_turn", s.max_odometry_turn);
+  s.odometry_jump.step = positiveParam(p, "front_end/max_odometry_step", s.odometry_jump.step);
+  s.odometry_jump.turn = positiveParam(p, "front_end/max_odometry_turn", s.odometry_jump.turn);
+  s.odometry_jump.speed = p.getNonNegative("front_end/max_odometry_speed", s.odometry_jump.speed);
+  s.odometry_jump.turn_rate = p.getNonNegative("front_end/max_odometry_turn_rate", s.odometry_jump.turn_rate);
   s.time_jump_tolerance = positiveParam(p, "front_end/time_jump_tolerance", s.time_jump_tolerance);
 }
 

@@ -78,8 +78,7 @@ LocalTrajectoryBuilder::Prediction LocalTrajectoryBuilder::predict(const SlamSca
   if (scan.odom && last_odom_)
   {
     const Pose2 step = last_odom_->inverse() * *scan.odom;
-    if (std::hypot(step.x, step.y) <= params_.max_odometry_step &&
-        std::fabs(step.theta) <= params_.max_odometry_turn)
+    if (params_.odometry_jump.isMotion(step, scan.stamp - last_stamp_))
     {
       prediction.odometry_usable = true;
       prediction.pose = last_local_ * step;
@@ -179,7 +178,7 @@ std::optional<MatchResult> LocalTrajectoryBuilder::searchEveryHeading(const Slam
   around.angular = M_PI;
   around.rotation_penalty = 0.0;
   const double periods = (scan.stamp - last_stamp_) / typical_period_;
-  around.linear += std::min(std::hypot(velocity_.x, velocity_.y) * periods, params_.max_odometry_step);
+  around.linear += std::min(std::hypot(velocity_.x, velocity_.y) * periods, params_.odometry_jump.step);
   const auto found = correlativeSearch(local_map_, scan.points, last_local_, around, 1);
   if (found.empty()) return std::nullopt;
   return refineMatch(local_map_, scan.points, found.front().pose, found.front().pose, params_.refinement);
@@ -320,7 +319,7 @@ void LocalTrajectoryBuilder::rebuildLocalMap()
   // decimetres, an odometry step at most max_odometry_step) and see max_range. Where the front end lost
   // track, the last keyframes lie far apart and their union would make the field unbounded.
   const Vec2 centre = recent_.back().local.translation();
-  const double reach = params_.max_range + params_.max_odometry_step + 1.0;
+  const double reach = params_.max_range + params_.odometry_jump.step + 1.0;
   const auto near = [&](const Vec2& q) { return (q - centre).cwiseAbs().maxCoeff() <= reach; };
   for (std::size_t i = recent_.size() - n; i < recent_.size(); ++i)
   {

@@ -25,6 +25,11 @@ struct CarmenRecordingOptions
   double range_min = 0.0;
   /// Keep only the first this many scans (0 = all); keyframes beyond are dropped.
   std::size_t max_scans = 0;
+  /// The scans' odometry from the ODOM lines even where their pose fields move: a corrected log, whose
+  /// pose fields are the corrected poses and whose ODOM lines are the robot's odometry.
+  bool odometry_from_odom_lines = false;
+  /// [s] ODOM lines are interpolated at each scan's stamp plus this (fitOdometryDelay).
+  double odometry_delay = 0.0;
 };
 
 /// What the conversion decided, for the tools' summaries.
@@ -59,5 +64,12 @@ struct CarmenRecordingReport
 ///    (pairKeyframes); pose = corrected laser pose * (base_link->laser)^-1.
 Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected,
                      const CarmenRecordingOptions& options = {}, CarmenRecordingReport* report = nullptr);
+
+/// A corrected log with ODOM lines: the delay (a multiple of `step` within +-max_delay seconds) at which
+/// the ODOM lines' motion between consecutive scans best agrees with the motion of their pose fields (the
+/// mean distance between the two). Logs of keyframes stamp their scans and the odometry with different
+/// latencies; the odometry of a scan taken at its bare stamp is then off by the robot's speed times the
+/// difference. 0 when the log has fewer than two scans or no ODOM lines.
+double fitOdometryDelay(const CarmenLog& log, double max_delay = 0.5, double step = 0.01);
 
 }  // namespace line_map_eval

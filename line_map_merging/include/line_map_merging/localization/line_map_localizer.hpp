@@ -22,6 +22,7 @@
 #include "line_map_merging/localization/localization_global_search.hpp"
 #include "line_map_merging/localization/localization_segment_matcher.hpp"
 #include "linemap/geometry.hpp"
+#include "linemap/odometry_jump.hpp"
 #include "linemap/params.hpp"
 #include "linemap/time_jump_detector.hpp"
 
@@ -34,16 +35,15 @@ struct LocalizerParams
   SegmentMatchParams match;
   double index_cell = 0.1;  ///< [m] cell of the segment index
   // Odometry prior: standard deviations of the predicted motion, a floor plus a share of the motion.
-  double odom_sigma_xy = 0.02;            ///< [m]
-  double odom_sigma_xy_per_m = 0.1;       ///< [m/m]
-  double odom_sigma_theta = 0.01;         ///< [rad]
-  double odom_sigma_theta_per_rad = 0.1;  ///< [rad/rad]
-  double odom_sigma_theta_per_m = 0.05;   ///< [rad/m]
-  double no_odom_sigma_xy = 0.3;          ///< [m] the prior without odometry (constant pose)
-  double no_odom_sigma_theta = 0.3;       ///< [rad]
-  double max_odometry_step = 0.5;         ///< [m] more between two scans: a jump, not a motion
-  double max_odometry_turn = 0.5;         ///< [rad]
-  double time_jump_tolerance = 1.0;       ///< [s] a stamp further back restarts the odometry reference
+  double odom_sigma_xy = 0.02;                ///< [m]
+  double odom_sigma_xy_per_m = 0.1;           ///< [m/m]
+  double odom_sigma_theta = 0.01;             ///< [rad]
+  double odom_sigma_theta_per_rad = 0.1;      ///< [rad/rad]
+  double odom_sigma_theta_per_m = 0.05;       ///< [rad/m]
+  double no_odom_sigma_xy = 0.3;              ///< [m] the prior without odometry (constant pose)
+  double no_odom_sigma_theta = 0.3;           ///< [rad]
+  linemap::OdometryJumpLimits odometry_jump;  ///< more between two scans: a jump, not a motion
+  double time_jump_tolerance = 1.0;           ///< [s] a stamp further back restarts the odometry reference
   // Recovery of a poor match by a correlative search around the prediction.
   double retry_inlier_share = 0.6;
   SearchWindow retry_window{0.3, 0.2, 0.05, 0.01, 0.0, 0.0};
@@ -152,7 +152,7 @@ class LineMapLocalizer
   };
   /// Counts a clock jump back (forgetting the odometry); false for a stamp that is not new.
   bool acceptStamp(double stamp);
-  OdometryMotion odometryMotion(const std::optional<linemap::Pose2>& reading);
+  OdometryMotion odometryMotion(const std::optional<linemap::Pose2>& reading, double stamp);
   /// One scan while tracking: matched near the odometry's prediction; lost after lost_scans poor ones.
   LocalizerResult trackStep(const LocalizerScan& scan, const std::optional<linemap::Pose2>& step,
                             const std::optional<linemap::Pose2>& jump);
@@ -179,6 +179,7 @@ class LineMapLocalizer
   bool tracking_ = false;
   linemap::Pose2 pose_;
   std::optional<linemap::Pose2> last_odom_;
+  double last_odom_stamp_ = 0.0;
   bool have_stamp_ = false;
   double last_stamp_ = 0.0;
   std::size_t poor_in_row_ = 0, scans_since_search_ = 0;

@@ -10,6 +10,7 @@
 #include "line_map_merging/slam/scan_matcher.hpp"
 #include "line_map_merging/slam/scan_surfaces.hpp"
 #include "linemap/geometry.hpp"
+#include "linemap/odometry_jump.hpp"
 #include "linemap/params.hpp"
 
 namespace line_map_merging
@@ -39,9 +40,9 @@ struct LaserSlamParams
   /// points alone: a wall at grazing incidence is then a line, not a row of dots that holds a scan at
   /// the keyframe's pose along a corridor. 0: the points alone.
   SurfaceParams surfaces{0.1745, 0.01};  ///< lambda about 10 degrees, as config/slam.yaml writes it
-  double max_odometry_step = 0.5;        ///< [m] odometry moving more between two scans is a jump
-  double max_odometry_turn = 0.5;        ///< [rad]
-  double time_jump_tolerance = 1.0;      ///< [s] a stamp this much before the last one: time jumped back
+  /// Odometry moving more between two scans is a jump, not used for that step.
+  linemap::OdometryJumpLimits odometry_jump;
+  double time_jump_tolerance = 1.0;  ///< [s] a stamp this much before the last one: time jumped back
   /// What a match determines, as a weight per direction of the translation (its score's curvature;
   /// TranslationShape): a direction fixed at least this fraction as sharply as the best one counts
   /// fully, a weaker one in proportion. The front end takes the match's translation in the
