@@ -162,9 +162,13 @@ Input loadInput(const Arguments& a)
   if (raw.odometry.size() < 2)
     throw std::invalid_argument(a.positional[0] +
                                 ": a raw CARMEN log needs its RELATIONS file, a corrected one ODOM lines");
-  if (raw.scans.empty() || !(raw.scans.back().timestamp > raw.scans.front().timestamp))
-    throw std::invalid_argument(a.positional[0] +
-                                ": its scans carry no time stamps: the ODOM lines cannot be placed at them");
+  std::size_t later = 0;  // scans stamped after the one before
+  for (std::size_t i = 1; i < raw.scans.size(); ++i)
+    later += raw.scans[i].timestamp > raw.scans[i - 1].timestamp;
+  if (2 * later < raw.scans.size())
+    throw std::invalid_argument(
+        a.positional[0] + ": only " + std::to_string(later) + " of its " + std::to_string(raw.scans.size()) +
+        " scans are stamped after the one before: the ODOM lines cannot be placed at them");
   CarmenRecordingOptions options;
   options.odometry_from_odom_lines = true;
   options.odometry_delay = fitOdometryDelay(raw);
