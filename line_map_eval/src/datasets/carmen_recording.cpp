@@ -60,18 +60,10 @@ bool hasPose(const CarmenScan& s)
 {
   return s.type != CarmenScanType::RawLaser;
 }
-}  // namespace
-
-Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const CarmenRecordingOptions& options,
-                     CarmenRecordingReport* report)
+/// The one RAWLASER sensor among the first n scans (0: none); two of them are refused.
+int singleRawLaser(const CarmenLog& raw, std::size_t n)
 {
-  if (raw.scans.empty()) throw std::runtime_error(raw.path + ": no FLASER, ROBOTLASER1 or RAWLASER scans");
-  if (!(options.min_stamp_step > 0.0)) throw std::invalid_argument("fromCarmen: min_stamp_step must be > 0");
-  CarmenRecordingReport info;
-  const std::size_t n =
-      options.max_scans > 0 ? std::min(options.max_scans, raw.scans.size()) : raw.scans.size();
-
-  // One laser per recording: RAWLASER1..4 are four different sensors.
+  // RAWLASER1..4 are four different sensors.
   int raw_laser = 0;
   for (std::size_t i = 0; i < n; ++i)
   {
@@ -83,6 +75,97 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
                                ": a recording holds the scans of one laser");
     raw_laser = s.raw_laser;
   }
+  return raw_laser;
+}
+
+/// The laser's mounting on base_link (fromCarmen's rule), where it came from in `info`.
+Pose2 laserMounting(const CarmenLog& raw, const CarmenLog* corrected, std::size_t n, bool front_laser,
+                    const CarmenScan* posed, CarmenRecordingReport& info)
+{
+  Pose2 mount;
+  if (front_laser && parseOffset(raw, mount))
+    info.mounting_source = "PARAM robot_frontlaser_offset of " + raw.path;
+  else if (front_laser && corrected && parseOffset(*corrected, mount))
+    info.mounting_source = "PARAM robot_frontlaser_offset of " + corrected->path;
+  else if (posed)
+  {
+    mount = posed->robot_pose.inverse() * posed->laser_pose;
+    info.mounting_source = "laser pose relative to robot pose of the first scan";
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      const CarmenScan& s = raw.scans[i];
+      if (!hasPose(s)) continue;
+      const Pose2 d = mount.inverse() * (s.robot_pose.inverse() * s.laser_pose);
+      info.max_mounting_shift = std::max(info.max_mounting_shift, std::hypot(d.x, d.y));
+      info.max_mounting_turn = std::max(info.max_mounting_turn, std::abs(linemap::normalizeAngle(d.theta)));
+    }
+  }
+  else
+    info.mounting_source = "none (identity): RAWLASER lines carry no pose";
+  return mount;
+}
+
+enum class Source
+{
+  Scan,
+  OdomLines,
+  Laser
+};
+
+/// Odometry of the scans with poses: their robot pose unless it never changes (or `prefer_odom_lines`).
+Source odometrySource(const CarmenLog& raw, std::size_t n, const CarmenScan* posed, bool prefer_odom_lines)
+{
+  const auto moves = [&](auto pose_of)
+  {
+    for (std::size_t i = 0; i < n; ++i)
+      if (hasPose(raw.scans[i]) && !samePose(pose_of(raw.scans[i]), pose_of(*posed))) return true;
+    return false;
+  };
+  bool odom_lines_move = false;
+  for (const CarmenOdom& o : raw.odometry)
+    if (!samePose(o.pose, raw.odometry.front().pose)) odom_lines_move = true;
+  if (prefer_odom_lines && odom_lines_move) return Source::OdomLines;
+  if (posed && !moves([](const CarmenScan& s) { return s.robot_pose; }))
+  {
+    if (odom_lines_move) return Source::OdomLines;
+    if (moves([](const CarmenScan& s) { return s.laser_pose; })) return Source::Laser;
+  }
+  return Source::Scan;
+}
+
+/// The corrected log's keyframes paired to the first n raw scans, as base_link poses.
+std::vector<CorrectedKeyframe> correctedKeyframes(const CarmenLog& raw, const CarmenLog& corrected,
+                                                  std::size_t n, const Pose2& laser_to_base)
+{
+  if (!corrected.scans.empty())
+  {
+    const std::size_t beams = corrected.scans.front().ranges.size();
+    if (std::none_of(raw.scans.begin(), raw.scans.end(),
+                     [&](const CarmenScan& s) { return s.ranges.size() == beams; }))
+      throw std::runtime_error(corrected.path + ": keyframes have " + std::to_string(beams) +
+                               " readings, no scan of " + raw.path + " has as many");
+  }
+  std::vector<CorrectedKeyframe> keyframes;
+  const std::vector<std::size_t> pairs = pairKeyframes(raw, corrected);
+  for (std::size_t k = 0; k < pairs.size(); ++k)
+  {
+    if (pairs[k] >= n) break;
+    keyframes.push_back({pairs[k], corrected.scans[k].laser_pose * laser_to_base});
+  }
+  return keyframes;
+}
+}  // namespace
+
+Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const CarmenRecordingOptions& options,
+                     CarmenRecordingReport* report)
+{
+  if (raw.scans.empty()) throw std::runtime_error(raw.path + ": no FLASER, ROBOTLASER1 or RAWLASER scans");
+  if (!(options.min_stamp_step > 0.0)) throw std::invalid_argument("fromCarmen: min_stamp_step must be > 0");
+  CarmenRecordingReport info;
+  const std::size_t n =
+      options.max_scans > 0 ? std::min(options.max_scans, raw.scans.size()) : raw.scans.size();
+
+  const int raw_laser = singleRawLaser(raw, n);
 
   // Beam geometry, scan by scan: ROBOTLASER1/RAWLASER lines state theirs (and their maximum range,
   // the no-return value), FLASER's follows from its beam count.
@@ -121,57 +204,12 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
   rec.geometry = geometryOf(raw.scans.front());
   std::vector<ScanGeometry> distinct{rec.geometry};
 
-  // Laser mounting on base_link.
-  const bool front_laser = raw_laser <= 1;
   const CarmenScan* posed = nullptr;  // the first scan with a laser and a robot pose
   for (std::size_t i = 0; i < n && !posed; ++i)
     if (hasPose(raw.scans[i])) posed = &raw.scans[i];
-  if (front_laser && parseOffset(raw, rec.base_to_laser))
-    info.mounting_source = "PARAM robot_frontlaser_offset of " + raw.path;
-  else if (front_laser && corrected && parseOffset(*corrected, rec.base_to_laser))
-    info.mounting_source = "PARAM robot_frontlaser_offset of " + corrected->path;
-  else if (posed)
-  {
-    rec.base_to_laser = posed->robot_pose.inverse() * posed->laser_pose;
-    info.mounting_source = "laser pose relative to robot pose of the first scan";
-    for (std::size_t i = 0; i < n; ++i)
-    {
-      const CarmenScan& s = raw.scans[i];
-      if (!hasPose(s)) continue;
-      const Pose2 d = rec.base_to_laser.inverse() * (s.robot_pose.inverse() * s.laser_pose);
-      info.max_mounting_shift = std::max(info.max_mounting_shift, std::hypot(d.x, d.y));
-      info.max_mounting_turn = std::max(info.max_mounting_turn, std::abs(linemap::normalizeAngle(d.theta)));
-    }
-  }
-  else
-    info.mounting_source = "none (identity): RAWLASER lines carry no pose";
+  rec.base_to_laser = laserMounting(raw, corrected, n, raw_laser <= 1, posed, info);
   const Pose2 laser_to_base = rec.base_to_laser.inverse();
-
-  // Odometry of the scans with poses: their robot pose unless it never changes.
-  const auto moves = [&](auto pose_of)
-  {
-    for (std::size_t i = 0; i < n; ++i)
-      if (hasPose(raw.scans[i]) && !samePose(pose_of(raw.scans[i]), pose_of(*posed))) return true;
-    return false;
-  };
-  bool odom_lines_move = false;
-  for (const CarmenOdom& o : raw.odometry)
-    if (!samePose(o.pose, raw.odometry.front().pose)) odom_lines_move = true;
-  enum class Source
-  {
-    Scan,
-    OdomLines,
-    Laser
-  } source = Source::Scan;
-  if (options.odometry_from_odom_lines && odom_lines_move)
-    source = Source::OdomLines;
-  else if (posed && !moves([](const CarmenScan& s) { return s.robot_pose; }))
-  {
-    if (odom_lines_move)
-      source = Source::OdomLines;
-    else if (moves([](const CarmenScan& s) { return s.laser_pose; }))
-      source = Source::Laser;
-  }
+  const Source source = odometrySource(raw, n, posed, options.odometry_from_odom_lines);
   // RAWLASER scans: ODOM lines interpolated at the scan stamp, like FLASER's odometry.
   const bool raw_scans = raw_laser > 0;
   std::vector<const CarmenOdom*> odom_sorted;
@@ -216,23 +254,7 @@ Recording fromCarmen(const CarmenLog& raw, const CarmenLog* corrected, const Car
   }
   info.geometries = distinct.size();
 
-  if (corrected)
-  {
-    if (!corrected->scans.empty())
-    {
-      const std::size_t beams = corrected->scans.front().ranges.size();
-      if (std::none_of(raw.scans.begin(), raw.scans.end(),
-                       [&](const CarmenScan& s) { return s.ranges.size() == beams; }))
-        throw std::runtime_error(corrected->path + ": keyframes have " + std::to_string(beams) +
-                                 " readings, no scan of " + raw.path + " has as many");
-    }
-    const std::vector<std::size_t> pairs = pairKeyframes(raw, *corrected);
-    for (std::size_t k = 0; k < pairs.size(); ++k)
-    {
-      if (pairs[k] >= n) break;
-      rec.keyframes.push_back({pairs[k], corrected->scans[k].laser_pose * laser_to_base});
-    }
-  }
+  if (corrected) rec.keyframes = correctedKeyframes(raw, *corrected, n, laser_to_base);
   if (report) *report = info;
   return rec;
 }
