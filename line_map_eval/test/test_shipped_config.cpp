@@ -100,6 +100,7 @@ TEST(ShippedConfig, SlamDefaultsAreTheConfigFiles)
   EXPECT_SAME(loop_candidates);
   EXPECT_SAME(loop_every);
   EXPECT_SAME(loop_min_score);
+  EXPECT_SAME(loop_min_score_ratio);
   EXPECT_SAME(loop_ambiguity_distance);
   EXPECT_SAME(loop_ambiguity_margin);
   EXPECT_SAME(loop_consistency_probability);

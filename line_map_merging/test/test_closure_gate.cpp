@@ -252,3 +252,32 @@ TEST(ClosureGate, JudgesTheMatchAsFoundNotAsHeldToTheEstimate)
   EXPECT_NEAR(g.edges().back().measurement.x, kLast - 0.002, 1e-12);
   EXPECT_NEAR(g.node(kLast).x, kLast, 0.01);
 }
+
+// The score floor is loop_min_score, or loop_min_score_ratio times the front end's typical score where
+// that is lower (hand-computed: 0.65 x 0.6 = 0.39); unknown (0) or a ratio of 0 leave loop_min_score.
+TEST(ClosureGate, TheScoreFloorFollowsTheFrontEndsScoreDown)
+{
+  LaserSlamParams p;
+  p.loop_min_score = 0.55;
+  p.loop_min_score_ratio = 0.65;
+  EXPECT_DOUBLE_EQ(p.loopMinScore(0.6), 0.39);
+  EXPECT_DOUBLE_EQ(p.loopMinScore(0.95), 0.55);
+  EXPECT_DOUBLE_EQ(p.loopMinScore(0.0), 0.55);
+  LaserSlamParams off = p;
+  off.loop_min_score_ratio = 0.0;
+  EXPECT_DOUBLE_EQ(off.loopMinScore(0.6), 0.55);
+
+  // A true closure scoring 0.45: refused against a front end scoring 0.95, accepted against one scoring 0.6.
+  for (double front_end : {0.95, 0.6})
+  {
+    PoseGraph g = chain(p);
+    ClosureGate gate(p);
+    gate.setFrontEndScore(front_end);
+    SlamCounters counters;
+    const bool accepted = gate.consider(closure(Pose2(kLast, 0.0, 0.0), p, 0.45), g, counters).accepted;
+    EXPECT_EQ(accepted, front_end < 0.7) << front_end;
+    ASSERT_EQ(gate.attempts().size(), 1u);
+    EXPECT_DOUBLE_EQ(gate.attempts()[0].min_score, front_end < 0.7 ? 0.39 : 0.55);
+    EXPECT_EQ(counters.loops_rejected_score, accepted ? 0u : 1u);
+  }
+}

@@ -30,7 +30,7 @@ bool ClosureGate::passesScreening(const LoopMatch& match, std::size_t attempt, S
     attempts_[attempt].outcome = ClosureOutcome::kAmbiguous;
     return false;
   }
-  if (match.match->score < params_.loop_min_score)
+  if (match.match->score < attempts_[attempt].min_score)
   {
     ++counters.loops_rejected_score;
     return false;
@@ -48,7 +48,8 @@ ClosureVerdict ClosureGate::consider(const LoopMatch& match, PoseGraph& graph, S
   const std::size_t j = match.from, k = match.to;
   const MatchResult& found = *match.match;
   const std::size_t attempt = attempts_.size();
-  attempts_.push_back({j, k, ClosureOutcome::kRejectedScore, found.score});
+  attempts_.push_back(
+      {j, k, ClosureOutcome::kRejectedScore, found.score, params_.loopMinScore(front_end_score_)});
   if (!passesScreening(match, attempt, counters)) return {};
   const PoseGraphEdge& e = match.edge;
   // Judged as matched: the edge keeps the estimate where the match is weak, which would hide a slide there.

@@ -221,6 +221,7 @@ void LaserSlam::closeLoops()
 {
   const std::size_t k = keyframes_.size() - 1;
   const LoopSearch search = constraints_.search(keyframes_, graph_, k);
+  gate_.setFrontEndScore(front_end_.runScore());
   for (std::size_t j : search.candidates)
   {
     // From the graph as the previous candidate's closure left it.
@@ -306,6 +307,13 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
 {
   const auto& c = counters_;
   auto n = [](std::size_t v) { return std::to_string(v); };
+  auto fixed = [](double v)
+  {
+    std::ostringstream out;
+    out.precision(3);
+    out << std::fixed << v;
+    return out.str();
+  };
   std::ostringstream opt;
   opt.precision(3);
   opt << c.last_optimization_ms;
@@ -333,6 +341,8 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
           {"loop closures accepted with a direction their match left open", n(c.loops_degenerate)},
           {"matches leaving a direction to the odometry", n(c.degenerate_matches)},
           {"loop closures rejected (score)", n(c.loops_rejected_score)},
+          {"front end's recent mean match score", fixed(front_end_.runScore())},
+          {"loop closures' score floor (now)", fixed(params_.loopMinScore(front_end_.runScore()))},
           {"loop closures rejected (graph)", n(c.loops_rejected_graph)},
           {"loop closures accepted by consensus (outvoting the chain)", n(c.loops_by_consensus)},
           {"loop closures refused as inconsistent in a row (now)", n(c.inconsistent_in_a_row)},

@@ -91,6 +91,7 @@ void readLoop(const linemap::ParamSet& p, LaserSlamParams& s)
   s.loop_candidates = countParam(p, "loop/candidates", s.loop_candidates, 0);
   s.loop_every = countParam(p, "loop/every", s.loop_every, 1);
   s.loop_min_score = p.getDouble("loop/min_score", s.loop_min_score);
+  s.loop_min_score_ratio = p.getNonNegative("loop/min_score_ratio", s.loop_min_score_ratio);
   s.loop_max_error_xy = positiveParam(p, "loop/max_error_xy", s.loop_max_error_xy);
   s.loop_max_error_theta = positiveParam(p, "loop/max_error_theta", s.loop_max_error_theta);
   s.loop_corroborate_xy = p.getDouble("loop/corroborate_xy", s.loop_corroborate_xy);

@@ -143,6 +143,8 @@ std::optional<Pose2> LocalTrajectoryBuilder::matchFrontEnd(const SlamScan& scan,
     return std::nullopt;
   }
   typical_score_ = typical_score_ > 0.0 ? 0.9 * typical_score_ + 0.1 * best->score : best->score;
+  run_score_matches_ = std::min(run_score_matches_ + 1, kRunScoreMatches);
+  run_score_ += (best->score - run_score_) / static_cast<double>(run_score_matches_);
   // Without odometry too: the constant velocity is the only information along a corridor's axis, and a
   // match that lags there would slow the velocity it is predicted by.
   return heldToPrediction(*best, predicted, weights, counters);

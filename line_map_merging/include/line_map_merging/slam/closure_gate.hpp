@@ -34,6 +34,9 @@ class ClosureGate
   /// Decides on `match` (of keyframes already in `graph`): adds its edge (and a corroborated pending
   /// closure's) and optimises, or leaves the graph as it was. Records the attempt, counts into `counters`.
   ClosureVerdict consider(const LoopMatch& match, PoseGraph& graph, SlamCounters& counters);
+  /// The front end's typical match score (LocalTrajectoryBuilder::runScore): what the closures' score
+  /// floor is relative to (LaserSlamParams::loopMinScore).
+  void setFrontEndScore(double score) { front_end_score_ = score; }
   /// Every closure attempt that got as far as a match, in order.
   const std::vector<ClosureAttempt>& attempts() const { return attempts_; }
 
@@ -68,6 +71,7 @@ class ClosureGate
   bool optimizeKeeping(PoseGraph& graph, std::vector<std::size_t> added, SlamCounters& counters) const;
 
   LaserSlamParams params_;
+  double front_end_score_ = 0.0;
   double consistency_gate_;  ///< chi-square quantile of loop_consistency_probability (infinite: off)
   struct PendingClosure
   {

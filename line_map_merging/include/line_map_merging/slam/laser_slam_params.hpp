@@ -77,7 +77,20 @@ struct LaserSlamParams
   double loop_submap_path = 1.2;
   std::size_t loop_candidates = 2;  ///< submaps tried per keyframe
   std::size_t loop_every = 1;       ///< keyframes between attempts
+  /// A closure's refined score must reach loop_min_score, or loop_min_score_ratio times the front end's
+  /// typical match score where that is lower: a sensor whose consecutive scans meet each other's surfaces
+  /// loosely (coarse ranges, far sparse walls) gives every true closure a lower score too. 0: the former
+  /// alone.
   double loop_min_score = 0.55;
+  double loop_min_score_ratio = 0.65;
+  /// The score a closure must reach when the front end's matches typically score `front_end_score` (0:
+  /// not known yet).
+  double loopMinScore(double front_end_score) const
+  {
+    return loop_min_score_ratio > 0.0 && front_end_score > 0.0
+               ? std::min(loop_min_score, loop_min_score_ratio * front_end_score)
+               : loop_min_score;
+  }
   /// A closure whose coarse search finds another pose at least ambiguity_distance away scoring within
   /// ambiguity_margin of the best (a fraction of its score) is refused (a corridor seen from inside); either
   /// 0: no check. A margin, not the rival's share of the best: near 1 a share leaves no room to loosen the

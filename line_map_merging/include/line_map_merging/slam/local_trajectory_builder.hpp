@@ -48,6 +48,9 @@ class LocalTrajectoryBuilder
   LocalScanResult addScan(const SlamScan& scan, SlamCounters& counters);
   /// The last accepted scan's front-end pose.
   const linemap::Pose2& currentLocal() const { return last_local_; }
+  /// The mean score of the recent accepted matches (about the last fifty; 0 before the first): how well
+  /// this sensor's scans meet the local map here, the reference of the closures' score floor.
+  double runScore() const { return run_score_; }
   /// Starts afresh at the newest of `keyframes` (a restored session), with the newest of them as the
   /// local map: the next scan is searched for around that keyframe's pose.
   void resumeFrom(const std::vector<SlamKeyframe>& keyframes);
@@ -114,6 +117,9 @@ class LocalTrajectoryBuilder
 
   LaserSlamParams params_;
   double typical_score_ = 0.0;  ///< running mean of the accepted match scores
+  double run_score_ = 0.0;      ///< their mean over the last kRunScoreMatches or so (runScore)
+  std::size_t run_score_matches_ = 0;
+  static constexpr std::size_t kRunScoreMatches = 50;
   /// The last local_map_keyframes keyframes (at least the last one: the keyframe decision's reference).
   std::deque<RecentKeyframe> recent_;
   LikelihoodGrid local_map_;

@@ -63,7 +63,8 @@ struct ClosureAttempt
 {
   std::size_t from = 0, to = 0;  ///< keyframe indices, from < to
   ClosureOutcome outcome = ClosureOutcome::kRejectedScore;
-  double score = 0.0;  ///< the refined match's mean field value (an ambiguous one's: the coarse field's)
+  double score = 0.0;      ///< the refined match's mean field value (an ambiguous one's: the coarse field's)
+  double min_score = 0.0;  ///< the score it had to reach (LaserSlamParams::loopMinScore then)
 };
 
 struct SlamKeyframe
