@@ -117,7 +117,9 @@ class LocalTrajectoryBuilder
 
   LaserSlamParams params_;
   double typical_score_ = 0.0;  ///< running mean of the accepted match scores
-  double run_score_ = 0.0;      ///< their mean over the last kRunScoreMatches or so (runScore)
+  /// Their mean over the last kRunScoreMatches or so (runScore): slower than typical_score_, which follows
+  /// the last few scans to widen a search; the closures' floor is a property of the sensor and the place.
+  double run_score_ = 0.0;
   std::size_t run_score_matches_ = 0;
   static constexpr std::size_t kRunScoreMatches = 50;
   /// The last local_map_keyframes keyframes (at least the last one: the keyframe decision's reference).
