@@ -13,6 +13,7 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -79,7 +80,8 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       NODELET_FATAL("line_map_merging: %s", e.what());
       throw;
     }
-    tf_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(120.0));
+    // A SLAM that lags the scans (a session search) publishes map -> odom for stamps this far back.
+    tf_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(std::max(10.0, pnh.param("tf_cache", 600.0))));
     const ros::TransportHints hints = linemap_ros::noDelay();
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_, nh, true, hints);
     map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
