@@ -11,6 +11,7 @@
 #include <tf2_ros/transform_listener.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <mutex>
@@ -57,13 +58,15 @@ class LineExtractionRos
       tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
       tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_);
     }
-    // As deep as the scan queue: a slow subscriber (a checker in python under load) loses messages past it.
-    segments_pub_ = nh.advertise<line_map_msgs::LineSegmentArray>("line_segments", 100);
+    // Scans that may wait, and segment sets for a slow subscriber (a checker in python under load): past it
+    // the oldest are lost without a trace.
+    const int queue = std::max(1, private_nh.param("queue_size", 1000));
+    segments_pub_ = nh.advertise<line_map_msgs::LineSegmentArray>("line_segments", queue);
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_segments_markers", 1);
-    // Room for bursts (a bag played fast, worker threads busy with a lookup table or an autosave):
-    // a short queue lost scans of a bag played fast here, unseen by any counter. Extraction takes
-    // microseconds, so a long queue adds no latency in steady state.
-    scan_sub_ = nh.subscribe("scan", 100, &LineExtractionRos::scanCallback, this, linemap_ros::noDelay());
+    // Room for bursts: a bag played fast, or the manager's worker threads busy elsewhere (an autosave, the
+    // SLAM's search for the robot in a saved session). Extraction takes microseconds, so a long queue adds
+    // no latency in steady state.
+    scan_sub_ = nh.subscribe("scan", queue, &LineExtractionRos::scanCallback, this, linemap_ros::noDelay());
     diagnostics_ = std::make_unique<linemap_ros::WallDiagnostics>(nh, private_nh, "line extraction", this,
                                                                   &LineExtractionRos::produceDiagnostics);
     ROS_INFO("line_extraction: algorithm '%s'%s", extractor_->params().algorithm.c_str(),

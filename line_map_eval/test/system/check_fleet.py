@@ -133,18 +133,13 @@ class CheckFleet(unittest.TestCase):
         lt.wait_until(lambda: "keyframes" in merging, "the merger's diagnostics", lambda: "none yet", 120.0)
         limit = lt.work_limit(lt.bag_scans(bag, "/robot1/scan")[2] + lt.bag_scans(bag, "/robot2/scan")[2], RATE)
         lt.play(bag, RATE, timeout=limit)
-        # Every segment set accounted for, mapped or dropped: too many dropped fails at once, not at the limit.
         lt.wait_until(lambda: "placed after" in merging.get("robot 1", "")
-                      and int(merging.get("segment sets handled", "0")) + int(merging.get("dropped scans", "0"))
-                      >= scans1 + scans2 - 10 and maps and all(r in paths for r in ROBOTS),
+                      and int(merging.get("segment sets handled", "0")) >= scans1 + scans2 - 10 and maps
+                      and all(r in paths for r in ROBOTS),
                       "robot2 placed and every segment set handled",
-                      lambda: "robot 1: %s; %s of %d segment sets handled, %s dropped; %d maps" % (
-                          merging.get("robot 1"), merging.get("segment sets handled"), scans1 + scans2,
-                          merging.get("dropped scans"), len(maps)),
+                      lambda: "robot 1: %s; %s of %d segment sets handled; %d maps" % (
+                          merging.get("robot 1"), merging.get("segment sets handled"), scans1 + scans2, len(maps)),
                       limit, gone=lt.gone_nodes("/line_map"))
-        self.assertLessEqual(int(merging.get("dropped scans", "0")), 10,
-                             "the merger dropped segment sets: %s" % lt.reported(
-                                 merging, ("segment sets handled", "scans", "dropped scans", "summary")))
         fits = {}
         for robot in ROBOTS:
             back = shift if robot == "robot2" else 0.0
