@@ -96,9 +96,11 @@ class LikelihoodGrid
  private:
   class NearestDistances;
   void release() noexcept;
-  /// Lowers the cells within r cells of the join `s`, and nearer its inside than its ends, to their
-  /// squared distance [m^2] to it.
-  void writeJoin(const linemap::Segment2& s, int r, NearestDistances& nearest) const;
+  /// Lowers the cells within r cells of point p to their squared distance [m^2] to it (dx2: scratch).
+  void writeDisc(const linemap::Vec2& p, int r, std::vector<double>& dx2, NearestDistances& nearest) const;
+  /// Lowers the cells within r cells and `reach` [m] of the join `s`, and nearer its inside than its ends,
+  /// to their squared distance [m^2] to it.
+  void writeJoin(const linemap::Segment2& s, int r, double reach, NearestDistances& nearest) const;
 
   static constexpr int kTile = 8;  ///< cells are written by tiles of kTile x kTile
 
