@@ -122,8 +122,16 @@ class ResidualLineFinder
   {
     double t0, t1;
   };
-  /// Calls f(index) for every point whose grid cell may hold points within `half_width` of the line
-  /// through `origin` along `dir` between `t0` and `t1` (each point once; the caller tests exactly).
+  /// A point as the grid holds it, in cell order: what the band tests read, side by side.
+  struct CellPoint
+  {
+    Vec2 p;
+    double band;  ///< band_sigmas times its sigma [m]
+    std::uint32_t source;
+    bool used;  ///< as the point's own flag
+  };
+  /// Calls f(index, cell point) for every point whose grid cell may hold points within `half_width` of the
+  /// line through `origin` along `dir` between `t0` and `t1` (each point once; the caller tests exactly).
   /// With `visited`, only the cells a call over that shorter stretch (same line and width) did not visit.
   template <class F>
   void forEachNear(const Vec2& origin, const Vec2& dir, double t0, double t1, double half_width, F&& f,
@@ -152,6 +160,8 @@ class ResidualLineFinder
   double max_sigma_ = 0.0, max_gap_ = 0.0;  ///< over all points
   // Hash grid over the points, cell = seed_radius: keys sorted, with the point of each.
   std::vector<std::uint32_t> cell_order_;
+  std::vector<CellPoint> cell_points_;        ///< the points of cell_order_, in its order
+  std::vector<std::uint32_t> cell_position_;  ///< each point's place in cell_order_
   /// Per occupied cell, its points' range in cell_order_.
   std::unordered_map<std::int64_t, std::pair<std::uint32_t, std::uint32_t>> cells_;
 };
