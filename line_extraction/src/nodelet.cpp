@@ -60,7 +60,7 @@ class LineExtractionRos
     }
     // Scans that may wait, and segment sets for a slow subscriber (a checker in python under load): past it
     // the oldest are lost without a trace.
-    const int queue = std::max(1, private_nh.param("queue_size", 1000));
+    const std::uint32_t queue = linemap_ros::queueSizeParam(private_nh);
     segments_pub_ = nh.advertise<line_map_msgs::LineSegmentArray>("line_segments", queue);
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_segments_markers", 1);
     // Room for bursts: a bag played fast, or the manager's worker threads busy elsewhere (an autosave, the

@@ -3,9 +3,12 @@
 // nodelets hand the core exactly what config/*.yaml and `linemap_batch --param` use.
 #pragma once
 
+#include <ros/console.h>
+#include <ros/duration.h>
 #include <ros/node_handle.h>
 #include <xmlrpcpp/XmlRpcValue.h>
 
+#include <cstdint>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -65,6 +68,30 @@ inline std::tuple<std::string, std::string, std::string> frameParams(const ros::
   const auto frame = [&](const char* name, const char* fallback)
   { return stripLeadingSlash(pnh.param<std::string>(name, fallback)); };
   return {frame("map_frame", "map"), frame("base_frame", "base_link"), frame("odom_frame", "odom")};
+}
+
+/// ~queue_size: the messages a subscription (or a publisher) holds; a full queue drops its oldest without a
+/// trace. Below 1, a warning naming the parameter, and 1.
+inline std::uint32_t queueSizeParam(const ros::NodeHandle& pnh, int fallback = 1000)
+{
+  const int value = pnh.param("queue_size", fallback);
+  if (value >= 1) return static_cast<std::uint32_t>(value);
+  ROS_WARN_STREAM("parameter " << pnh.resolveName("queue_size") << " must be at least 1, got " << value
+                               << ": using 1");
+  return 1;
+}
+
+/// ~tf_cache [s]: how far back the tf buffer holds transforms. A node that lags the bag (the SLAM searching a
+/// saved session) needs transforms that far back. Below 10 s, or not a number, a warning naming the
+/// parameter, and 10 s.
+inline ros::Duration tfCacheParam(const ros::NodeHandle& pnh, double fallback = 600.0)
+{
+  constexpr double kShortest = 10.0;
+  const double value = pnh.param("tf_cache", fallback);
+  if (value >= kShortest) return ros::Duration(value);
+  ROS_WARN_STREAM("parameter " << pnh.resolveName("tf_cache") << " must be at least " << kShortest
+                               << " s, got " << value << ": using " << kShortest << " s");
+  return ros::Duration(kShortest);
 }
 
 }  // namespace linemap_ros

@@ -1,4 +1,5 @@
-// gtests of the ROS-side helpers, run by rostest (test/ros/ros_helpers.test): TfWaitQueue.
+// gtests of the ROS-side helpers, run by rostest (test/ros/ros_helpers.test): TfWaitQueue, and the
+// parameters every nodelet reads alike (param_loader.hpp).
 // The transforms go straight into a tf2::BufferCore and the queue's passes run on a callback queue
 // of the test's own, spun by hand, so every step is an event the test causes.
 #include <geometry_msgs/TransformStamped.h>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "linemap_ros/param_loader.hpp"
 #include "linemap_ros/tf_wait_queue.hpp"
 
 namespace
@@ -234,6 +236,36 @@ TEST_F(TfWaitQueueTest, DestroyedQueueLeavesNoPassBehind)
   setTf(2.0);  // the listener is gone too
   EXPECT_EQ(callbacks.callOne(), ros::CallbackQueue::Empty);
   EXPECT_TRUE(delivered.empty());
+}
+// Each test its own private namespace on the master: no test sees another's parameters.
+TEST(SharedParams, QueueSizeAndTfCacheDefaultWhenUnset)
+{
+  const ros::NodeHandle pnh("~unset");
+  EXPECT_EQ(linemap_ros::queueSizeParam(pnh), 1000u);
+  EXPECT_EQ(linemap_ros::queueSizeParam(pnh, 7), 7u);
+  EXPECT_DOUBLE_EQ(linemap_ros::tfCacheParam(pnh).toSec(), 600.0);
+}
+
+TEST(SharedParams, QueueSizeAndTfCacheAsSet)
+{
+  ros::NodeHandle pnh("~set");
+  pnh.setParam("queue_size", 25);
+  pnh.setParam("tf_cache", 42.5);
+  EXPECT_EQ(linemap_ros::queueSizeParam(pnh), 25u);
+  EXPECT_DOUBLE_EQ(linemap_ros::tfCacheParam(pnh).toSec(), 42.5);
+}
+
+TEST(SharedParams, OutOfRangeValuesAreRaisedToTheSmallestThatWorks)
+{
+  ros::NodeHandle pnh("~bad");
+  pnh.setParam("queue_size", -3);
+  pnh.setParam("tf_cache", 2.0);
+  EXPECT_EQ(linemap_ros::queueSizeParam(pnh), 1u);
+  EXPECT_DOUBLE_EQ(linemap_ros::tfCacheParam(pnh).toSec(), 10.0);
+  pnh.setParam("queue_size", 0);
+  pnh.setParam("tf_cache", -1.0);
+  EXPECT_EQ(linemap_ros::queueSizeParam(pnh), 1u);
+  EXPECT_DOUBLE_EQ(linemap_ros::tfCacheParam(pnh).toSec(), 10.0);
 }
 }  // namespace
 

@@ -49,11 +49,11 @@ class LineMapEvalNodelet : public nodelet::Nodelet
       return;
     }
     std::tie(map_frame_, base_frame_, odom_frame_) = linemap_ros::frameParams(pnh);
-    tf_ = std::make_shared<tf2_ros::Buffer>(ros::Duration(600.0));
+    tf_ = std::make_shared<tf2_ros::Buffer>(linemap_ros::tfCacheParam(pnh));
     tf_listener_ = std::make_shared<tf2_ros::TransformListener>(*tf_, true, linemap_ros::noDelay());
     quality_pub_ = nh.advertise<line_map_msgs::MapQuality>("map_quality", 1, true);
     grid_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("lookup_table", 1, true);
-    const auto queue = static_cast<std::uint32_t>(std::max(1, pnh.param("queue_size", 1000)));
+    const std::uint32_t queue = linemap_ros::queueSizeParam(pnh);
     // With ~robots, every robot's scans and segments (their frames placed in the map by the fleet's merger);
     // each robot's trajectory is in its own map frame and names its own stamps: the scans stay where tf put
     // them.

@@ -81,12 +81,12 @@ class LineMapMergingNodelet : public nodelet::Nodelet
       throw;
     }
     // A SLAM that lags the scans (a session search) publishes map -> odom for stamps this far back.
-    tf_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(std::max(10.0, pnh.param("tf_cache", 600.0))));
+    tf_ = std::make_unique<tf2_ros::Buffer>(linemap_ros::tfCacheParam(pnh));
     const ros::TransportHints hints = linemap_ros::noDelay();
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_, nh, true, hints);
     map_pub_ = nh.advertise<line_map_msgs::LineMap>("line_map", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("line_map_markers", 1, true);
-    const int queue = std::max(1, pnh.param("queue_size", 1000));
+    const std::uint32_t queue = linemap_ros::queueSizeParam(pnh);
     addRobots(nh, pnh, queue);
     advertiseServices(pnh);
     const double period = mapper_->mapper().params().autosave_period;
@@ -143,7 +143,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
   }
 
   /// The robots of ~robots (or the one robot in the map frame), and with two or more their placement.
-  void addRobots(ros::NodeHandle& nh, ros::NodeHandle& pnh, int queue)
+  void addRobots(ros::NodeHandle& nh, ros::NodeHandle& pnh, std::uint32_t queue)
   {
     const auto names = pnh.param("robots", std::vector<std::string>{});
     if (names.empty()) addRobot(nh, "", queue);
@@ -164,7 +164,7 @@ class LineMapMergingNodelet : public nodelet::Nodelet
     publishPlacements();
   }
 
-  void addRobot(ros::NodeHandle& nh, const std::string& name, int queue)
+  void addRobot(ros::NodeHandle& nh, const std::string& name, std::uint32_t queue)
   {
     auto robot = std::make_unique<Robot>();
     robot->lane = robots_.size();

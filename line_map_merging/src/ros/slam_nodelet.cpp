@@ -74,12 +74,12 @@ class SlamNodelet : public nodelet::Nodelet
       NODELET_ERROR("slam: bad parameter (%s); running on the built-in defaults", e.what());
     }
     slam_ = std::make_unique<LaserSlam>(params);
-    buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(600.0));  // the SLAM may lag the bag
+    buffer_ = std::make_unique<tf2_ros::Buffer>(linemap_ros::tfCacheParam(pnh));  // the SLAM may lag the bag
     listener_ = std::make_unique<tf2_ros::TransformListener>(*buffer_, nh, true, linemap_ros::noDelay());
     path_pub_ = nh.advertise<nav_msgs::Path>("optimized_trajectory", 1, true);
     // A scan waits up to ~tf_timeout for the tf it needs (odom -> base -> laser, or base -> laser
     // without odometry); then it is matched with what tf has (see onScan).
-    const int queue = std::max(1, pnh.param("queue_size", 1000));
+    const std::uint32_t queue = linemap_ros::queueSizeParam(pnh);
     waiting_ = std::make_unique<linemap_ros::TfWaitQueue<sensor_msgs::LaserScan>>(
         *buffer_, use_odometry_ ? odom_frame_ : base_frame_, queue, ros::Duration(tf_timeout), nh,
         [this](const ScanEvent& e) { onScan(e); },
