@@ -185,8 +185,10 @@ bool ResidualLineFinder::seedLine(std::size_t seed, LineNormal& best) const
   const std::vector<ResidualPoint>& points = *points_;
   const ResidualPoint& s = points[seed];
   const double radius = params_.seed_radius;
-  // Unused neighbours of the seed.
+  // Unused neighbours of the seed, their coordinates and bands side by side: each line hypothesis below
+  // reads them all.
   std::vector<std::uint32_t> near;
+  std::vector<double> xs, ys, bands;
   const std::int64_t cx = cellIndex(s.p.x(), radius), cy = cellIndex(s.p.y(), radius);
   for (std::int64_t dx = -1; dx <= 1; ++dx)
     for (std::int64_t dy = -1; dy <= 1; ++dy)
@@ -196,22 +198,17 @@ bool ResidualLineFinder::seedLine(std::size_t seed, LineNormal& best) const
       for (std::uint32_t k = cell_at->second.first; k < cell_at->second.second; ++k)
       {
         const CellPoint& w = cell_points_[k];
-        if (!w.used && (w.p - s.p).squaredNorm() <= radius * radius) near.push_back(cell_order_[k]);
+        if (w.used || !((w.p - s.p).squaredNorm() <= radius * radius)) continue;
+        near.push_back(cell_order_[k]);
+        xs.push_back(w.p.x());
+        ys.push_back(w.p.y());
+        bands.push_back(w.band);
       }
     }
-  if (static_cast<int>(near.size()) < 3) return false;
-
-  // The line through the seed and one neighbour that holds the most neighbours in its band. The neighbours'
-  // coordinates and bands side by side: each hypothesis reads them all, and the points lie scattered.
   const std::size_t n = near.size();
-  std::vector<double> xs(n), ys(n), bands(n);
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    const ResidualPoint& w = points[near[i]];
-    xs[i] = w.p.x();
-    ys[i] = w.p.y();
-    bands[i] = params_.band_sigmas * w.sigma;
-  }
+  if (n < 3) return false;
+
+  // The line through the seed and one neighbour that holds the most neighbours in its band.
   int best_count = 0;
   const std::size_t stride = std::max<std::size_t>(1, n / 48);
   for (std::size_t a = 0; a < n; a += stride)
