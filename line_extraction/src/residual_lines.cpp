@@ -162,8 +162,14 @@ bool ResidualLineFinder::grow(std::size_t seed, ResidualLine& line)
   if (seed_source == nullptr) return false;
   LineNormal fit_line;
   std::vector<Candidate> run;
-  if (!seedLine(seed, fit_line) || !growRun(seed, fit_line, run) || !acceptRun(run, fit_line, line))
-    return false;
+  if (!seedLine(seed, fit_line) || !growRun(seed, fit_line, run)) return false;
+  if (!acceptRun(run, fit_line, line))
+  {
+    // A wall seen only through the gaps between things in front of it: its run bridges the hidden
+    // stretches (its points' beams are sparse there) and fails the fill test as a whole. Where its points
+    // are dense, the piece around the seed is a line of its own.
+    if (!keepSeedPiece(seed, fit_line, run) || !acceptRun(run, fit_line, line)) return false;
+  }
 
   // Accepted: the endpoints with the observers on the left.
   const Vec2 observer = seed_source->laser.translation();
@@ -427,6 +433,60 @@ double ResidualLineFinder::filledShare(const std::vector<Candidate>& run, const 
   }
   return static_cast<double>(std::count(filled.begin(), filled.end(), 1)) /
          static_cast<double>(filled.size());
+}
+
+bool ResidualLineFinder::keepSeedPiece(std::size_t seed, LineNormal& fit_line,
+                                       std::vector<Candidate>& run) const
+{
+  if (!(params_.min_fill > 0.0) || run.empty()) return false;
+  const std::vector<ResidualPoint>& points = *points_;
+  const Vec2 dir(-fit_line.ny, fit_line.nx);
+  const Vec2 foot = Vec2(fit_line.nx, fit_line.ny) * fit_line.radius;
+  double t0 = std::numeric_limits<double>::infinity(), t1 = -t0;
+  std::vector<double> along;  // where the points that fill bins lie along the line
+  double sigma_sum = 0.0;
+  for (const Candidate& c : run)
+  {
+    const double t = dir.dot(points[c.index].p - foot);
+    t0 = std::min(t0, t);
+    t1 = std::max(t1, t);
+    sigma_sum += points[c.index].sigma;
+    if (fit_line.distance(points[c.index].p) <= params_.fill_bin) along.push_back(t);
+  }
+  if (filledShare(run, fit_line, t0, t1) >= params_.min_fill) return false;  // it failed for another reason
+  // A curved wall's points leave the line along the run: its chords are the curvature test's matter.
+  if (curved(run, fit_line, t0, t1, sigma_sum / static_cast<double>(run.size()))) return false;
+  std::sort(along.begin(), along.end());
+  // The piece: between the empty stretches longer than max_gap nearest the seed on either side.
+  const double t_seed = dir.dot(points[seed].p - foot);
+  double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 1; i < along.size(); ++i)
+  {
+    const double a = along[i - 1], b = along[i];
+    if (b - a <= params_.max_gap) continue;
+    if (b <= t_seed)
+      lo = b;
+    else if (a >= t_seed)
+    {
+      hi = a;
+      break;
+    }
+    else
+      return false;  // the seed lies in an empty stretch
+  }
+  if (!std::isfinite(lo) && !std::isfinite(hi)) return false;  // no empty stretch to cut at
+  std::vector<Candidate> piece;
+  LineSums sums;
+  for (const Candidate& c : run)
+  {
+    const double t = dir.dot(points[c.index].p - foot);
+    if (t < lo || t > hi) continue;
+    piece.push_back(c);
+    sums.add(points[c.index].p);
+  }
+  if (static_cast<int>(piece.size()) < params_.min_points || !fitNormal(sums, fit_line)) return false;
+  run.swap(piece);
+  return true;
 }
 
 bool ResidualLineFinder::curved(const std::vector<Candidate>& run, const LineNormal& line, double t0,

@@ -148,6 +148,10 @@ class ResidualLineFinder
   /// points allow; false when the seed is not in the band.
   bool runThrough(std::size_t seed, const std::vector<Candidate>& band, std::vector<Candidate>& run) const;
   bool acceptRun(const std::vector<Candidate>& run, const LineNormal& fit_line, ResidualLine& line) const;
+  /// A run that fails the fill test cut to its piece around the seed between the empty stretches (no point
+  /// within fill_bin of the line over more than max_gap) nearest to it, and `fit_line` refitted to it; false
+  /// when the run passed the fill test, is curved, has no such stretch, or the seed lies in one.
+  bool keepSeedPiece(std::size_t seed, LineNormal& fit_line, std::vector<Candidate>& run) const;
   /// The share of the line's bins [t0, t1] that its points fill (see ResidualLineParams::min_fill).
   double filledShare(const std::vector<Candidate>& run, const LineNormal& line, double t0, double t1) const;
   bool curved(const std::vector<Candidate>& run, const LineNormal& line, double t0, double t1,
