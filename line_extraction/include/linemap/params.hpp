@@ -2,9 +2,12 @@
 // batch tool's `--param key=value`. Keys are "block/name" as in config/*.yaml.
 #pragma once
 
+#include <initializer_list>
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <variant>
 
 namespace linemap
 {
@@ -39,5 +42,45 @@ class ParamSet
   std::map<std::string, std::string> values_;
   std::map<std::string, std::string>* fallbacks_ = nullptr;
 };
+
+/// A key and the field of a parameter struct P it sets; the field's type picks the getter.
+template <class P>
+struct ParamField
+{
+  const char* key;
+  std::variant<double P::*, int P::*, bool P::*> field;
+};
+
+/// Sets each listed field of `p` from its key in turn; an absent key keeps the field's value (its default),
+/// which is also the fallback the getters note.
+template <class P>
+void readFields(const ParamSet& params, std::initializer_list<ParamField<P>> fields, P& p)
+{
+  for (const ParamField<P>& f : fields)
+    std::visit(
+        [&](auto field)
+        {
+          auto& value = p.*field;
+          using Value = std::decay_t<decltype(value)>;
+          if constexpr (std::is_same_v<Value, double>)
+            value = params.getDouble(f.key, value);
+          else if constexpr (std::is_same_v<Value, int>)
+            value = params.getInt(f.key, value);
+          else
+            value = params.getBool(f.key, value);
+        },
+        f.field);
+}
+
+/// A P of its defaults, the listed fields read over them, then validated (P::validate throws
+/// ParameterError): the whole of a fromParams that reads only plain fields.
+template <class P>
+P readValidated(const ParamSet& params, std::initializer_list<ParamField<P>> fields)
+{
+  P p;
+  readFields(params, fields, p);
+  p.validate();
+  return p;
+}
 
 }  // namespace linemap

@@ -15,12 +15,10 @@ constexpr double kMaxCells = 1e8;  // 400 MB of floats: beyond that the resoluti
 
 LookupTableParams LookupTableParams::fromParams(const linemap::ParamSet& params)
 {
-  LookupTableParams p;
-  p.resolution = params.getDouble("eval/resolution", p.resolution);
-  p.sigma = params.getDouble("eval/sigma", p.sigma);
-  p.kernel_radius = params.getDouble("eval/kernel_radius", p.kernel_radius);
-  p.validate();
-  return p;
+  return linemap::readValidated<LookupTableParams>(
+      params, {{"eval/resolution", &LookupTableParams::resolution},
+               {"eval/sigma", &LookupTableParams::sigma},
+               {"eval/kernel_radius", &LookupTableParams::kernel_radius}});
 }
 
 void LookupTableParams::validate() const

@@ -10,12 +10,10 @@ namespace line_map_eval
 {
 QualityParams QualityParams::fromParams(const linemap::ParamSet& params)
 {
-  QualityParams p;
-  p.directed = params.getBool("eval/directed", p.directed);
-  p.direction_bins = params.getInt("eval/direction_bins", p.direction_bins);
-  p.redundancy_penalty = params.getDouble("eval/redundancy_penalty", p.redundancy_penalty);
-  p.validate();
-  return p;
+  return linemap::readValidated<QualityParams>(
+      params, {{"eval/directed", &QualityParams::directed},
+               {"eval/direction_bins", &QualityParams::direction_bins},
+               {"eval/redundancy_penalty", &QualityParams::redundancy_penalty}});
 }
 
 void QualityParams::validate() const

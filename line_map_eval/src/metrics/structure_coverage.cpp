@@ -470,25 +470,23 @@ std::vector<VoxelLine> smearedLines(const std::vector<Voxel>& voxels, const Stru
 
 StructureParams StructureParams::fromParams(const linemap::ParamSet& params)
 {
-  StructureParams p;
-  p.radius = params.getDouble("eval/structure_radius", p.radius);
-  p.min_length = params.getDouble("eval/structure_min_length", p.min_length);
-  p.band_sigmas = params.getDouble("eval/structure_band_sigmas", p.band_sigmas);
-  p.max_rms_sigmas = params.getDouble("eval/structure_max_rms_sigmas", p.max_rms_sigmas);
-  p.min_share = params.getDouble("eval/structure_min_share", p.min_share);
-  p.min_fill = params.getDouble("eval/structure_min_fill", p.min_fill);
-  p.voxel = params.getDouble("eval/structure_voxel", p.voxel);
-  p.length_cell = params.getDouble("eval/structure_length_cell", p.length_cell);
-  p.smear_band = params.getDouble("eval/structure_smear_band", p.smear_band);
-  p.smear_radius = params.getDouble("eval/structure_smear_radius", p.smear_radius);
-  p.smear_max_rms = params.getDouble("eval/structure_smear_max_rms", p.smear_max_rms);
-  p.smear_min_share = params.getDouble("eval/structure_smear_min_share", p.smear_min_share);
-  p.smear_min_length = params.getDouble("eval/structure_smear_min_length", p.smear_min_length);
-  p.smear_min_fill = params.getDouble("eval/structure_smear_min_fill", p.smear_min_fill);
-  p.smear_fill_bin = params.getDouble("eval/structure_smear_fill_bin", p.smear_fill_bin);
-  p.smear_min_points = params.getInt("eval/structure_smear_min_points", p.smear_min_points);
-  p.validate();
-  return p;
+  return linemap::readValidated<StructureParams>(
+      params, {{"eval/structure_radius", &StructureParams::radius},
+               {"eval/structure_min_length", &StructureParams::min_length},
+               {"eval/structure_band_sigmas", &StructureParams::band_sigmas},
+               {"eval/structure_max_rms_sigmas", &StructureParams::max_rms_sigmas},
+               {"eval/structure_min_share", &StructureParams::min_share},
+               {"eval/structure_min_fill", &StructureParams::min_fill},
+               {"eval/structure_voxel", &StructureParams::voxel},
+               {"eval/structure_length_cell", &StructureParams::length_cell},
+               {"eval/structure_smear_band", &StructureParams::smear_band},
+               {"eval/structure_smear_radius", &StructureParams::smear_radius},
+               {"eval/structure_smear_max_rms", &StructureParams::smear_max_rms},
+               {"eval/structure_smear_min_share", &StructureParams::smear_min_share},
+               {"eval/structure_smear_min_length", &StructureParams::smear_min_length},
+               {"eval/structure_smear_min_fill", &StructureParams::smear_min_fill},
+               {"eval/structure_smear_fill_bin", &StructureParams::smear_fill_bin},
+               {"eval/structure_smear_min_points", &StructureParams::smear_min_points}});
 }
 
 void StructureParams::validate() const

@@ -10,9 +10,11 @@ namespace line_map_merging
 FusionParams FusionParams::fromParams(const linemap::ParamSet& params)
 {
   FusionParams p;
-  p.max_angle = params.getDouble("fusion/max_angle", p.max_angle);
-  p.max_distance = params.getDouble("fusion/max_distance", p.max_distance);
-  p.min_overlap = params.getDouble("fusion/min_overlap", p.min_overlap);
+  linemap::readFields(params,
+                      {{"fusion/max_angle", &FusionParams::max_angle},
+                       {"fusion/max_distance", &FusionParams::max_distance},
+                       {"fusion/min_overlap", &FusionParams::min_overlap}},
+                      p);
   const std::string weighting = params.getString("fusion/weighting", "length");
   if (weighting == "length")
     p.weighting = FusionWeighting::length;

@@ -122,14 +122,12 @@ void snapEndpoints(std::vector<MapSegment>& map, double distance)
 
 Li2023Params Li2023Params::fromParams(const linemap::ParamSet& params)
 {
-  Li2023Params p;
-  p.delta = params.getDouble("li2023/delta", p.delta);
-  p.gamma = params.getDouble("li2023/gamma", p.gamma);
-  p.eta = params.getDouble("li2023/eta", p.eta);
-  p.min_count = params.getInt("li2023/min_count", p.min_count);
-  p.snap_distance = params.getDouble("li2023/snap_distance", p.snap_distance);
-  p.validate();
-  return p;
+  return linemap::readValidated<Li2023Params>(params,
+                                              {{"li2023/delta", &Li2023Params::delta},
+                                               {"li2023/gamma", &Li2023Params::gamma},
+                                               {"li2023/eta", &Li2023Params::eta},
+                                               {"li2023/min_count", &Li2023Params::min_count},
+                                               {"li2023/snap_distance", &Li2023Params::snap_distance}});
 }
 
 void Li2023Params::validate() const

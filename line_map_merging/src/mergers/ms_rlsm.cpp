@@ -49,12 +49,10 @@ struct UnionFind
 
 MsParams MsParams::fromParams(const linemap::ParamSet& params)
 {
-  MsParams p;
-  p.angular_bandwidth = params.getDouble("ms/angular_bandwidth", p.angular_bandwidth);
-  p.lateral_separation = params.getDouble("ms/lateral_separation", p.lateral_separation);
-  p.longitudinal_overlap = params.getDouble("ms/longitudinal_overlap", p.longitudinal_overlap);
-  p.validate();
-  return p;
+  return linemap::readValidated<MsParams>(params,
+                                          {{"ms/angular_bandwidth", &MsParams::angular_bandwidth},
+                                           {"ms/lateral_separation", &MsParams::lateral_separation},
+                                           {"ms/longitudinal_overlap", &MsParams::longitudinal_overlap}});
 }
 
 void MsParams::validate() const

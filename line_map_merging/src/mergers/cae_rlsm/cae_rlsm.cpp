@@ -15,19 +15,21 @@ CaeParams CaeParams::fromParams(const linemap::ParamSet& params)
   if (p.threads < 0)
     throw linemap::ParameterError("parameter 'threads': " + std::to_string(p.threads) +
                                   " must be >= 0 (0 = all cores)");
-  p.consistent_adjustment = params.getBool("consistent_adjustment", p.consistent_adjustment);
-  p.spatial_index = params.getBool("spatial_index", p.spatial_index);
-  p.map_merge = params.getBool("map_merge", p.map_merge);
-  p.absorb_contained = params.getBool("absorb_contained", p.absorb_contained);
-  p.regroup_on_adjust = params.getBool("regroup_on_adjust", p.regroup_on_adjust);
-  p.incremental_regroup = params.getBool("incremental_regroup", p.incremental_regroup);
-  p.resolve_crossings = params.getBool("resolve_crossings", p.resolve_crossings);
-  p.crossing_overhang = params.getDouble("crossing_overhang", p.crossing_overhang);
-  p.crossing_chain_angle = params.getDouble("crossing_chain_angle", p.crossing_chain_angle);
-  p.single_view_min_length = params.getDouble("single_view_min_length", p.single_view_min_length);
-  p.see_through = params.getBool("see_through", p.see_through);
-  p.see_through_margin = params.getDouble("see_through_margin", p.see_through_margin);
-  p.see_through_views = params.getInt("see_through_views", p.see_through_views);
+  linemap::readFields(params,
+                      {{"consistent_adjustment", &CaeParams::consistent_adjustment},
+                       {"spatial_index", &CaeParams::spatial_index},
+                       {"map_merge", &CaeParams::map_merge},
+                       {"absorb_contained", &CaeParams::absorb_contained},
+                       {"regroup_on_adjust", &CaeParams::regroup_on_adjust},
+                       {"incremental_regroup", &CaeParams::incremental_regroup},
+                       {"resolve_crossings", &CaeParams::resolve_crossings},
+                       {"crossing_overhang", &CaeParams::crossing_overhang},
+                       {"crossing_chain_angle", &CaeParams::crossing_chain_angle},
+                       {"single_view_min_length", &CaeParams::single_view_min_length},
+                       {"see_through", &CaeParams::see_through},
+                       {"see_through_margin", &CaeParams::see_through_margin},
+                       {"see_through_views", &CaeParams::see_through_views}},
+                      p);
   p.validate();
   return p;
 }
