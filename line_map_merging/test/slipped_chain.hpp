@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "graph_edges.hpp"
 #include "line_map_merging/slam/pose_graph.hpp"
 #include "linemap/geometry.hpp"
 
@@ -32,13 +33,8 @@ inline PoseGraph slippedChain(std::size_t slipped_node, const Pose2& slip, doubl
   g.addNode(truth[0]);
   for (std::size_t i = 1; i < truth.size(); ++i)
   {
-    PoseGraphEdge e;
-    e.from = i - 1;
-    e.to = i;
-    e.measurement = truth[i - 1].inverse() * truth[i];
+    PoseGraphEdge e = graph_edges::edge(i - 1, i, truth[i - 1].inverse() * truth[i], sigma_xy, sigma_theta);
     if (i == slipped_node) e.measurement = e.measurement * slip;
-    e.sigma_xy = sigma_xy;
-    e.sigma_theta = sigma_theta;
     g.addNode(g.node(i - 1) * e.measurement);
     g.addEdge(e);
   }

@@ -8,6 +8,7 @@
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 
+#include "graph_edges.hpp"
 #include "line_map_merging/slam/closure_consensus.hpp"
 #include "line_map_merging/slam/relative_uncertainty.hpp"
 #include "slipped_chain.hpp"
@@ -62,17 +63,7 @@ Eigen::Matrix3d someCovariance(double scale, double tilt)
 
 constexpr double kSigmaXy = 0.02, kSigmaTheta = 0.002;
 
-PoseGraphEdge edge(std::size_t from, std::size_t to, const Pose2& z, double sxy, double sth, bool loop)
-{
-  PoseGraphEdge e;
-  e.from = from;
-  e.to = to;
-  e.measurement = z;
-  e.sigma_xy = sxy;
-  e.sigma_theta = sth;
-  e.loop = loop;
-  return e;
-}
+using graph_edges::edge;
 
 /// The chain of the out-and-back drive, its edge into node 20 slipped by `slip`.
 PoseGraph slippedChain(const Pose2& slip)

@@ -4,6 +4,7 @@
 // match is refused before the graph is looked at.
 #include <gtest/gtest.h>
 
+#include "graph_edges.hpp"
 #include "line_map_merging/slam/closure_gate.hpp"
 #include "slipped_chain.hpp"
 
@@ -14,7 +15,6 @@ using line_map_merging::LaserSlamParams;
 using line_map_merging::LoopMatch;
 using line_map_merging::MatchResult;
 using line_map_merging::PoseGraph;
-using line_map_merging::PoseGraphEdge;
 using line_map_merging::SlamCounters;
 using linemap::Pose2;
 
@@ -30,13 +30,7 @@ PoseGraph chain(const LaserSlamParams& p)
   for (std::size_t i = 1; i <= kLast; ++i)
   {
     g.addNode(Pose2(static_cast<double>(i), 0.0, 0.0));
-    PoseGraphEdge e;
-    e.from = i - 1;
-    e.to = i;
-    e.measurement = Pose2(1.0, 0.0, 0.0);
-    e.sigma_xy = p.edge_sigma_xy;
-    e.sigma_theta = p.edge_sigma_theta;
-    g.addEdge(e);
+    g.addEdge(graph_edges::edge(i - 1, i, Pose2(1.0, 0.0, 0.0), p.edge_sigma_xy, p.edge_sigma_theta));
   }
   return g;
 }

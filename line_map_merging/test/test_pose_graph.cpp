@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "graph_edges.hpp"
 #include "line_map_merging/slam/pose_graph.hpp"
 
 using line_map_merging::PoseGraph;
@@ -28,14 +29,7 @@ std::vector<Pose2> ring(int n, double r)
 PoseGraphEdge edge(std::size_t i, std::size_t j, const Pose2& z, bool loop, double sxy = 0.02,
                    double sth = 0.005)
 {
-  PoseGraphEdge e;
-  e.from = i;
-  e.to = j;
-  e.measurement = z;
-  e.loop = loop;
-  e.sigma_xy = sxy;
-  e.sigma_theta = sth;
-  return e;
+  return graph_edges::edge(i, j, z, sxy, sth, loop);
 }
 
 /// A ring graph: chain edges with a heading bias per edge, true loop edges every `loop_every` nodes

@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "graph_edges.hpp"
 #include "line_map_merging/slam/relative_uncertainty.hpp"
 
 using line_map_merging::edgeCovariance;
@@ -26,13 +27,8 @@ PoseGraph chain(int n, const Pose2& start)
   for (int i = 1; i <= n; ++i)
   {
     g.addNode(start * Pose2(kStep * i, 0.0, 0.0));
-    PoseGraphEdge e;
-    e.from = static_cast<std::size_t>(i - 1);
-    e.to = static_cast<std::size_t>(i);
-    e.measurement = Pose2(kStep, 0.0, 0.0);
-    e.sigma_xy = kSigmaXy;
-    e.sigma_theta = kSigmaTheta;
-    g.addEdge(e);
+    g.addEdge(graph_edges::edge(static_cast<std::size_t>(i - 1), static_cast<std::size_t>(i),
+                                Pose2(kStep, 0.0, 0.0), kSigmaXy, kSigmaTheta));
   }
   return g;
 }
