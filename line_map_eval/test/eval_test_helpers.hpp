@@ -1,4 +1,5 @@
-// What several line_map_eval tests share: a scratch directory and a check on error messages.
+// What several line_map_eval tests share: a scratch directory, a check on error messages and a lookup table's
+// parameters.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "line_map_eval/datasets/recording.hpp"
+#include "line_map_eval/metrics/lookup_table.hpp"
 
 namespace line_map_eval::test_helpers
 {
@@ -44,6 +46,16 @@ class TempDir
  private:
   std::string path_;
 };
+
+/// A lookup table's parameters with the kernel cut at 3 sigma, whatever the shipped defaults become.
+inline LookupTableParams lookupTableParams(double resolution, double sigma)
+{
+  LookupTableParams p;
+  p.resolution = resolution;
+  p.sigma = sigma;
+  p.kernel_radius = 3.0;
+  return p;
+}
 
 /// Expects `message` to contain every one of `parts`.
 inline void expectMentions(const std::string& message, std::initializer_list<const char*> parts)

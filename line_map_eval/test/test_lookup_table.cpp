@@ -4,29 +4,19 @@
 #include <cmath>
 #include <limits>
 
+#include "eval_test_helpers.hpp"
 #include "line_map_eval/metrics/lookup_table.hpp"
 
 using line_map_eval::Cell;
 using line_map_eval::LookupTable;
 using line_map_eval::LookupTableParams;
+using line_map_eval::test_helpers::lookupTableParams;
 using linemap::Vec2;
-
-namespace
-{
-LookupTableParams params(double res, double sigma)
-{
-  LookupTableParams p;
-  p.resolution = res;
-  p.sigma = sigma;
-  p.kernel_radius = 3.0;
-  return p;
-}
-}  // namespace
 
 TEST(LookupTable, IsolatedPointPeakSymmetryAndGaussianValues)
 {
   // (1.025, 2.025) is the centre of global cell (20, 40) at 5 cm.
-  const LookupTable t = LookupTable::build({Vec2(1.025, 2.025)}, params(0.05, 0.05));
+  const LookupTable t = LookupTable::build({Vec2(1.025, 2.025)}, lookupTableParams(0.05, 0.05));
   const Cell c{20, 40};
   EXPECT_EQ(t.cellOf(Vec2(1.025, 2.025)), c);
   EXPECT_FLOAT_EQ(t.at(c), 1.0f);
@@ -57,7 +47,7 @@ TEST(LookupTable, IsolatedPointPeakSymmetryAndGaussianValues)
 TEST(LookupTable, WiderKernelFollowsExpOfDistance)
 {
   // sigma = 2 cells: cell k away holds exp(-(0.05 k)^2 / (2 * 0.1^2)) = exp(-k^2 / 8).
-  const LookupTable t = LookupTable::build({Vec2(-0.475, 0.325)}, params(0.05, 0.1));
+  const LookupTable t = LookupTable::build({Vec2(-0.475, 0.325)}, lookupTableParams(0.05, 0.1));
   const Cell c = t.cellOf(Vec2(-0.475, 0.325));
   EXPECT_EQ(c, (Cell{-10, 6}));
   EXPECT_FLOAT_EQ(t.at(c), 1.0f);
@@ -74,7 +64,7 @@ TEST(LookupTable, OverlappingKernelsTakeTheMaximumNotTheSum)
     pts.emplace_back(0.025, 0.025);
     pts.emplace_back(0.125, 0.025);
   }
-  const LookupTable t = LookupTable::build(pts, params(0.05, 0.05));
+  const LookupTable t = LookupTable::build(pts, lookupTableParams(0.05, 0.05));
   EXPECT_EQ(t.occupiedCells(), 2u);
   EXPECT_FLOAT_EQ(t.at({0, 0}), 1.0f);
   EXPECT_FLOAT_EQ(t.at({2, 0}), 1.0f);
@@ -85,7 +75,7 @@ TEST(LookupTable, OverlappingKernelsTakeTheMaximumNotTheSum)
 
 TEST(LookupTable, WindowCoversTheKernelAroundEveryPoint)
 {
-  const LookupTable t = LookupTable::build({Vec2(-3.0, 7.0), Vec2(12.0, -4.0)}, params(0.1, 0.1));
+  const LookupTable t = LookupTable::build({Vec2(-3.0, 7.0), Vec2(12.0, -4.0)}, lookupTableParams(0.1, 0.1));
   for (const Vec2& p : {Vec2(-3.0, 7.0), Vec2(12.0, -4.0)})
   {
     const Cell c = t.cellOf(p);
@@ -100,14 +90,15 @@ TEST(LookupTable, WindowCoversTheKernelAroundEveryPoint)
 
 TEST(LookupTable, EmptyInputAndBadInput)
 {
-  const LookupTable empty = LookupTable::build({}, params(0.05, 0.05));
+  const LookupTable empty = LookupTable::build({}, lookupTableParams(0.05, 0.05));
   EXPECT_TRUE(empty.empty());
   EXPECT_EQ(empty.valueAt(Vec2(0.0, 0.0)), 0.0f);
-  EXPECT_THROW(LookupTable::build({Vec2(0.0, std::numeric_limits<double>::quiet_NaN())}, params(0.05, 0.05)),
+  EXPECT_THROW(LookupTable::build({Vec2(0.0, std::numeric_limits<double>::quiet_NaN())},
+                                  lookupTableParams(0.05, 0.05)),
                std::invalid_argument);
   try
   {
-    LookupTable::build({Vec2(0, 0)}, params(-0.05, 0.05));
+    LookupTable::build({Vec2(0, 0)}, lookupTableParams(-0.05, 0.05));
     FAIL() << "negative resolution accepted";
   }
   catch (const linemap::ParameterError& e)
@@ -115,7 +106,7 @@ TEST(LookupTable, EmptyInputAndBadInput)
     EXPECT_NE(std::string(e.what()).find("eval/resolution"), std::string::npos) << e.what();
   }
   // 10 km square at 1 mm: far beyond 1e8 cells.
-  EXPECT_THROW(LookupTable::build({Vec2(0, 0), Vec2(1e4, 1e4)}, params(0.001, 0.05)),
+  EXPECT_THROW(LookupTable::build({Vec2(0, 0), Vec2(1e4, 1e4)}, lookupTableParams(0.001, 0.05)),
                linemap::ParameterError);
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <random>
 
+#include "eval_test_helpers.hpp"
 #include "line_map_eval/metrics/map_quality.hpp"
 
 using line_map_eval::computeMapQuality;
@@ -17,13 +18,10 @@ using linemap::Vec2;
 
 namespace
 {
+/// The table every case here samples: 5 cm cells, 5 cm sigma.
 LookupTableParams tableParams()
 {
-  LookupTableParams p;
-  p.resolution = 0.05;
-  p.sigma = 0.05;
-  p.kernel_radius = 3.0;
-  return p;
+  return line_map_eval::test_helpers::lookupTableParams(0.05, 0.05);
 }
 
 QualityParams qualityParams(double w, bool directed = true)
