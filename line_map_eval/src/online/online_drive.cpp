@@ -58,14 +58,7 @@ Pose2 sampleAt(const std::vector<std::pair<double, Pose2>>& samples, double t)
 std::shared_ptr<const line_map_merging::KeyframeScan> keyframeScan(const Recording& rec, std::size_t index)
 {
   const RecordedScan& scan = rec.scans.at(index);
-  const ScanGeometry& g = rec.geometryOf(scan);
-  auto beams = std::make_shared<line_map_merging::KeyframeScan>();
-  beams->angle_min = g.angle_min;
-  beams->angle_increment = g.angle_increment;
-  beams->range_min = g.range_min;
-  beams->range_max = g.range_max;
-  beams->ranges = scan.ranges;
-  return beams;
+  return line_map_merging::makeKeyframeScan(rec.geometryOf(scan), scan.ranges);
 }
 
 line_map_merging::StampedScan stampedScan(const Recording& rec, const BackEndSchedule& schedule,

@@ -44,21 +44,15 @@ inline std::optional<std::vector<std::pair<double, linemap::Pose2>>> toNodes(con
   return nodes;
 }
 
-/// A segment set with its poses from tf at its stamp: the laser in `map` (nothing without a valid
-/// transform), in `odom` (unless empty or `map`) and base -> laser (identity when tf has none or
-/// `base` is empty; `mount_found` says which).
 /// A scan's beams for the map-level lines.
 inline std::shared_ptr<const KeyframeScan> toKeyframeScan(const sensor_msgs::LaserScan& msg)
 {
-  auto scan = std::make_shared<KeyframeScan>();
-  scan->angle_min = msg.angle_min;
-  scan->angle_increment = msg.angle_increment;
-  scan->range_min = msg.range_min;
-  scan->range_max = msg.range_max;
-  scan->ranges = msg.ranges;
-  return scan;
+  return makeKeyframeScan(msg, msg.ranges);
 }
 
+/// A segment set with its poses from tf at its stamp: the laser in `map` (nothing without a valid
+/// transform), in `odom` (unless empty or `map`) and base -> laser (identity when tf has none or
+/// `base` is empty; `mount_found` says which).
 inline std::optional<StampedScan> toStampedScan(const tf2_ros::Buffer& tf,
                                                 const line_map_msgs::LineSegmentArray& msg,
                                                 const std::string& frame, const std::string& map,

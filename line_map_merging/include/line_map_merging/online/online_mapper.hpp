@@ -68,6 +68,21 @@ struct StampedScan
   std::shared_ptr<const KeyframeScan> beams;
 };
 
+/// The beams of a scan for StampedScan::beams: `geometry` has a LaserScan message's angle_min,
+/// angle_increment, range_min and range_max (the message itself, or a recording's scan geometry).
+template <class Geometry>
+std::shared_ptr<const KeyframeScan> makeKeyframeScan(const Geometry& geometry,
+                                                     const std::vector<float>& ranges)
+{
+  auto scan = std::make_shared<KeyframeScan>();
+  scan->angle_min = geometry.angle_min;
+  scan->angle_increment = geometry.angle_increment;
+  scan->range_min = geometry.range_min;
+  scan->range_max = geometry.range_max;
+  scan->ranges = ranges;
+  return scan;
+}
+
 /// A trajectory node: base pose in the map frame at a stamp.
 using StampedPose = std::pair<double, linemap::Pose2>;
 
