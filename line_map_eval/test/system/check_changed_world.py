@@ -78,11 +78,7 @@ class CheckChangedWorld(unittest.TestCase):
         second = os.path.join(work, "second.bag")
         sensor_bag(later, second)
         session = os.path.join(work, "office.session")
-        rc, log = lt.run(["rosrun", "line_map_eval", "linemap_batch", first, "--slam", "--merger", "cae",
-                          "--no-figures", "--no-progress", "--out", os.path.join(work, "batch"),
-                          "--save-session", session], 600)
-        self.assertEqual(rc, 0, log)
-        saved, saved_map_keyframes = lt.session_keyframes(session)
+        saved, saved_map_keyframes = lt.save_batch_session(self, first, work, session)
         true_pose = {}
         for path in lt.bag_trajectories(first)[-1:]:
             for p in path.poses:

@@ -74,11 +74,7 @@ class CheckSessionContinue(unittest.TestCase):
         work = tempfile.mkdtemp(prefix=name + "_")
         first, second = split_log(raw, work)
         session = os.path.join(work, "first.session")
-        rc, log = lt.run(["rosrun", "line_map_eval", "linemap_batch", first, "--slam", "--merger", "cae",
-                          "--no-figures", "--no-progress", "--out", os.path.join(work, "batch"),
-                          "--save-session", session], 600)
-        self.assertEqual(rc, 0, log)
-        saved, saved_map_keyframes = lt.session_keyframes(session)
+        saved, saved_map_keyframes = lt.save_batch_session(self, first, work, session)
         bag = os.path.join(work, "second.bag")
         rc, log = lt.run(["rosrun", "line_map_eval", "carmen_to_bag", second, bag, "--no-progress"], 300)
         self.assertEqual(rc, 0, log)

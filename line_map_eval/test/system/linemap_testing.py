@@ -675,6 +675,16 @@ def session_keyframes(session):
     return [(t, p[0], p[1]) for t, p in zip(stamps, poses)], map_keyframes
 
 
+def save_batch_session(test, recording, work, session):
+    """Maps RECORDING offline (linemap_batch --slam --merger cae, its output in WORK/batch) and saves the session to
+    SESSION; fails TEST unless the batch exits 0. Returns session_keyframes(SESSION)."""
+    rc, log = run(["rosrun", "line_map_eval", "linemap_batch", recording, "--slam", "--merger", "cae",
+                   "--no-figures", "--no-progress", "--out", os.path.join(work, "batch"),
+                   "--save-session", session], 600)
+    test.assertEqual(rc, 0, log)
+    return session_keyframes(session)
+
+
 # The merger's wait for a segment set's transform in the session pipelines [s]: it waits as long as the SLAM
 # takes to pose the scan. The SLAM searches the saved map scan by scan, then catches up with the scans queued
 # meanwhile. The merger's queue waits while the SLAM's tf moves on, but drops a set once it has not for
