@@ -113,7 +113,7 @@ TEST(ShippedConfig, SlamDefaultsAreTheConfigFiles)
   EXPECT_SAME(loop_agreement_theta);
   EXPECT_SAME(loop_pending_keyframes);
   EXPECT_SAME(loop_consensus);
-  EXPECT_SAME(loop_consensus_keyframes);
+  EXPECT_SAME(loop_consensus_waiting);
   EXPECT_SAME(loop_consistent_xy);
   EXPECT_SAME(loop_consistent_theta);
 #undef EXPECT_SAME

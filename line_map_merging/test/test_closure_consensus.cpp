@@ -153,3 +153,28 @@ TEST(ClosureConsensus, ADirectionTheClosureLeftOpenIsNoDisagreement)
   // The same slide in a closure that fixes x is a disagreement.
   EXPECT_GT(pairwiseDisagreement(g, trueClosure(5, 74), trueClosure(10, 70, Pose2(0.4, 0.0, 0.0))), gate());
 }
+
+// Over a long, loose stretch of graph any two closures agree: the cycle's covariance swallows both their
+// corrections. Such agreement is no evidence, and the group leaves it out; over short, certain stretches
+// the same test keeps closures that correct a slip together (AFalseClosureStaysOutOfTheGroup).
+TEST(ClosureConsensus, AgreementOverALooseStretchIsNoVote)
+{
+  // No slip, but a chain ten times less certain: 25 edges of 0.2 m and 0.02 rad on either side of the cycle.
+  const PoseGraph g = slipped_chain::slippedChain(20, Pose2(), 10.0 * kSigmaXy, 10.0 * kSigmaTheta);
+  // Two false closures, 0.3 m off in opposite directions along the corridor: they contradict each other.
+  const PoseGraphEdge a = trueClosure(5, 74, Pose2(0.3, 0.0, 0.0));
+  const PoseGraphEdge b = trueClosure(30, 49, Pose2(-0.3, 0.0, 0.0));
+  const auto check = line_map_merging::checkPair(g, a, b);
+  EXPECT_LT(check.disagreement, gate());       // the cycle alone would let them agree
+  EXPECT_LT(check.larger_correction, gate());  // but could not tell either correction from none
+  // Three that agree pairwise by the cycle alone; none of the pairs is evidence.
+  const PoseGraphEdge c = trueClosure(12, 67, Pose2(0.3, 0.0, 0.0));
+  EXPECT_LT(pairwiseDisagreement(g, b, c), gate());
+  EXPECT_LT(pairwiseDisagreement(g, a, c), gate());
+  const std::vector<PoseGraphEdge> closures{a, b, c};
+  EXPECT_EQ(consistentGroup(g, closures, 1, gate()).size(), 1u);
+  // True closures across a slip of the certain chain: each one's correction is told from none.
+  const PoseGraph slipped = slippedChain(Pose2(0.1, 0.28, 5.0 * linemap::kPi / 180.0));
+  EXPECT_GT(line_map_merging::checkPair(slipped, trueClosure(5, 74), trueClosure(8, 71)).larger_correction,
+            gate());
+}

@@ -160,7 +160,6 @@ LoopMatch trueClosure(std::size_t j, std::size_t k, const LaserSlamParams& p, co
 TEST(ClosureGate, IndependentClosuresAgreeingWithEachOtherOutvoteTheChain)
 {
   LaserSlamParams p;
-  p.loop_consensus_keyframes = 30;
   const auto truth = slipped_chain::outAndBack();
   for (const std::size_t consensus : {std::size_t{0}, std::size_t{3}})
   {

@@ -307,6 +307,12 @@ TEST(LaserSlam, ParametersAreCheckedByName)
   EXPECT_DOUBLE_EQ(LaserSlamParams::fromParams(p).loop_min_score, 0.7);
   p.set("loop/min_score_ratio", "-0.1");
   expectRefusedNaming(p, "loop/min_score_ratio");
+  p = linemap::ParamSet();
+  p.set("loop/consensus_keyframes", "25");  // the former key: not silently ignored
+  expectRefusedNaming(p, "loop/consensus_waiting");
+  p = linemap::ParamSet();
+  p.set("loop/consensus_waiting", "1");  // a consensus needs two waiting at least
+  expectRefusedNaming(p, "loop/consensus_waiting");
 }
 
 TEST(LaserSlam, TheAmbiguityTestIsAMarginBelowTheBest)

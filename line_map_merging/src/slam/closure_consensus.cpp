@@ -12,6 +12,8 @@
 
 namespace line_map_merging
 {
+using linemap::Pose2;
+
 namespace
 {
 Eigen::Matrix2d rotation(double theta)
@@ -55,27 +57,49 @@ UncertainPose inverse(const UncertainPose& a)
   return {a.pose.inverse(), j * a.covariance * j.transpose()};
 }
 
-double pairwiseDisagreement(const PoseGraph& graph, const PoseGraphEdge& a, const PoseGraphEdge& b)
+PairwiseCheck checkPair(const PoseGraph& graph, const PoseGraphEdge& a, const PoseGraphEdge& b)
 {
+  const double infinite = std::numeric_limits<double>::infinity();
   const auto newer = graphRelative(graph, a.to, b.to);
   const auto older = graphRelative(graph, b.from, a.from);
-  if (!newer || !older) return std::numeric_limits<double>::infinity();
+  if (!newer || !older) return {infinite, 0.0};
   const UncertainPose closure_a{a.measurement, edgeCovariance(a)};
   const UncertainPose closure_b{b.measurement, edgeCovariance(b)};
   const UncertainPose cycle = compose(compose(compose(closure_a, *newer), inverse(closure_b)), *older);
-  const Eigen::Vector3d r(cycle.pose.x, cycle.pose.y, linemap::normalizeAngle(cycle.pose.theta));
-  return r.dot(cycle.covariance.ldlt().solve(r));
+  const auto solver = cycle.covariance.ldlt();
+  const auto chi2 = [&](const Pose2& p)
+  {
+    const Eigen::Vector3d r(p.x, p.y, linemap::normalizeAngle(p.theta));
+    return r.dot(solver.solve(r));
+  };
+  // A closure's correction of the graph: the cycle with the other closure replaced by the graph's own
+  // estimate of its relative pose (in the same frame, so in the same metric).
+  const auto as_estimated = [&](const PoseGraphEdge& e)
+  { return graph.node(e.from).inverse() * graph.node(e.to); };
+  const Pose2 correction_a = a.measurement * newer->pose * as_estimated(b).inverse() * older->pose;
+  const Pose2 correction_b = as_estimated(a) * newer->pose * b.measurement.inverse() * older->pose;
+  return {chi2(cycle.pose), std::max(chi2(correction_a), chi2(correction_b))};
+}
+
+double pairwiseDisagreement(const PoseGraph& graph, const PoseGraphEdge& a, const PoseGraphEdge& b)
+{
+  return checkPair(graph, a, b).disagreement;
 }
 
 std::vector<std::size_t> consistentGroup(const PoseGraph& graph, const std::vector<PoseGraphEdge>& closures,
                                          std::size_t newest, double gate)
 {
   const std::size_t n = closures.size();
-  // Pairwise disagreements, computed once each.
+  // Pairwise disagreements, computed once each; a pair whose cycle could not have told the larger of their
+  // corrections from none does not agree (infinite): over a long, loose stretch of graph anything does.
   std::vector<std::vector<double>> d(n, std::vector<double>(n, 0.0));
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = i + 1; j < n; ++j)
-      d[i][j] = d[j][i] = pairwiseDisagreement(graph, closures[i], closures[j]);
+    {
+      const PairwiseCheck check = checkPair(graph, closures[i], closures[j]);
+      d[i][j] = d[j][i] =
+          check.larger_correction > gate ? check.disagreement : std::numeric_limits<double>::infinity();
+    }
   std::vector<std::pair<double, std::size_t>> order;
   for (std::size_t i = 0; i < n; ++i)
     if (i != newest && d[newest][i] <= gate) order.push_back({d[newest][i], i});

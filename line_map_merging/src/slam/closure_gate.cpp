@@ -103,12 +103,11 @@ ClosureVerdict ClosureGate::outvoteChain(const LoopMatch& match, std::size_t att
                                          SlamCounters& counters)
 {
   if (params_.loop_consensus == 0) return {};
-  const std::size_t k = match.to;
-  refused_.erase(std::remove_if(refused_.begin(), refused_.end(),
-                                [&](const RefusedClosure& r)
-                                { return r.edge.to + params_.loop_consensus_keyframes < k; }),
-                 refused_.end());
   refused_.push_back({match.edge, attempt, match.shape.degenerate});
+  if (refused_.size() > params_.loop_consensus_waiting)
+    refused_.erase(
+        refused_.begin(),
+        refused_.begin() + static_cast<std::ptrdiff_t>(refused_.size() - params_.loop_consensus_waiting));
   std::vector<PoseGraphEdge> edges;
   for (const auto& r : refused_) edges.push_back(r.edge);
   const std::vector<std::size_t> agreeing =

@@ -99,7 +99,11 @@ void readLoop(const linemap::ParamSet& p, LaserSlamParams& s)
   s.loop_agreement_xy = p.getDouble("loop/agreement_xy", s.loop_agreement_xy);
   s.loop_agreement_theta = p.getDouble("loop/agreement_theta", s.loop_agreement_theta);
   s.loop_consensus = countParam(p, "loop/consensus", s.loop_consensus, 0);
-  s.loop_consensus_keyframes = countParam(p, "loop/consensus_keyframes", s.loop_consensus_keyframes, 1);
+  if (p.has("loop/consensus_keyframes"))
+    throw linemap::ParameterError(
+        "parameter 'loop/consensus_keyframes' is now 'loop/consensus_waiting' (a count "
+        "of refused closures, not of keyframes)");
+  s.loop_consensus_waiting = countParam(p, "loop/consensus_waiting", s.loop_consensus_waiting, 2);
   s.loop_pending_keyframes = countParam(p, "loop/pending_keyframes", s.loop_pending_keyframes, 1);
   s.loop_ambiguity_distance = p.getDouble("loop/ambiguity_distance", s.loop_ambiguity_distance);
   if (p.has("loop/ambiguity_ratio"))

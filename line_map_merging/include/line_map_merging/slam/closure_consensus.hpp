@@ -31,13 +31,25 @@ UncertainPose compose(const UncertainPose& a, const UncertainPose& b);
 /// The same relative pose the other way round.
 UncertainPose inverse(const UncertainPose& a);
 
+/// Two closures judged together: the chi-square (3 degrees of freedom) of their cycle (see
+/// pairwiseDisagreement), and of the larger of their corrections of the graph (a closure's measurement
+/// against the graph's estimate) in the cycle's metric: how well the cycle could tell that correction
+/// from none. Their agreement is evidence only when this exceeds the gate.
+struct PairwiseCheck
+{
+  double disagreement = 0.0;
+  double larger_correction = 0.0;
+};
+PairwiseCheck checkPair(const PoseGraph& graph, const PoseGraphEdge& a, const PoseGraphEdge& b);
+
 /// Chi-square (3 degrees of freedom) of the cycle a, graph a.to -> b.to, b backwards, graph b.from ->
 /// a.from, in the metric of its propagated covariance (the closures' own plus relativeCovariance of
 /// the two graph stretches). Infinite when the graph joins neither pair of ends.
 double pairwiseDisagreement(const PoseGraph& graph, const PoseGraphEdge& a, const PoseGraphEdge& b);
 
 /// The largest set of `closures` holding `newest` whose members are pairwise within `gate`
-/// (pairwiseDisagreement), grown greedily from the closures most consistent with `newest`; indices
+/// (pairwiseDisagreement) by a cycle tight enough to tell their corrections from none (checkPair),
+/// grown greedily from the closures most consistent with `newest`; indices
 /// into `closures`, `newest` first.
 std::vector<std::size_t> consistentGroup(const PoseGraph& graph, const std::vector<PoseGraphEdge>& closures,
                                          std::size_t newest, double gate);

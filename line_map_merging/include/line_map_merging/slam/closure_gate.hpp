@@ -81,7 +81,7 @@ class ClosureGate
     std::size_t attempt;  ///< its entry in attempts_
   };
   std::optional<PendingClosure> pending_;
-  /// Closures refused as inconsistent within the last loop_consensus_keyframes keyframes.
+  /// The newest loop_consensus_waiting closures refused as inconsistent, oldest first.
   struct RefusedClosure
   {
     PoseGraphEdge edge;

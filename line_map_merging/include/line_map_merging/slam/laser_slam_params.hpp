@@ -123,12 +123,13 @@ struct LaserSlamParams
   double loop_agreement_xy = 0.1;         ///< [m]
   double loop_agreement_theta = 0.03;     ///< [rad]
   std::size_t loop_pending_keyframes = 10;
-  /// A closure refused as inconsistent with the chain waits this many keyframes for others: when
-  /// loop_consensus of the waiting ones, from as many different keyframes, agree with each other
-  /// (closure_consensus.hpp, within the consistency gate), they outvote the chain and go in together: a
-  /// front-end slip the chain cannot see is repaired. 0: the chain always wins.
+  /// A closure refused as inconsistent with the chain waits for others: when loop_consensus of the
+  /// waiting ones, from as many different keyframes, agree with each other (closure_consensus.hpp: within
+  /// the consistency gate, by cycles tight enough to tell their corrections from none), they outvote the
+  /// chain and go in together: a front-end slip the chain cannot see is repaired. 0: the chain always wins.
   std::size_t loop_consensus = 3;
-  std::size_t loop_consensus_keyframes = 25;
+  /// The newest this many refused closures wait (the pairwise tests cost their square per refusal).
+  std::size_t loop_consensus_waiting = 50;
   /// A closure the current estimate meets within these is added without optimising at once.
   double loop_consistent_xy = 0.03;     ///< [m]
   double loop_consistent_theta = 0.01;  ///< [rad]
