@@ -82,6 +82,48 @@ TEST(ConstraintBuilder, FindsTheTrueOffsetOfARevisit)
   EXPECT_EQ(m.edge.sigma_xy, p.loop_sigma_xy);
 }
 
+// A window that does not hold the true pose: its best lies on the border, nearest the truth, and scores on
+// rising towards it. That is no peak, and the match is refused as ambiguous, however far a rival must lie;
+// the wider window of a later attempt holds the truth and finds it.
+TEST(ConstraintBuilder, ABestOnTheWindowsBorderIsAmbiguous)
+{
+  // A rival must lie 2 m from the best: none does in a window 1.2 m wide, so only the border can refuse it.
+  LaserSlamParams p;
+  p.loop_ambiguity_distance = 2.0;
+  ConstraintBuilder builder(p);
+  // Keyframe 7's estimate lies 0.9 m ahead of its truth: beyond loop_radius (0.6 m) right after a closure,
+  // with keyframe 6 within it, so a candidate is searched.
+  const Revisit r(Pose2{0.9, 0.0, 0.0});
+  builder.closureAccepted(r.keyframes[7].path, r.graph);
+  const LoopSearch narrow = builder.search(r.keyframes, r.graph, 7);
+  ASSERT_FALSE(narrow.candidates.empty());
+  ASSERT_LT(narrow.radius, 0.85);  // the truth, about 0.88 m from the estimate along x, lies outside
+  SlamCounters counters;
+  const LoopMatch cut = builder.match(r.keyframes, r.graph, narrow.candidates.front(), 7, narrow, counters);
+  ASSERT_TRUE(cut.match);
+  EXPECT_TRUE(p.ambiguous(cut.ambiguity)) << "ambiguity " << cut.ambiguity;
+  // With the ambiguity test off, nothing refuses it.
+  LaserSlamParams off = p;
+  off.loop_ambiguity_distance = 0.0;
+  ConstraintBuilder unchecked(off);
+  unchecked.closureAccepted(r.keyframes[7].path, r.graph);
+  EXPECT_FALSE(off.ambiguous(
+      unchecked.match(r.keyframes, r.graph, narrow.candidates.front(), 7, narrow, counters).ambiguity));
+
+  // 20 m without a closure: the window has grown past the truth, which is a peak inside it.
+  const ConstraintBuilder wide_builder(p);
+  const LoopSearch wide = wide_builder.search(r.keyframes, r.graph, 7);
+  ASSERT_GT(wide.radius, 1.0);
+  ASSERT_FALSE(wide.candidates.empty());
+  const std::size_t j = wide.candidates.front();
+  const LoopMatch found = wide_builder.match(r.keyframes, r.graph, j, 7, wide, counters);
+  ASSERT_TRUE(found.match);
+  EXPECT_FALSE(p.ambiguous(found.ambiguity)) << "ambiguity " << found.ambiguity;
+  const Pose2 expected = r.truth[j].inverse() * r.truth[7];
+  EXPECT_NEAR(found.match->pose.x, expected.x, 0.02);
+  EXPECT_NEAR(found.match->pose.y, expected.y, 0.02);
+}
+
 TEST(ConstraintBuilder, WindowShrinksAfterAClosure)
 {
   const LaserSlamParams p;

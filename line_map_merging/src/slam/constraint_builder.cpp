@@ -124,9 +124,14 @@ std::optional<std::pair<MatchResult, double>> ConstraintBuilder::matchLoop(
   const auto candidates = correlativeSearch(coarse, scan, guess, wide, 3, &spread);
   if (candidates.empty()) return std::nullopt;
   double ambiguity = 0.0;
+  const linemap::Vec2 best_at = candidates.front().pose.translation();
+  // A best on the window's border is as ambiguous as a match can be: where the score peaks is not known
+  // (in a corridor of doors, a pose slid onto the next door scores on). The window grows with the path,
+  // so a true closure beyond it is found again from further on.
   if (params_.loop_ambiguity_distance > 0.0 && candidates.front().score > 0.0)
-    ambiguity = spread.bestAwayFrom(candidates.front().pose.translation(), params_.loop_ambiguity_distance) /
-                candidates.front().score;
+    ambiguity = spread.onBorder(best_at) ? 1.0
+                                         : spread.bestAwayFrom(best_at, params_.loop_ambiguity_distance) /
+                                               candidates.front().score;
   // The gate refuses an ambiguous match whatever its refined score: the fine field is not worth building.
   if (params_.ambiguous(ambiguity)) return std::make_pair(candidates.front(), ambiguity);
   const LikelihoodGrid fine(points, params_.resolution, params_.sigma, 0.5);

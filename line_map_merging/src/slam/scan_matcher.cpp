@@ -137,6 +137,13 @@ double TranslationScores::bestAwayFrom(const linemap::Vec2& at, double distance)
   return best_score;
 }
 
+bool TranslationScores::onBorder(const linemap::Vec2& at) const
+{
+  if (reach <= 0) return false;
+  const double inner = (reach - 0.5) * step;
+  return std::fabs(at.x() - centre.x()) > inner || std::fabs(at.y() - centre.y()) > inner;
+}
+
 namespace
 {
 int floorDiv(int a, int b)

@@ -92,8 +92,8 @@ struct LaserSlamParams
                : loop_min_score;
   }
   /// A closure whose coarse search finds another pose at least ambiguity_distance away scoring within
-  /// ambiguity_margin of the best (a fraction of its score) is refused (a corridor seen from inside); either
-  /// 0: no check. A margin, not the rival's share of the best: near 1 a share leaves no room to loosen the
+  /// ambiguity_margin of the best (a fraction of its score) is refused (a corridor seen from inside), as is
+  /// a best on the search window's border (ConstraintBuilder: ambiguity 1); either 0: no check. A margin, not the rival's share of the best: near 1 a share leaves no room to loosen the
   /// test.
   double loop_ambiguity_distance = 0.3;  ///< [m]
   double loop_ambiguity_margin = 0.1;

@@ -38,6 +38,9 @@ struct TranslationScores
   std::vector<double> best;                      ///< row-major, y outer
   /// The best score among translations at least `distance` from `at` (0 when there is none).
   double bestAwayFrom(const linemap::Vec2& at, double distance) const;
+  /// Whether `at` lies on the window's outermost translations: a best found there is no peak, since the
+  /// score may go on rising beyond the window (false without a grid).
+  bool onBorder(const linemap::Vec2& at) const;
 };
 
 struct RefinementParams
