@@ -344,6 +344,25 @@ line_map_merging::TranslationShape shapeAt(const std::vector<Vec2>& map,
 
 // The refinement's curvature says what the scan determines: in a corridor along x, nothing along
 // x; in the room with boxes and a niche, both directions.
+// The border of a window of translations centre + (i, j) step, |i|, |j| <= reach: the outermost ring, its
+// outward direction (a corner's diagonal); inside, none.
+TEST(ScanMatcher, BorderDirectionOfTheWindow)
+{
+  line_map_merging::TranslationScores spread;
+  spread.centre = linemap::Vec2(1.0, 2.0);
+  spread.step = 0.1;
+  spread.reach = 5;
+  const auto direction = [&](double x, double y) { return spread.borderDirection(linemap::Vec2(x, y)); };
+  EXPECT_TRUE(direction(1.5, 2.0).isApprox(linemap::Vec2(1.0, 0.0)));
+  EXPECT_TRUE(direction(1.2, 1.5).isApprox(linemap::Vec2(0.0, -1.0)));
+  const double h = std::sqrt(0.5);
+  EXPECT_TRUE(direction(0.5, 2.5).isApprox(linemap::Vec2(-h, h)));
+  EXPECT_EQ(direction(1.4, 2.4).norm(), 0.0);  // one step inside
+  EXPECT_EQ(direction(1.0, 2.0).norm(), 0.0);
+  line_map_merging::TranslationScores none;  // no grid: no border
+  EXPECT_EQ(none.borderDirection(linemap::Vec2(5.0, 5.0)).norm(), 0.0);
+}
+
 TEST(ScanMatcher, CurvatureShapesTheTranslation)
 {
   const std::vector<linemap::Segment2> walls = {{{-50, 0}, {50, 0}}, {{-50, 2}, {50, 2}}};

@@ -85,14 +85,21 @@ LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, c
   const auto found = matchLoop(keyframes, graph, j, k, guess, own ? search.radii[c] : search.radius,
                                own ? search.angles[c] : search.angle);
   if (!found) return m;
-  m.match = found->first;
-  m.ambiguity = found->second;
-  m.shape = matchShape(found->first, params_);
-  m.edge = loopEdge(j, k, heldToEstimate(found->first.pose, guess, m.shape), m.shape, params_);
+  m.match = found->match;
+  m.ambiguity = found->ambiguity;
+  m.shape = matchShape(found->match, params_);
+  // A best on the window's border is as ambiguous as a match can be along a direction the match determines:
+  // where the score peaks is not known (in a corridor of doors, a pose slid onto the next door scores on).
+  // Along a direction it leaves open the edge keeps the estimate (heldToEstimate): the rest of it counts.
+  // The window grows with the path, so a true closure beyond it is found again from further on.
+  if (params_.loop_ambiguity_distance > 0.0 && found->border.norm() > 0.0 &&
+      found->border.dot(m.shape.weights * found->border) >= 0.5)
+    m.ambiguity = 1.0;
+  m.edge = loopEdge(j, k, heldToEstimate(found->match.pose, guess, m.shape), m.shape, params_);
   return m;
 }
 
-std::optional<std::pair<MatchResult, double>> ConstraintBuilder::matchLoop(
+std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
     const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph, std::size_t candidate,
     std::size_t current, const Pose2& guess, double radius, double angle) const
 {
@@ -123,17 +130,18 @@ std::optional<std::pair<MatchResult, double>> ConstraintBuilder::matchLoop(
   TranslationScores spread;
   const auto candidates = correlativeSearch(coarse, scan, guess, wide, 3, &spread);
   if (candidates.empty()) return std::nullopt;
-  double ambiguity = 0.0;
+  Found result;
   const linemap::Vec2 best_at = candidates.front().pose.translation();
-  // A best on the window's border is as ambiguous as a match can be: where the score peaks is not known
-  // (in a corridor of doors, a pose slid onto the next door scores on). The window grows with the path,
-  // so a true closure beyond it is found again from further on.
+  result.border = spread.borderDirection(best_at);
   if (params_.loop_ambiguity_distance > 0.0 && candidates.front().score > 0.0)
-    ambiguity = spread.onBorder(best_at) ? 1.0
-                                         : spread.bestAwayFrom(best_at, params_.loop_ambiguity_distance) /
-                                               candidates.front().score;
+    result.ambiguity =
+        spread.bestAwayFrom(best_at, params_.loop_ambiguity_distance) / candidates.front().score;
   // The gate refuses an ambiguous match whatever its refined score: the fine field is not worth building.
-  if (params_.ambiguous(ambiguity)) return std::make_pair(candidates.front(), ambiguity);
+  if (params_.ambiguous(result.ambiguity))
+  {
+    result.match = candidates.front();
+    return result;
+  }
   const LikelihoodGrid fine(points, params_.resolution, params_.sigma, 0.5);
   SearchWindow narrow{params_.loop_resolution,
                       params_.loop_angular_step,
@@ -151,7 +159,8 @@ std::optional<std::pair<MatchResult, double>> ConstraintBuilder::matchLoop(
     if (!best || refined.score > best->score) best = refined;
   }
   if (!best) return std::nullopt;
-  return std::make_pair(*best, ambiguity);
+  result.match = *best;
+  return result;
 }
 
 void ConstraintBuilder::chooseCandidates(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,

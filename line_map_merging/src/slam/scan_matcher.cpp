@@ -137,11 +137,15 @@ double TranslationScores::bestAwayFrom(const linemap::Vec2& at, double distance)
   return best_score;
 }
 
-bool TranslationScores::onBorder(const linemap::Vec2& at) const
+linemap::Vec2 TranslationScores::borderDirection(const linemap::Vec2& at) const
 {
-  if (reach <= 0) return false;
+  linemap::Vec2 out = linemap::Vec2::Zero();
+  if (reach <= 0) return out;
   const double inner = (reach - 0.5) * step;
-  return std::fabs(at.x() - centre.x()) > inner || std::fabs(at.y() - centre.y()) > inner;
+  const linemap::Vec2 offset = at - centre;
+  for (int i = 0; i < 2; ++i)
+    if (std::fabs(offset(i)) > inner) out(i) = offset(i) > 0.0 ? 1.0 : -1.0;
+  return out.norm() > 0.0 ? linemap::Vec2(out.normalized()) : out;
 }
 
 namespace

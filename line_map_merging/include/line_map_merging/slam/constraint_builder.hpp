@@ -85,12 +85,17 @@ class ConstraintBuilder
                                                  std::size_t j, std::size_t k);
   /// The suspect edges no loop closure in the graph spans.
   std::vector<SuspectEdge> openSuspects(const PoseGraph& graph) const;
-  /// The refined match and its ambiguity (best coarse score away from the peak / the peak's); an ambiguous
-  /// one unrefined.
-  std::optional<std::pair<MatchResult, double>> matchLoop(const std::vector<SlamKeyframe>& keyframes,
-                                                          const PoseGraph& graph, std::size_t candidate,
-                                                          std::size_t current, const linemap::Pose2& guess,
-                                                          double radius, double angle) const;
+  /// A submap match: the refined one (an ambiguous one unrefined), its ambiguity (best coarse score away
+  /// from the peak / the peak's) and where the coarse best lay on the window's border (borderDirection).
+  struct Found
+  {
+    MatchResult match;
+    double ambiguity = 0.0;
+    linemap::Vec2 border = linemap::Vec2::Zero();
+  };
+  std::optional<Found> matchLoop(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
+                                 std::size_t candidate, std::size_t current, const linemap::Pose2& guess,
+                                 double radius, double angle) const;
 
   LaserSlamParams params_;
   double path_at_closure_ = 0.0;  ///< [m] front-end path of the last accepted closure's keyframe

@@ -93,8 +93,9 @@ struct LaserSlamParams
   }
   /// A closure whose coarse search finds another pose at least ambiguity_distance away scoring within
   /// ambiguity_margin of the best (a fraction of its score) is refused (a corridor seen from inside), as is
-  /// a best on the search window's border (ConstraintBuilder: ambiguity 1); either 0: no check. A margin, not the rival's share of the best: near 1 a share leaves no room to loosen the
-  /// test.
+  /// a best on the search window's border along a direction the match determines (ConstraintBuilder:
+  /// ambiguity 1); either 0: no check. A margin, not the rival's share of the best: near 1 a share leaves
+  /// no room to loosen the test.
   double loop_ambiguity_distance = 0.3;  ///< [m]
   double loop_ambiguity_margin = 0.1;
   /// Whether a match whose rival scores `ambiguity` (a fraction of the best) is refused as ambiguous.

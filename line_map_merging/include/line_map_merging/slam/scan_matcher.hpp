@@ -38,9 +38,10 @@ struct TranslationScores
   std::vector<double> best;                      ///< row-major, y outer
   /// The best score among translations at least `distance` from `at` (0 when there is none).
   double bestAwayFrom(const linemap::Vec2& at, double distance) const;
-  /// Whether `at` lies on the window's outermost translations: a best found there is no peak, since the
-  /// score may go on rising beyond the window (false without a grid).
-  bool onBorder(const linemap::Vec2& at) const;
+  /// The outward unit direction of the window's border where `at` lies on its outermost translations (a
+  /// corner's diagonal), zero inside or without a grid: a best found there is no peak along it, since the
+  /// score may go on rising beyond the window.
+  linemap::Vec2 borderDirection(const linemap::Vec2& at) const;
 };
 
 struct RefinementParams
