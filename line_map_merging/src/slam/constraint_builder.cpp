@@ -99,11 +99,11 @@ LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, c
   return m;
 }
 
-std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
-    const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph, std::size_t candidate,
-    std::size_t current, const Pose2& guess, double radius, double angle) const
+std::vector<Vec2> ConstraintBuilder::submapPoints(const std::vector<SlamKeyframe>& keyframes,
+                                                  const PoseGraph& graph, std::size_t candidate,
+                                                  std::size_t current, const Pose2& guess,
+                                                  double radius) const
 {
-  // Submap: the candidate and its neighbours in the candidate's frame, by their optimised poses.
   const Pose2 inv = graph.node(candidate).inverse();
   const std::size_t s = params_.submapKeyframes();
   const std::size_t lo = candidate >= s ? candidate - s : 0;
@@ -123,6 +123,14 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
       if (std::fabs(q.x() - guess.x) <= reach && std::fabs(q.y() - guess.y) <= reach) points.push_back(q);
     }
   }
+  return points;
+}
+
+std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
+    const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph, std::size_t candidate,
+    std::size_t current, const Pose2& guess, double radius, double angle) const
+{
+  const std::vector<Vec2> points = submapPoints(keyframes, graph, candidate, current, guess, radius);
   if (points.size() < params_.min_points) return std::nullopt;
   const auto& scan = keyframes[current].points;
   const LikelihoodGrid coarse(points, params_.loop_resolution, params_.loop_resolution, 0.5);

@@ -85,6 +85,12 @@ class ConstraintBuilder
                                                  std::size_t j, std::size_t k);
   /// The suspect edges no loop closure in the graph spans.
   std::vector<SuspectEdge> openSuspects(const PoseGraph& graph) const;
+  /// The submap of keyframe `current`'s match against `candidate`: the candidate and its neighbours (not
+  /// the recent ones) in the candidate's frame by their optimised poses, the points within reach of the
+  /// scan somewhere in the search window around `guess`.
+  std::vector<linemap::Vec2> submapPoints(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
+                                          std::size_t candidate, std::size_t current,
+                                          const linemap::Pose2& guess, double radius) const;
   /// A submap match: the refined one (an ambiguous one unrefined), its ambiguity (best coarse score away
   /// from the peak / the peak's) and where the coarse best lay on the window's border (borderDirection).
   struct Found
