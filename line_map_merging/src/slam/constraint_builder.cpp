@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "line_map_merging/slam/likelihood_grid.hpp"
 
@@ -87,14 +88,13 @@ LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, c
   if (!found) return m;
   m.match = found->match;
   m.ambiguity = found->ambiguity;
-  m.shape = matchShape(found->match, params_);
-  // A best on the window's border is as ambiguous as a match can be along a direction the match determines:
-  // where the score peaks is not known (in a corridor of doors, a pose slid onto the next door scores on).
-  // Along a direction it leaves open the edge keeps the estimate (heldToEstimate): the rest of it counts.
-  // The window grows with the path, so a true closure beyond it is found again from further on.
-  if (params_.loop_ambiguity_distance > 0.0 && found->border.norm() > 0.0 &&
-      found->border.dot(m.shape.weights * found->border) >= 0.5)
-    m.ambiguity = 1.0;
+  m.shape = found->shape;
+  // A best on the border even of the window searched again around it (matchLoop) is as ambiguous as a match
+  // can be along a direction the match determines: where the score peaks is not known (in a corridor of
+  // doors, a pose slid onto the next door scores on). Along a direction it leaves open the edge keeps the
+  // estimate (heldToEstimate): the rest of it counts. The window grows with the path, so a true closure
+  // beyond it is found again from further on.
+  if (params_.loop_ambiguity_distance > 0.0 && found->onDeterminedBorder()) m.ambiguity = 1.0;
   m.edge = loopEdge(j, k, heldToEstimate(found->match.pose, guess, m.shape), m.shape, params_);
   return m;
 }
@@ -126,31 +126,65 @@ std::vector<Vec2> ConstraintBuilder::submapPoints(const std::vector<SlamKeyframe
   return points;
 }
 
+bool ConstraintBuilder::Found::onDeterminedBorder() const
+{
+  return border.norm() > 0.0 && border.dot(shape.weights * border) >= 0.5;
+}
+
 std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
     const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph, std::size_t candidate,
     std::size_t current, const Pose2& guess, double radius, double angle) const
 {
-  const std::vector<Vec2> points = submapPoints(keyframes, graph, candidate, current, guess, radius);
+  std::vector<Vec2> points = submapPoints(keyframes, graph, candidate, current, guess, radius);
   if (points.size() < params_.min_points) return std::nullopt;
-  const auto& scan = keyframes[current].points;
-  const LikelihoodGrid coarse(points, params_.loop_resolution, params_.loop_resolution, 0.5);
+  LikelihoodGrid coarse(points, params_.loop_resolution, params_.loop_resolution, 0.5);
+  const Fields fields{std::move(points), std::move(coarse), std::nullopt};
   const SearchWindow wide{radius, angle, params_.loop_resolution, params_.loop_angular_step, 0.0, 0.0};
+  const auto& scan = keyframes[current].points;
+  TranslationScores first;
+  std::optional<Found> found = searchAround(fields, scan, guess, wide, nullptr, &first);
+  // A best on the border is no peak: the score may go on rising beyond the window. Where the match
+  // determines the border's direction and no rival came near it, the same window is searched once more,
+  // centred on that best: it holds a peak a little beyond the first window (a drift just past its reach),
+  // and where look-alikes repeat (a door slid onto the next), rivals, among the poses of both windows. A
+  // best on the second window's border match() judges ambiguous. An ambiguous first best stays refused: on
+  // a corridor's long ramp of nearly equal scores the second window's best edges its rivals out by chance.
+  if (found && params_.loop_ambiguity_distance > 0.0 && !params_.ambiguous(found->ambiguity) &&
+      found->onDeterminedBorder())
+  {
+    const Pose2 centre(found->coarse_best.x(), found->coarse_best.y(), guess.theta);
+    if (std::optional<Found> again = searchAround(fields, scan, centre, wide, &first, nullptr))
+      found = std::move(again);
+  }
+  return found;
+}
+
+std::optional<ConstraintBuilder::Found> ConstraintBuilder::searchAround(
+    const Fields& fields, const std::vector<Vec2>& scan, const Pose2& centre, const SearchWindow& wide,
+    const TranslationScores* earlier, TranslationScores* spread_out) const
+{
   TranslationScores spread;
-  const auto candidates = correlativeSearch(coarse, scan, guess, wide, 3, &spread);
+  const auto candidates = correlativeSearch(fields.coarse, scan, centre, wide, 3, &spread);
   if (candidates.empty()) return std::nullopt;
   Found result;
-  const linemap::Vec2 best_at = candidates.front().pose.translation();
-  result.border = spread.borderDirection(best_at);
+  result.coarse_best = candidates.front().pose.translation();
+  result.border = spread.borderDirection(result.coarse_best);
   if (params_.loop_ambiguity_distance > 0.0 && candidates.front().score > 0.0)
-    result.ambiguity =
-        spread.bestAwayFrom(best_at, params_.loop_ambiguity_distance) / candidates.front().score;
+  {
+    double rival = spread.bestAwayFrom(result.coarse_best, params_.loop_ambiguity_distance);
+    if (earlier)
+      rival = std::max(rival, earlier->bestAwayFrom(result.coarse_best, params_.loop_ambiguity_distance));
+    result.ambiguity = rival / candidates.front().score;
+  }
+  if (spread_out) *spread_out = spread;
   // The gate refuses an ambiguous match whatever its refined score: the fine field is not worth building.
   if (params_.ambiguous(result.ambiguity))
   {
     result.match = candidates.front();
+    result.shape = matchShape(result.match, params_);
     return result;
   }
-  const LikelihoodGrid fine(points, params_.resolution, params_.sigma, 0.5);
+  if (!fields.fine) fields.fine.emplace(fields.points, params_.resolution, params_.sigma, 0.5);
   SearchWindow narrow{params_.loop_resolution,
                       params_.loop_angular_step,
                       params_.resolution,
@@ -160,14 +194,15 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
   std::optional<MatchResult> best;
   for (const auto& c : candidates)
   {
-    const auto local = correlativeSearch(fine, scan, c.pose, narrow, 1);
+    const auto local = correlativeSearch(*fields.fine, scan, c.pose, narrow, 1);
     if (local.empty()) continue;
     const MatchResult refined =
-        refineMatch(fine, scan, local.front().pose, local.front().pose, params_.refinement);
+        refineMatch(*fields.fine, scan, local.front().pose, local.front().pose, params_.refinement);
     if (!best || refined.score > best->score) best = refined;
   }
   if (!best) return std::nullopt;
   result.match = *best;
+  result.shape = matchShape(result.match, params_);
   return result;
 }
 

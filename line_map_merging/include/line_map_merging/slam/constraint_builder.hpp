@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "line_map_merging/slam/laser_slam_params.hpp"
+#include "line_map_merging/slam/likelihood_grid.hpp"
 #include "line_map_merging/slam/pose_graph.hpp"
 #include "line_map_merging/slam/scan_matcher.hpp"
 #include "line_map_merging/slam/slam_types.hpp"
@@ -92,16 +93,34 @@ class ConstraintBuilder
                                           std::size_t candidate, std::size_t current,
                                           const linemap::Pose2& guess, double radius) const;
   /// A submap match: the refined one (an ambiguous one unrefined), its ambiguity (best coarse score away
-  /// from the peak / the peak's) and where the coarse best lay on the window's border (borderDirection).
+  /// from the peak / the peak's), the coarse best and where it lay on the window's border (borderDirection),
+  /// and the match's shape.
   struct Found
   {
     MatchResult match;
     double ambiguity = 0.0;
+    linemap::Vec2 coarse_best = linemap::Vec2::Zero();  ///< the coarse search's best translation
     linemap::Vec2 border = linemap::Vec2::Zero();
+    TranslationShape shape;
+    /// On the border along a direction the match determines (half its weight or more).
+    bool onDeterminedBorder() const;
   };
   std::optional<Found> matchLoop(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
                                  std::size_t candidate, std::size_t current, const linemap::Pose2& guess,
                                  double radius, double angle) const;
+  /// A submap's points and their fields: the coarse one for the search, the fine one built when a match is
+  /// first refined.
+  struct Fields
+  {
+    std::vector<linemap::Vec2> points;
+    LikelihoodGrid coarse;
+    mutable std::optional<LikelihoodGrid> fine;
+  };
+  /// The coarse search of `wide` around `centre`, its best few refined unless ambiguous; rivals also among
+  /// the translations of an `earlier` search, and the spread of this one's scores into `spread_out`.
+  std::optional<Found> searchAround(const Fields& fields, const std::vector<linemap::Vec2>& scan,
+                                    const linemap::Pose2& centre, const SearchWindow& wide,
+                                    const TranslationScores* earlier, TranslationScores* spread_out) const;
 
   LaserSlamParams params_;
   double path_at_closure_ = 0.0;  ///< [m] front-end path of the last accepted closure's keyframe
