@@ -176,7 +176,7 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::searchAround(
       rival = std::max(rival, earlier->bestAwayFrom(result.coarse_best, params_.loop_ambiguity_distance));
     result.ambiguity = rival / candidates.front().score;
   }
-  if (spread_out) *spread_out = spread;
+  if (spread_out) *spread_out = std::move(spread);
   // The gate refuses an ambiguous match whatever its refined score: the fine field is not worth building.
   if (params_.ambiguous(result.ambiguity))
   {
