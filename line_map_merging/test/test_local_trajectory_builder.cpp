@@ -1,6 +1,7 @@
 // The SLAM's front end alone, on a ray-cast room: a straight drive is recovered from odometry that
 // under-reports every step and from no odometry at all; keyframes every keyframe_distance; a scan
-// older than the last one is rejected.
+// older than the last one is rejected. In a corridor without odometry the path held to the constant
+// velocity is timed.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -125,9 +126,9 @@ TEST(LocalTrajectoryBuilder, OlderScanIsRejectedAndChangesNothing)
 
 // In the middle of a round hall every heading sees the same scan. The robot turns 1 rad between two scans
 // 0.1 s apart (a glitch, or a gap in the log the stamps do not show): the odometry's step exceeds
-// max_odometry_turn and what max_odometry_turn_rate allows in 0.1 s, so it counts as a jump, and both its pose
-// and the constant-velocity prediction (no turn) are searched. Both match perfectly; the odometry's measured
-// motion must stand, not the assumption (which keeps the old heading, 1 rad off).
+// max_odometry_turn and what max_odometry_turn_rate allows in 0.1 s, so it counts as a jump, and both its
+// pose and the constant-velocity prediction (no turn) are searched. Both match perfectly; the odometry's
+// measured motion must stand, not the assumption (which keeps the old heading, 1 rad off).
 TEST(LocalTrajectoryBuilder, AcrossAnOdometryJumpTheMeasuredTurnStands)
 {
   std::vector<linemap::Segment2> hall;
@@ -197,4 +198,43 @@ TEST(LocalTrajectoryBuilder, OdometryOverScansFarApartInTimeIsMotionNotAJump)
   const LocalScanResult r = builder.addScan(glitch, counters);
   EXPECT_EQ(counters.odometry_jumps, 1u);
   EXPECT_LT(std::hypot(r.pose.x - before.x, r.pose.y - before.y), 0.1);
+}
+
+// A pier on one side of a corridor fixes the motion along it while the 180-degree scan sees its front face
+// or its far corner; past it the walls run on beyond the scans' reach and fix nothing along the axis.
+// Without odometry the front end then holds the constant velocity along the axis: the longest held run is
+// the drive from the pier (its faces at x = -0.5 and 0.5 m) to the end at 5 m, at 1 m/s. With odometry
+// nothing is held to an assumption.
+TEST(LocalTrajectoryBuilder, TheTimeHeldToTheConstantVelocityIsCounted)
+{
+  LaserSlamParams p;
+  p.max_range = 4.0;  // the walls within reach at every beam's angle beyond 17 degrees
+  const std::vector<linemap::Segment2> corridor = {{{-5.0, -1.2}, {100.0, -1.2}}, {{-5.0, 1.2}, {-0.5, 1.2}},
+                                                   {{-0.5, 1.2}, {-0.5, 0.4}},    {{-0.5, 0.4}, {0.5, 0.4}},
+                                                   {{0.5, 0.4}, {0.5, 1.2}},      {{0.5, 1.2}, {100.0, 1.2}}};
+  for (const bool with_odometry : {false, true})
+  {
+    LocalTrajectoryBuilder builder(p);
+    SlamCounters counters;
+    for (int i = 0; i <= 80; ++i)
+    {
+      const Pose2 truth(-3.0 + 0.1 * i, 0.0, 0.0);
+      SlamScan s;
+      s.stamp = 1.0 + 0.1 * i;
+      s.points = slam_world::scan(corridor, truth, 360, 20.0, 0.002, static_cast<unsigned>(i));
+      if (with_odometry) s.odom = truth;
+      const LocalScanResult r = builder.addScan(s, counters);
+      ASSERT_NE(r.outcome, SlamOutcome::kRejected);
+    }
+    EXPECT_EQ(counters.poor_matches, 0u);
+    if (with_odometry)
+      EXPECT_EQ(counters.longest_held_time, 0.0);
+    else
+    {
+      // The last feature along the axis leaves the scan between the pier's faces: 4.5-5.5 s to go.
+      EXPECT_GE(counters.longest_held_time, 4.4);
+      EXPECT_LE(counters.longest_held_time, 5.6);
+      EXPECT_NEAR(counters.held_time, counters.longest_held_time, 1e-9);  // the run lasts to the end
+    }
+  }
 }

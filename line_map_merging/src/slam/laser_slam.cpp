@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -30,7 +31,8 @@ std::string closureSummary(const SlamCounters& c)
       << " attempts (refused: " << c.loops_rejected_score << " score, " << c.loops_ambiguous << " ambiguous, "
       << c.loops_inconsistent << " inconsistent, " << c.loops_rejected_graph << " graph, " << c.loops_pending
       << " uncorroborated; " << c.loops_by_consensus << " by consensus; most inconsistent in a row "
-      << c.most_inconsistent_in_a_row << ")";
+      << c.most_inconsistent_in_a_row << "; longest run held to the constant velocity " << std::fixed
+      << std::setprecision(1) << c.longest_held_time << " s)";
   return out.str();
 }
 
@@ -348,6 +350,7 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
           {"loop closures refused as inconsistent in a row (now)", n(c.inconsistent_in_a_row)},
           {"loop closures refused as inconsistent in a row (most)", n(c.most_inconsistent_in_a_row)},
           {"front-end matches at the search window's border", n(c.border_matches)},
+          {"longest run held to the constant velocity [s]", fixed(c.longest_held_time)},
           {"chain edges widened (disagreeing with the odometry)", n(c.suspect_edges)},
           {"share of the path no closure spans [%]",
            std::to_string(static_cast<int>(std::lround(100.0 * unclosedShare())))},

@@ -1,5 +1,6 @@
 #include "line_map_merging/slam/local_trajectory_builder.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -35,6 +36,7 @@ LocalScanResult LocalTrajectoryBuilder::addScan(const SlamScan& in, SlamCounters
     result.outcome = SlamOutcome::kMatched;
   }
   countOutcome(result.outcome, counters);
+  countHeldTime(result, prediction, counters);
   advance(scan, result.pose, result.outcome);
   result.path = path_;
   result.chain_matched = chain_matched_;
@@ -194,6 +196,23 @@ Pose2 LocalTrajectoryBuilder::heldToPrediction(const MatchResult& match, const P
   weights = shape.weights;
   if (shape.degenerate) ++counters.degenerate_matches;
   return heldToEstimate(match.pose, predicted, shape);
+}
+
+void LocalTrajectoryBuilder::countHeldTime(const LocalScanResult& result, const Prediction& prediction,
+                                           SlamCounters& counters) const
+{
+  // Held: along its weakest direction the pose is more the prediction's than the match's.
+  const bool held =
+      result.outcome == SlamOutcome::kMatched && !prediction.odometry_usable &&
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(result.match_weights).eigenvalues()(0) <= 0.5;
+  // Time, not the path: a speed held wrongly at zero moves the estimate nowhere.
+  if (!held || !have_scan_)
+  {
+    counters.held_time = 0.0;
+    return;
+  }
+  counters.held_time += result.scan.stamp - last_stamp_;
+  counters.longest_held_time = std::max(counters.longest_held_time, counters.held_time);
 }
 
 void LocalTrajectoryBuilder::countOutcome(SlamOutcome outcome, SlamCounters& counters)

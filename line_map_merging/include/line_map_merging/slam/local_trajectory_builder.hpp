@@ -97,6 +97,10 @@ class LocalTrajectoryBuilder
                   std::optional<MatchResult>& best) const;
   /// The scan matched at every heading around the last pose (after a gap in the scans, without odometry).
   std::optional<MatchResult> searchEveryHeading(const SlamScan& scan) const;
+  /// The time of the current run of matches held more to the constant velocity than to the scan along some
+  /// direction (no usable odometry) and of the longest such run, in `counters`.
+  void countHeldTime(const LocalScanResult& result, const Prediction& prediction,
+                     SlamCounters& counters) const;
   void countOutcome(SlamOutcome outcome, SlamCounters& counters);
   /// The front end's state after a scan posed at `pose`: path, velocity, last poses and stamp.
   void advance(const SlamScan& scan, const linemap::Pose2& pose, SlamOutcome outcome);
