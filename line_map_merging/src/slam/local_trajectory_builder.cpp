@@ -205,8 +205,9 @@ void LocalTrajectoryBuilder::countHeldTime(const LocalScanResult& result, const 
   const bool held =
       result.outcome == SlamOutcome::kMatched && !prediction.odometry_usable &&
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(result.match_weights).eigenvalues()(0) <= 0.5;
-  // Time, not the path: a speed held wrongly at zero moves the estimate nowhere.
-  if (!held || !have_scan_)
+  // Time, not the path: a speed held wrongly at zero moves the estimate nowhere. (A match has a scan
+  // before it: the local map is made of earlier ones.)
+  if (!held)
   {
     counters.held_time = 0.0;
     return;
