@@ -5,6 +5,7 @@
 // the summary's percentiles and failures.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "line_map_eval/batch/slam_robustness.hpp"
@@ -204,4 +205,36 @@ TEST(SlamRobustness, SummaryPercentilesAndFailures)
   EXPECT_FALSE(runs[7].failure.empty());
   EXPECT_FALSE(runs[8].failure.empty());
   EXPECT_TRUE(runs[6].failure.empty());
+}
+
+// Every fault is found by its printed name and by the name with dashes the command line takes; a failure's
+// rerun options name exactly its run: a fault variant its fault and seed, a parameter variant its key.
+TEST(SlamRobustness, AFailureCanBeRunAgainAlone)
+{
+  const std::vector<InputFault> all{InputFault::kOdometryScale, InputFault::kHeadingDrift,
+                                    InputFault::kDroppedScans,  InputFault::kLateStart,
+                                    InputFault::kStampJitter,   InputFault::kFrontEndSlip};
+  for (InputFault f : all)
+  {
+    EXPECT_EQ(faultFromName(faultName(f)), f) << faultName(f);
+    std::string dashed = faultName(f);
+    std::replace(dashed.begin(), dashed.end(), ' ', '-');
+    EXPECT_EQ(faultFromName(dashed), f) << dashed;
+  }
+  EXPECT_EQ(faultFromName("late-start"), InputFault::kLateStart);
+  EXPECT_EQ(faultFromName("front-end-slip"), InputFault::kFrontEndSlip);
+  EXPECT_FALSE(faultFromName("late"));
+  EXPECT_FALSE(faultFromName("slip"));
+
+  const auto late = faultVariants({InputFault::kLateStart}, 3, 4);
+  ASSERT_EQ(late.size(), 3u);
+  EXPECT_EQ(rerunOptions(late[1]), "--only faults --fault late-start --runs 1 --seed 5");
+  EXPECT_EQ(rerunOptions(faultVariants({InputFault::kFrontEndSlip}, 1, 18).front()),
+            "--only faults --fault front-end-slip --runs 1 --seed 18");
+  linemap::ParamSet defaults;
+  defaults.set("loop/min_score", "0.55");
+  const auto scaled = parameterVariants(defaults);
+  ASSERT_EQ(scaled.size(), 2u);
+  EXPECT_EQ(rerunOptions(scaled.front()), "--only parameters --keys loop/min_score");
+  EXPECT_EQ(rerunOptions(RobustnessVariant{"defaults", {}, std::nullopt, 0}), "--only defaults");
 }

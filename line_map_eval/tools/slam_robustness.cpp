@@ -1,7 +1,8 @@
 // slam_robustness: the laser SLAM's robustness benchmark (batch/slam_robustness.hpp). Runs the SLAM on
 // a raw CARMEN log (scored by its relations file) or a simulated world (scored by relations taken from
 // its ground truth) under the defaults, each numeric parameter x0.7 and x1.4, and seeded input faults;
-// prints every run, the median, 90th percentile and worst error, and each failure with its cause.
+// prints every run, the median, 90th percentile and worst error, and each failure with its cause and the
+// command that runs it again alone.
 #include "line_map_eval/batch/slam_robustness.hpp"
 
 #include <algorithm>
@@ -33,7 +34,8 @@ namespace
 void usage(std::ostream& out)
 {
   out << "usage: slam_robustness DATASET [RELATIONS] [--no-odometry] [--runs N] [--seed S] [--jobs J]\n"
-         "                       [--only defaults|parameters|faults]... [--keys K1,K2,...]\n"
+         "                       [--only defaults|parameters|faults]... [--keys K1,K2,...] [--fault "
+         "NAME]...\n"
          "                       [--config FILE] [--param key=value]... [--sensor FILE] [--csv FILE]\n"
          "                       [--figures DIR]\n"
          "The laser SLAM's robustness: runs it under the defaults, each numeric parameter of "
@@ -58,6 +60,8 @@ void usage(std::ostream& out)
          "  --jobs J         runs in parallel (default 1; CPU times are per run either way)\n"
          "  --only WHAT      only these groups (repeatable); the defaults always run\n"
          "  --keys K1,K2     only these parameters\n"
+         "  --fault NAME     only this input fault (repeatable): odometry-scale, heading-drift,\n"
+         "                   dropped-scans, late-start, stamp-jitter, front-end-slip\n"
          "  --config FILE    the SLAM parameter file (default: slam.yaml in the config directory\n"
          "                   linemap_batch finds: $LINEMAP_CONFIG_DIR, $LINEMAP_ROOT/config, or\n"
          "                   upwards from the executable or the working directory)\n"
@@ -71,6 +75,7 @@ void usage(std::ostream& out)
 struct Arguments
 {
   std::vector<std::string> positional, overrides, only;
+  std::vector<InputFault> faults;  ///< --fault: only these (empty: all)
   std::string config, sensor, csv, keys, figures;
   bool odometry = true;
   std::size_t runs = 3, jobs = 1;
@@ -97,6 +102,17 @@ bool parseArguments(int argc, char** argv, Arguments& a)
       if (a.only.back() != "defaults" && a.only.back() != "parameters" && a.only.back() != "faults")
         throw std::invalid_argument("--only expects defaults, parameters or faults, got '" + a.only.back() +
                                     "'");
+    }
+    else if (arg == "--fault")
+    {
+      const std::string name = cl.value();
+      const auto fault = faultFromName(name);
+      if (!fault)
+        throw std::invalid_argument(
+            "--fault expects odometry-scale, heading-drift, dropped-scans, late-start, "
+            "stamp-jitter or front-end-slip, got '" +
+            name + "'");
+      a.faults.push_back(*fault);
     }
     else if (arg == "--keys")
       a.keys = cl.value();
@@ -198,6 +214,12 @@ std::vector<RobustnessVariant> variants(const Arguments& a, const linemap::Param
     std::vector<InputFault> faults{InputFault::kDroppedScans, InputFault::kLateStart,
                                    InputFault::kStampJitter, InputFault::kFrontEndSlip};
     if (a.odometry) faults.insert(faults.begin(), {InputFault::kOdometryScale, InputFault::kHeadingDrift});
+    if (!a.faults.empty())
+      faults.erase(std::remove_if(faults.begin(), faults.end(),
+                                  [&](InputFault f) {
+                                    return std::find(a.faults.begin(), a.faults.end(), f) == a.faults.end();
+                                  }),
+                   faults.end());
     for (auto& v : faultVariants(faults, a.runs, a.seed)) out.push_back(std::move(v));
   }
   return out;
@@ -226,8 +248,17 @@ void printRuns(const Arguments& a, const std::vector<RobustnessRun>& runs, const
             << std::setprecision(2) << (s.defaults > 0.0 ? s.worst / s.defaults : 0.0) << "x the defaults)\n"
             << s.failures << " failures (worse than 2x the defaults or above 0.1 m)"
             << (s.failures ? ":" : "") << "\n";
+  // Each failure with the command that runs it again alone.
+  std::string again = "slam_robustness";
+  for (const auto& p : a.positional) again += " " + p;
+  if (!a.odometry) again += " --no-odometry";
+  if (!a.config.empty()) again += " --config " + a.config;
+  if (!a.sensor.empty()) again += " --sensor " + a.sensor;
+  for (const auto& o : a.overrides) again += " --param " + o;
   for (const auto& r : runs)
-    if (!r.failure.empty()) std::cout << "  " << r.variant.label << ": " << r.failure << "\n";
+    if (!r.failure.empty())
+      std::cout << "  " << r.variant.label << ": " << r.failure << "\n    again: " << again << " "
+                << rerunOptions(r.variant) << "\n";
 }
 
 /// Every run as a CSV row in `path`.

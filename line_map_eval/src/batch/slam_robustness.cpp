@@ -106,6 +106,34 @@ std::string faultName(InputFault fault)
   return "?";
 }
 
+std::optional<InputFault> faultFromName(const std::string& name)
+{
+  std::string spaced = name;
+  std::replace(spaced.begin(), spaced.end(), '-', ' ');
+  for (InputFault f : {InputFault::kOdometryScale, InputFault::kHeadingDrift, InputFault::kDroppedScans,
+                       InputFault::kLateStart, InputFault::kStampJitter, InputFault::kFrontEndSlip})
+  {
+    // "front-end slip" keeps its own dash.
+    std::string dashed = faultName(f);
+    std::replace(dashed.begin(), dashed.end(), ' ', '-');
+    if (name == faultName(f) || name == dashed || spaced == faultName(f)) return f;
+  }
+  return std::nullopt;
+}
+
+std::string rerunOptions(const RobustnessVariant& variant)
+{
+  if (variant.fault)
+  {
+    std::string name = faultName(*variant.fault);
+    std::replace(name.begin(), name.end(), ' ', '-');
+    return "--only faults --fault " + name + " --runs 1 --seed " + std::to_string(variant.seed);
+  }
+  if (variant.overrides.empty()) return "--only defaults";
+  const std::string& o = variant.overrides.front();
+  return "--only parameters --keys " + o.substr(0, o.find('='));
+}
+
 std::vector<std::string> scalableSlamKeys(const linemap::ParamSet& defaults)
 {
   std::vector<std::string> keys;

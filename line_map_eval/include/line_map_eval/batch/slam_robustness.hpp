@@ -33,6 +33,8 @@ enum class InputFault
 };
 
 std::string faultName(InputFault fault);
+/// The fault a name stands for: faultName's, or with dashes for spaces ("late-start"); none when unknown.
+std::optional<InputFault> faultFromName(const std::string& name);
 
 /// One run of the benchmark: parameter overrides ("key=value") and/or a fault.
 struct RobustnessVariant
@@ -56,6 +58,11 @@ std::optional<std::string> scaledValue(const std::string& key, const std::string
 /// Each scalable key scaled by each factor, one at a time.
 std::vector<RobustnessVariant> parameterVariants(const linemap::ParamSet& defaults,
                                                  const std::vector<double>& factors = {0.7, 1.4});
+
+/// The slam_robustness options that run `variant` again alone (with the same DATASET, RELATIONS and
+/// --param): "--only defaults", "--only parameters --keys KEY" (both of its factors), or "--only faults
+/// --fault NAME --runs 1 --seed S".
+std::string rerunOptions(const RobustnessVariant& variant);
 
 /// Each fault in `faults` with seeds first_seed .. first_seed + runs - 1.
 std::vector<RobustnessVariant> faultVariants(const std::vector<InputFault>& faults, std::size_t runs,
