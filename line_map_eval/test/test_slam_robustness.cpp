@@ -238,3 +238,33 @@ TEST(SlamRobustness, AFailureCanBeRunAgainAlone)
   EXPECT_EQ(rerunOptions(scaled.front()), "--only parameters --keys loop/min_score");
   EXPECT_EQ(rerunOptions(RobustnessVariant{"defaults", {}, std::nullopt, 0}), "--only defaults");
 }
+
+// The faults' tally: per fault its runs, failures and worst error, in the order the faults first appear;
+// the defaults and parameter runs are in no tally.
+TEST(SlamRobustness, FailuresAreTalliedByFault)
+{
+  std::vector<RobustnessRun> runs(6);
+  runs[0].variant = {"defaults", {}, std::nullopt, 0};
+  runs[1].variant = {"loop/min_score x0.7", {"loop/min_score=0.385"}, std::nullopt, 0};
+  runs[2].variant = faultVariants({InputFault::kLateStart}, 1, 1).front();
+  runs[3].variant = faultVariants({InputFault::kFrontEndSlip}, 1, 1).front();
+  runs[4].variant = faultVariants({InputFault::kLateStart}, 1, 2).front();
+  runs[5].variant = faultVariants({InputFault::kFrontEndSlip}, 1, 2).front();
+  const double errors[] = {0.02, 0.5, 0.03, 0.021, 0.05, 0.022};
+  for (std::size_t i = 0; i < runs.size(); ++i)
+  {
+    runs[i].error.translation_mean = errors[i];
+    runs[i].error.used = 10;
+  }
+  const RobustnessSummary s = summarize(runs);
+  EXPECT_EQ(s.failures, 2u);  // the parameter run (0.5) and the second later start (0.05 > 2 x 0.02)
+  ASSERT_EQ(s.by_fault.size(), 2u);
+  EXPECT_EQ(s.by_fault[0].fault, InputFault::kLateStart);
+  EXPECT_EQ(s.by_fault[0].runs, 2u);
+  EXPECT_EQ(s.by_fault[0].failures, 1u);
+  EXPECT_DOUBLE_EQ(s.by_fault[0].worst, 0.05);
+  EXPECT_EQ(s.by_fault[1].fault, InputFault::kFrontEndSlip);
+  EXPECT_EQ(s.by_fault[1].runs, 2u);
+  EXPECT_EQ(s.by_fault[1].failures, 0u);
+  EXPECT_DOUBLE_EQ(s.by_fault[1].worst, 0.022);
+}

@@ -245,8 +245,16 @@ void printRuns(const Arguments& a, const std::vector<RobustnessRun>& runs, const
               << std::setprecision(1) << r.cpu_seconds << " s CPU\n";
   std::cout << std::setprecision(4) << "defaults " << s.defaults << " m; median " << s.median
             << " m, 90th percentile " << s.p90 << " m, worst " << s.worst << " m (" << s.worst_label << ", "
-            << std::setprecision(2) << (s.defaults > 0.0 ? s.worst / s.defaults : 0.0) << "x the defaults)\n"
-            << s.failures << " failures (worse than 2x the defaults or above 0.1 m)"
+            << std::setprecision(2) << (s.defaults > 0.0 ? s.worst / s.defaults : 0.0) << "x the defaults)\n";
+  if (!s.by_fault.empty())
+  {
+    std::cout << "by fault:";
+    for (const auto& t : s.by_fault)
+      std::cout << (&t == &s.by_fault.front() ? " " : "; ") << faultName(t.fault) << " " << t.failures
+                << " of " << t.runs << " failing (worst " << std::setprecision(4) << t.worst << " m)";
+    std::cout << "\n";
+  }
+  std::cout << s.failures << " failures (worse than 2x the defaults or above 0.1 m)"
             << (s.failures ? ":" : "") << "\n";
   // Each failure with the command that runs it again alone.
   std::string again = "slam_robustness";

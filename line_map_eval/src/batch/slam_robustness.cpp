@@ -380,6 +380,14 @@ RobustnessSummary summarize(std::vector<RobustnessRun>& runs, double failure_rat
       why << e << " m > " << failure_error << " m";
     r.failure = why.str();
     if (!r.failure.empty()) ++s.failures;
+    if (!r.variant.fault) continue;
+    auto tally =
+        std::find_if(s.by_fault.begin(), s.by_fault.end(),
+                     [&](const RobustnessSummary::FaultTally& t) { return t.fault == *r.variant.fault; });
+    if (tally == s.by_fault.end()) tally = s.by_fault.insert(s.by_fault.end(), {*r.variant.fault});
+    ++tally->runs;
+    tally->failures += r.failure.empty() ? 0 : 1;
+    tally->worst = std::max(tally->worst, e);
   }
   return s;
 }

@@ -113,6 +113,14 @@ struct RobustnessSummary
   double median = 0.0, p90 = 0.0, worst = 0.0;
   std::string worst_label;
   std::size_t failures = 0;
+  /// The runs of one input fault (all its seeds): how many, how many failed, the worst error [m].
+  struct FaultTally
+  {
+    InputFault fault;
+    std::size_t runs = 0, failures = 0;
+    double worst = 0.0;
+  };
+  std::vector<FaultTally> by_fault;  ///< in the order the faults first appear among the runs
 };
 
 /// Median, 90th percentile and worst translation error over every run (the defaults' included), and
