@@ -260,3 +260,37 @@ TEST(ConstraintBuilder, ClosureKeepsTheEstimateAlongDirectionsItsMatchLeavesOpen
   EXPECT_DOUBLE_EQ(full.x, match.x);
   EXPECT_DOUBLE_EQ(full.y, match.y);
 }
+
+// A revisit facing back the way the submap's keyframes looked sees mostly the room behind them, where the
+// submap never looked: with only the points in view, too few remain to match, and no closure is made; taken
+// whole (loop/in_view_only off) the scan is matched. Facing the way they looked, every point is in view.
+TEST(ConstraintBuilder, AScanMostlyWhereTheSubmapNeverLookedIsNotMatched)
+{
+  for (const double turned : {0.0, linemap::kPi})
+    for (const bool in_view_only : {true, false})
+    {
+      LaserSlamParams p;
+      p.loop_in_view_only = in_view_only;
+      const ConstraintBuilder builder(p);
+      Revisit r(Pose2(0.1, -0.1, 0.02));
+      r.truth[7] = Pose2(2.65, 4.1, 0.2 + turned);
+      r.keyframes[7].points = slam_world::scan(slam_world::room(), r.truth[7], 180, 20.0, 0.005, 7);
+      r.graph.setNode(7, r.truth[7] * r.offset);
+      SlamCounters counters;
+      const LoopSearch search = builder.search(r.keyframes, r.graph, 7);
+      ASSERT_FALSE(search.candidates.empty());
+      const std::size_t j = search.candidates.front();
+      const LoopMatch m = builder.match(r.keyframes, r.graph, j, 7, search, counters);
+      if (turned > 0.0 && in_view_only)
+      {
+        EXPECT_FALSE(m.match) << "facing back, in view only";
+        continue;
+      }
+      ASSERT_TRUE(m.match) << "turned " << turned << ", in view only " << in_view_only;
+      if (turned > 0.0) continue;  // matched whole; whether it is right is the ambiguity test's concern
+      const Pose2 want = r.truth[j].inverse() * r.truth[7];
+      EXPECT_NEAR(m.match->pose.x, want.x, 0.05);
+      EXPECT_NEAR(m.match->pose.y, want.y, 0.05);
+      EXPECT_NEAR(linemap::normalizeAngle(m.match->pose.theta - want.theta), 0.0, 0.02);
+    }
+}

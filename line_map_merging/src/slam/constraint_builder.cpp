@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "line_map_merging/slam/likelihood_grid.hpp"
+#include "line_map_merging/slam/submap_view.hpp"
 
 namespace line_map_merging
 {
@@ -99,23 +100,30 @@ LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, c
   return m;
 }
 
+std::vector<std::size_t> ConstraintBuilder::submapOf(const std::vector<SlamKeyframe>& keyframes,
+                                                     std::size_t candidate, std::size_t current) const
+{
+  const std::size_t s = params_.submapKeyframes();
+  std::vector<std::size_t> members;
+  // Not those too recent for `current`: they are part of the chain being checked.
+  for (std::size_t i = candidate >= s ? candidate - s : 0; i <= candidate + s && i < keyframes.size(); ++i)
+    if (keyframes[current].path - keyframes[i].path >= 0.5 * params_.loop_min_path) members.push_back(i);
+  return members;
+}
+
 std::vector<Vec2> ConstraintBuilder::submapPoints(const std::vector<SlamKeyframe>& keyframes,
                                                   const PoseGraph& graph, std::size_t candidate,
                                                   std::size_t current, const Pose2& guess,
                                                   double radius) const
 {
   const Pose2 inv = graph.node(candidate).inverse();
-  const std::size_t s = params_.submapKeyframes();
-  const std::size_t lo = candidate >= s ? candidate - s : 0;
   // Only submap points within reach of the scan somewhere in the search window (its points lie within
   // max_range of its pose, a field value depends on points a few sigma away): farther ones cannot change a
   // score and would only widen the fields — without bound where the keyframes of a submap lie far apart.
   const double reach = params_.max_range + radius + 1.0;
   std::vector<Vec2> points;
-  for (std::size_t i = lo; i <= candidate + s && i < keyframes.size(); ++i)
+  for (std::size_t i : submapOf(keyframes, candidate, current))
   {
-    if (keyframes[current].path - keyframes[i].path < 0.5 * params_.loop_min_path)
-      continue;  // too recent: part of the chain being checked
     const Pose2 rel = inv * graph.node(i);
     for (const auto& p : keyframes[i].points)
     {
@@ -124,6 +132,27 @@ std::vector<Vec2> ConstraintBuilder::submapPoints(const std::vector<SlamKeyframe
     }
   }
   return points;
+}
+
+std::vector<Vec2> ConstraintBuilder::pointsInSubmapView(const std::vector<SlamKeyframe>& keyframes,
+                                                        const PoseGraph& graph, std::size_t candidate,
+                                                        std::size_t current, const Pose2& guess,
+                                                        double radius) const
+{
+  const Pose2 inv = graph.node(candidate).inverse();
+  std::vector<std::pair<Pose2, ViewCone>> views;
+  for (std::size_t i : submapOf(keyframes, candidate, current))
+    views.push_back({inv * graph.node(i), viewCone(keyframes[i].points)});
+  const auto& own = keyframes[current].points;
+  std::vector<Vec2> at_guess;
+  at_guess.reserve(own.size());
+  for (const auto& p : own) at_guess.push_back(guess.apply(p));
+  // Within the search's reach of a cone: the scan may lie anywhere in the window.
+  const std::vector<bool> seen = inView(at_guess, views, radius);
+  std::vector<Vec2> kept;
+  for (std::size_t i = 0; i < own.size(); ++i)
+    if (seen[i]) kept.push_back(own[i]);
+  return kept;
 }
 
 bool ConstraintBuilder::Found::onDeterminedBorder() const
@@ -137,10 +166,16 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
 {
   std::vector<Vec2> points = submapPoints(keyframes, graph, candidate, current, guess, radius);
   if (points.size() < params_.min_points) return std::nullopt;
+  const std::vector<Vec2> scan = params_.loop_in_view_only
+                                     ? pointsInSubmapView(keyframes, graph, candidate, current, guess, radius)
+                                     : keyframes[current].points;
+  if (scan.size() < params_.min_points ||
+      static_cast<double>(scan.size()) <
+          params_.loop_min_in_view * static_cast<double>(keyframes[current].points.size()))
+    return std::nullopt;
   LikelihoodGrid coarse(points, params_.loop_resolution, params_.loop_resolution, 0.5);
   const Fields fields{std::move(points), std::move(coarse), std::nullopt};
   const SearchWindow wide{radius, angle, params_.loop_resolution, params_.loop_angular_step, 0.0, 0.0};
-  const auto& scan = keyframes[current].points;
   TranslationScores first;
   std::optional<Found> found = searchAround(fields, scan, guess, wide, nullptr, &first);
   // A best on the border is no peak: the score may go on rising beyond the window. Where the match

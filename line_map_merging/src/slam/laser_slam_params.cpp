@@ -105,6 +105,10 @@ void readLoop(const linemap::ParamSet& p, LaserSlamParams& s)
         "of refused closures, not of keyframes)");
   s.loop_consensus_waiting = countParam(p, "loop/consensus_waiting", s.loop_consensus_waiting, 2);
   s.loop_pending_keyframes = countParam(p, "loop/pending_keyframes", s.loop_pending_keyframes, 1);
+  s.loop_in_view_only = p.getBool("loop/in_view_only", s.loop_in_view_only);
+  s.loop_min_in_view = p.getDouble("loop/min_in_view", s.loop_min_in_view);
+  if (!(s.loop_min_in_view >= 0.0 && s.loop_min_in_view <= 1.0))
+    throw linemap::ParameterError("parameter 'loop/min_in_view' must be in [0, 1]");
   s.loop_ambiguity_distance = p.getDouble("loop/ambiguity_distance", s.loop_ambiguity_distance);
   if (p.has("loop/ambiguity_ratio"))
     throw linemap::ParameterError(

@@ -89,6 +89,16 @@ class ConstraintBuilder
   /// The submap of keyframe `current`'s match against `candidate`: the candidate and its neighbours (not
   /// the recent ones) in the candidate's frame by their optimised poses, the points within reach of the
   /// scan somewhere in the search window around `guess`.
+  /// The keyframes of `candidate`'s submap: its neighbours over loop_submap_path each side, but none so
+  /// recent for `current` that they are part of the chain being checked.
+  std::vector<std::size_t> submapOf(const std::vector<SlamKeyframe>& keyframes, std::size_t candidate,
+                                    std::size_t current) const;
+  /// The current keyframe's points (its frame) that, placed at `guess` in the candidate's frame, lie in some
+  /// submap keyframe's view cone, widened by the search `radius` in range (submap_view.hpp).
+  std::vector<linemap::Vec2> pointsInSubmapView(const std::vector<SlamKeyframe>& keyframes,
+                                                const PoseGraph& graph, std::size_t candidate,
+                                                std::size_t current, const linemap::Pose2& guess,
+                                                double radius) const;
   std::vector<linemap::Vec2> submapPoints(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
                                           std::size_t candidate, std::size_t current,
                                           const linemap::Pose2& guess, double radius) const;

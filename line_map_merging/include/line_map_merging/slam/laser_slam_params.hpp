@@ -62,8 +62,14 @@ struct LaserSlamParams
   /// until a closure spans it (ConstraintBuilder::suspectEdge).
   bool edge_odometry_disagreement = true;
   double loop_sigma_xy = 0.05, loop_sigma_theta = 0.01;
-  double loop_loss_scale = 1.0;      ///< Cauchy scale, in standard deviations
-  double loop_min_path = 5.0;        ///< [m] path between a keyframe and a candidate
+  double loop_loss_scale = 1.0;  ///< Cauchy scale, in standard deviations
+  double loop_min_path = 5.0;    ///< [m] path between a keyframe and a candidate
+  /// The loop match uses only the scan points (at the estimate) inside some submap keyframe's view cone
+  /// (submap_view.hpp): a place the submap never looked at cannot tell where the scan lies.
+  bool loop_in_view_only = false;
+  /// With loop_in_view_only: a scan with a smaller share of its points in view is not matched (a sliver of
+  /// overlap fits in many places, and fixes a pose less well).
+  double loop_min_in_view = 0.5;
   double loop_radius = 0.6;          ///< [m] search radius just after a closure
   double loop_radius_growth = 0.05;  ///< [m per m of path since the last closure]
   double loop_max_radius = 3.0;      ///< [m]
