@@ -214,6 +214,9 @@ TEST(SlamRobustness, AFailureCanBeRunAgainAlone)
   const std::vector<InputFault> all{InputFault::kOdometryScale, InputFault::kHeadingDrift,
                                     InputFault::kDroppedScans,  InputFault::kLateStart,
                                     InputFault::kStampJitter,   InputFault::kFrontEndSlip};
+  EXPECT_EQ(allInputFaults(), all);
+  EXPECT_EQ(faultOption(InputFault::kLateStart), "late-start");
+  EXPECT_EQ(faultOption(InputFault::kFrontEndSlip), "front-end-slip");
   for (InputFault f : all)
   {
     EXPECT_EQ(faultFromName(faultName(f)), f) << faultName(f);

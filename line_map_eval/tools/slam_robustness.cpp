@@ -108,10 +108,11 @@ bool parseArguments(int argc, char** argv, Arguments& a)
       const std::string name = cl.value();
       const auto fault = faultFromName(name);
       if (!fault)
-        throw std::invalid_argument(
-            "--fault expects odometry-scale, heading-drift, dropped-scans, late-start, "
-            "stamp-jitter or front-end-slip, got '" +
-            name + "'");
+      {
+        std::string names;
+        for (InputFault f : allInputFaults()) names += (names.empty() ? "" : ", ") + faultOption(f);
+        throw std::invalid_argument("--fault expects one of " + names + ", got '" + name + "'");
+      }
       a.faults.push_back(*fault);
     }
     else if (arg == "--keys")
@@ -211,15 +212,14 @@ std::vector<RobustnessVariant> variants(const Arguments& a, const linemap::Param
     }
   if (wanted("faults"))
   {
-    std::vector<InputFault> faults{InputFault::kDroppedScans, InputFault::kLateStart,
-                                   InputFault::kStampJitter, InputFault::kFrontEndSlip};
-    if (a.odometry) faults.insert(faults.begin(), {InputFault::kOdometryScale, InputFault::kHeadingDrift});
-    if (!a.faults.empty())
-      faults.erase(std::remove_if(faults.begin(), faults.end(),
-                                  [&](InputFault f) {
-                                    return std::find(a.faults.begin(), a.faults.end(), f) == a.faults.end();
-                                  }),
-                   faults.end());
+    std::vector<InputFault> faults;
+    for (InputFault f : allInputFaults())
+    {
+      const bool needs_odometry = f == InputFault::kOdometryScale || f == InputFault::kHeadingDrift;
+      const bool chosen =
+          a.faults.empty() || std::find(a.faults.begin(), a.faults.end(), f) != a.faults.end();
+      if (chosen && (a.odometry || !needs_odometry)) faults.push_back(f);
+    }
     for (auto& v : faultVariants(faults, a.runs, a.seed)) out.push_back(std::move(v));
   }
   return out;

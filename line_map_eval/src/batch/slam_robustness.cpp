@@ -86,6 +86,14 @@ FaultyRecording withScansKept(const Recording& recording, const std::vector<bool
 }
 }  // namespace
 
+const std::vector<InputFault>& allInputFaults()
+{
+  static const std::vector<InputFault> faults{InputFault::kOdometryScale, InputFault::kHeadingDrift,
+                                              InputFault::kDroppedScans,  InputFault::kLateStart,
+                                              InputFault::kStampJitter,   InputFault::kFrontEndSlip};
+  return faults;
+}
+
 std::string faultName(InputFault fault)
 {
   switch (fault)
@@ -106,18 +114,17 @@ std::string faultName(InputFault fault)
   return "?";
 }
 
+std::string faultOption(InputFault fault)
+{
+  std::string dashed = faultName(fault);
+  std::replace(dashed.begin(), dashed.end(), ' ', '-');
+  return dashed;
+}
+
 std::optional<InputFault> faultFromName(const std::string& name)
 {
-  std::string spaced = name;
-  std::replace(spaced.begin(), spaced.end(), '-', ' ');
-  for (InputFault f : {InputFault::kOdometryScale, InputFault::kHeadingDrift, InputFault::kDroppedScans,
-                       InputFault::kLateStart, InputFault::kStampJitter, InputFault::kFrontEndSlip})
-  {
-    // "front-end slip" keeps its own dash.
-    std::string dashed = faultName(f);
-    std::replace(dashed.begin(), dashed.end(), ' ', '-');
-    if (name == faultName(f) || name == dashed || spaced == faultName(f)) return f;
-  }
+  for (InputFault f : allInputFaults())
+    if (name == faultName(f) || name == faultOption(f)) return f;
   return std::nullopt;
 }
 
@@ -125,9 +132,8 @@ std::string rerunOptions(const RobustnessVariant& variant)
 {
   if (variant.fault)
   {
-    std::string name = faultName(*variant.fault);
-    std::replace(name.begin(), name.end(), ' ', '-');
-    return "--only faults --fault " + name + " --runs 1 --seed " + std::to_string(variant.seed);
+    return "--only faults --fault " + faultOption(*variant.fault) + " --runs 1 --seed " +
+           std::to_string(variant.seed);
   }
   if (variant.overrides.empty()) return "--only defaults";
   const std::string& o = variant.overrides.front();

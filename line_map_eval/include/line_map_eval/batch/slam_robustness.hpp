@@ -32,8 +32,12 @@ enum class InputFault
   kFrontEndSlip,
 };
 
+/// Every input fault, in the order the benchmark runs them.
+const std::vector<InputFault>& allInputFaults();
 std::string faultName(InputFault fault);
-/// The fault a name stands for: faultName's, or with dashes for spaces ("late-start"); none when unknown.
+/// The name on the command line: faultName's with dashes for spaces ("late-start").
+std::string faultOption(InputFault fault);
+/// The fault a name stands for: faultName's or faultOption's; none when unknown.
 std::optional<InputFault> faultFromName(const std::string& name);
 
 /// One run of the benchmark: parameter overrides ("key=value") and/or a fault.
