@@ -34,3 +34,25 @@ TEST(SlamCorridorWorld, ClosuresDoNotSlideThePassesAlongTheAxis)
   EXPECT_LT(run.error.translation_mean, 0.03);
   EXPECT_EQ(run.false_closures, 0u);
 }
+
+// Matched on the in-view points alone, a scan of the return pass facing back keeps only the walls beside it
+// (the stretch it faces, the submap never saw): its heading rests on a lever arm under a metre. Held as
+// sure as a whole scan's, such a closure went in 1.4 degrees off; with the heading's certainty from its
+// lever arm no closure is false and the run stays near the front end's.
+TEST(SlamCorridorWorld, InViewClosuresAreAsSureOfTheHeadingAsTheirLeverArm)
+{
+  const World world = loadWorld(LINEMAP_SOURCE_DIR "/config/worlds/corridor.yaml");
+  const Recording recording = simulate(world).recording;
+  std::vector<double> stamps;
+  for (const auto& s : recording.scans) stamps.push_back(s.stamp);
+  const std::vector<Relation> relations = truthRelations(recording);
+  const linemap::ParamSet defaults = loadParameterFiles({LINEMAP_SOURCE_DIR "/config/slam.yaml"});
+  RobustnessVariant variant;
+  variant.label = "in view only";
+  variant.overrides = {"loop/in_view_only=true"};
+  const RobustnessRun run = runVariant(recording, stamps, relations, defaults, variant, true);
+  EXPECT_GT(run.error.used, relations.size() / 2);
+  EXPECT_LT(run.error.translation_mean, 0.03);
+  EXPECT_GE(run.counters.loops_accepted, 1u);
+  EXPECT_EQ(run.false_closures, 0u);
+}

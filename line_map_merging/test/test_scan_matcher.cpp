@@ -469,3 +469,32 @@ TEST(ScanMatcher, EveryTranslationScoresTheMeanOfItsShiftedCells)
     EXPECT_GT(found.front().score, 0.5);
   }
 }
+
+// A scan that fixes its heading only by walls beside it: points on two walls along x from the pose to L
+// ahead. A turn by dtheta moves a point at x across its wall by x dtheta, so the heading's curvature over
+// the translation's is the mean of x squared: the lever arm is L / sqrt(3), whatever the field's width.
+TEST(ScanMatcher, LeverArmOfWallsBesideThePose)
+{
+  EXPECT_NEAR(line_map_merging::matchLeverArm(Eigen::Vector3d(4.0, 1.0, 4.0 * 2.5 * 2.5).asDiagonal()), 2.5,
+              1e-12);
+  EXPECT_EQ(line_map_merging::matchLeverArm(Eigen::Matrix3d::Zero()), 0.0);
+  for (double length : {1.5, 6.0})
+  {
+    std::vector<Vec2> map, points;
+    for (double x = -1.0; x <= length + 1.0; x += 0.01)
+    {
+      map.push_back({x, 0.0});
+      map.push_back({x, 2.0});
+    }
+    for (double x = 0.0; x <= length; x += 0.02)
+    {
+      points.push_back({x, -1.0});
+      points.push_back({x, 1.0});
+    }
+    const LikelihoodGrid field(map, 0.025, 0.04, 0.5);
+    const Pose2 truth(0.0, 1.0, 0.0);
+    const auto match = refineMatch(field, points, truth, truth, RefinementParams{2.0, 2.0, 30});
+    EXPECT_NEAR(line_map_merging::matchLeverArm(match.curvature), length / std::sqrt(3.0), 0.1 * length)
+        << length;
+  }
+}

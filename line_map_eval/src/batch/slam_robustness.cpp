@@ -336,7 +336,9 @@ RobustnessRun runVariant(const Recording& recording, const std::vector<double>& 
     const Pose2 t = a->inverse() * *b;
     const Eigen::Vector2d d(e.measurement.x - t.x, e.measurement.y - t.y);
     if (std::sqrt(d.dot(e.translation_weights * d)) > 0.1 ||
-        std::fabs(linemap::normalizeAngle(e.measurement.theta - t.theta)) > 0.02)
+        std::fabs(linemap::normalizeAngle(e.measurement.theta - t.theta)) * slam_params.loop_sigma_theta /
+                e.sigma_theta >
+            0.02)
       ++run.false_closures;
   }
   if (!figure.empty())

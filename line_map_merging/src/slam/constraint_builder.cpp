@@ -14,16 +14,27 @@ namespace
 using linemap::Pose2;
 using linemap::Vec2;
 
+/// A loop match on the in-view points alone may rest its heading on points near the pose (a corridor's
+/// walls beside it, the far stretch it faces never seen by the submap): the edge is then as sure of the
+/// heading as the match's lever arm allows, graph/loop_sigma_xy over it, never surer than loop_sigma_theta.
+double loopSigmaTheta(const MatchResult& match, const LaserSlamParams& params)
+{
+  if (!params.loop_in_view_only || params.isotropic_ratio <= 0.0) return params.loop_sigma_theta;
+  const double lever = matchLeverArm(match.curvature);
+  if (!(lever > 0.0)) return params.loop_sigma_theta;
+  return std::max(params.loop_sigma_theta, params.loop_sigma_xy / lever);
+}
+
 /// The closure edge j -> k measured by a loop match, its information shaped by the match's.
-PoseGraphEdge loopEdge(std::size_t j, std::size_t k, const Pose2& measurement, const TranslationShape& shape,
-                       const LaserSlamParams& params)
+PoseGraphEdge loopEdge(std::size_t j, std::size_t k, const Pose2& measurement, const MatchResult& match,
+                       const TranslationShape& shape, const LaserSlamParams& params)
 {
   PoseGraphEdge e;
   e.from = j;
   e.to = k;
   e.measurement = measurement;
   e.sigma_xy = params.loop_sigma_xy;
-  e.sigma_theta = params.loop_sigma_theta;
+  e.sigma_theta = loopSigmaTheta(match, params);
   e.translation_weights = shape.weights;
   e.loop = true;
   return e;
@@ -96,7 +107,7 @@ LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, c
   // estimate (heldToEstimate): the rest of it counts. The window grows with the path, so a true closure
   // beyond it is found again from further on.
   if (params_.loop_ambiguity_distance > 0.0 && found->onDeterminedBorder()) m.ambiguity = 1.0;
-  m.edge = loopEdge(j, k, heldToEstimate(found->match.pose, guess, m.shape), m.shape, params_);
+  m.edge = loopEdge(j, k, heldToEstimate(found->match.pose, guess, m.shape), found->match, m.shape, params_);
   return m;
 }
 

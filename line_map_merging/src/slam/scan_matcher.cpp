@@ -350,3 +350,14 @@ TranslationShape translationShape(const Eigen::Matrix3d& curvature, double isotr
 }
 
 }  // namespace line_map_merging
+
+namespace line_map_merging
+{
+double matchLeverArm(const Eigen::Matrix3d& curvature)
+{
+  const double strongest =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(curvature.topLeftCorner<2, 2>()).eigenvalues()(1);
+  if (!(strongest > 0.0) || !(curvature(2, 2) > 0.0)) return 0.0;
+  return std::sqrt(curvature(2, 2) / strongest);
+}
+}  // namespace line_map_merging

@@ -76,6 +76,11 @@ struct TranslationShape
   double norm(const linemap::Vec2& v) const { return std::sqrt(std::max(0.0, v.dot(weights * v))); }
 };
 TranslationShape translationShape(const Eigen::Matrix3d& curvature, double isotropic_ratio, double floor);
+/// How far from the pose, in the root-mean-square, the points that fix a match's heading lie [m]: the
+/// curvature's heading term over its translation block's strongest. A turn by dtheta moves them by about
+/// lever * dtheta, so a match pinned to within s in translation is pinned to about s / lever in heading.
+/// Zero where the curvature is empty (an unrefined match).
+double matchLeverArm(const Eigen::Matrix3d& curvature);
 /// A match's pose where its `shape` determines the translation, a `prior` pose elsewhere (in proportion to
 /// each direction's weight); the match's heading. The front end keeps the odometry's prediction so; a loop
 /// closure the graph's estimate: along a corridor's axis a match slides between look-alike stretches (seen
