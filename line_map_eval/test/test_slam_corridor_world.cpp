@@ -17,20 +17,25 @@ using namespace line_map_eval;
 
 namespace
 {
+struct CorridorRun
+{
+  RobustnessRun run;
+  std::size_t relations = 0;  ///< the truth's relations the run was measured by
+};
+
 /// The shipped SLAM with `overrides` in the corridor world, measured against its truth.
-RobustnessRun corridorRun(const std::vector<std::string>& overrides, std::size_t& relation_count)
+CorridorRun corridorRun(const std::vector<std::string>& overrides)
 {
   const World world = loadWorld(LINEMAP_SOURCE_DIR "/config/worlds/corridor.yaml");
   const Recording recording = simulate(world).recording;
   std::vector<double> stamps;
   for (const auto& s : recording.scans) stamps.push_back(s.stamp);
   const std::vector<Relation> relations = truthRelations(recording);
-  relation_count = relations.size();
   const linemap::ParamSet defaults = loadParameterFiles({LINEMAP_SOURCE_DIR "/config/slam.yaml"});
   RobustnessVariant variant;
   variant.label = overrides.empty() ? "defaults" : overrides.front();
   variant.overrides = overrides;
-  return runVariant(recording, stamps, relations, defaults, variant, true);
+  return {runVariant(recording, stamps, relations, defaults, variant, true), relations.size()};
 }
 }  // namespace
 
@@ -40,8 +45,7 @@ RobustnessRun corridorRun(const std::vector<std::string>& overrides, std::size_t
 // run near that, with no false closure among them.
 TEST(SlamCorridorWorld, ClosuresDoNotSlideThePassesAlongTheAxis)
 {
-  std::size_t relations = 0;
-  const RobustnessRun run = corridorRun({}, relations);
+  const auto [run, relations] = corridorRun({});
   EXPECT_GT(run.error.used, relations / 2);
   EXPECT_LT(run.error.translation_mean, 0.03);
   EXPECT_EQ(run.false_closures, 0u);
@@ -53,8 +57,7 @@ TEST(SlamCorridorWorld, ClosuresDoNotSlideThePassesAlongTheAxis)
 // lever arm no closure is false and the run stays near the front end's.
 TEST(SlamCorridorWorld, InViewClosuresAreAsSureOfTheHeadingAsTheirLeverArm)
 {
-  std::size_t relations = 0;
-  const RobustnessRun run = corridorRun({"loop/in_view_only=true"}, relations);
+  const auto [run, relations] = corridorRun({"loop/in_view_only=true"});
   EXPECT_GT(run.error.used, relations / 2);
   EXPECT_LT(run.error.translation_mean, 0.03);
   EXPECT_GE(run.counters.loops_accepted, 1u);
