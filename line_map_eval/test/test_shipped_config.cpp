@@ -103,6 +103,9 @@ TEST(ShippedConfig, SlamDefaultsAreTheConfigFiles)
   EXPECT_SAME(loop_min_score_ratio);
   EXPECT_SAME(loop_ambiguity_distance);
   EXPECT_SAME(loop_ambiguity_margin);
+  EXPECT_SAME(loop_ridge_closures);
+  EXPECT_SAME(loop_in_view_only);
+  EXPECT_SAME(loop_min_in_view);
   EXPECT_SAME(loop_consistency_probability);
   EXPECT_SAME(loop_scale_by_disagreement);
   EXPECT_SAME(loop_max_error_xy);

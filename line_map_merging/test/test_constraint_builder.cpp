@@ -294,3 +294,55 @@ TEST(ConstraintBuilder, AScanMostlyWhereTheSubmapNeverLookedIsNotMatched)
       EXPECT_NEAR(linemap::normalizeAngle(m.match->pose.theta - want.theta), 0.0, 0.02);
     }
 }
+
+// A revisit of a featureless corridor (60 m along x, 2 m wide, its ends beyond the laser's reach): every pose
+// slid along the axis scores alike, and nothing across it does. Such a match is refused as ambiguous, also
+// with loop/ridge_closures on while no suspect chain edge lies between the two keyframes. Across a suspect
+// edge it goes in: across the axis and in heading as the truth, along it at the estimate (0.5 m ahead of the
+// truth there), the edge's weight along the axis at the floor.
+TEST(ConstraintBuilder, AMatchSlidAlongACorridorCountsAcrossItOnlyAcrossASuspectEdge)
+{
+  const std::vector<linemap::Segment2> corridor = {{{0, 0}, {60, 0}}, {{0, 2}, {60, 2}}};
+  std::vector<Pose2> truth;
+  std::vector<SlamKeyframe> keyframes;
+  PoseGraph graph;
+  for (int i = 0; i < 8; ++i)
+  {
+    truth.push_back(i < 7 ? Pose2(28.0 + 0.2 * i, 1.0, 0.0) : Pose2(28.7, 1.2, 0.1));
+    SlamKeyframe kf;
+    kf.stamp = i;
+    kf.scan = static_cast<std::size_t>(i);
+    kf.local = truth.back();
+    kf.points = slam_world::scan(corridor, truth.back(), 180, 20.0, 0.005, static_cast<unsigned>(i));
+    kf.path = i < 7 ? 0.2 * i : 20.0;
+    keyframes.push_back(kf);
+    graph.addNode(i < 7 ? truth.back() : Pose2(28.7 + 0.5, 1.2 - 0.1, 0.1 + 0.04));
+  }
+  for (const bool ridge_closures : {false, true})
+    for (const bool suspect : {false, true})
+    {
+      LaserSlamParams p;
+      p.loop_ridge_closures = ridge_closures;
+      ConstraintBuilder builder(p);
+      if (suspect) builder.suspectEdge(7, 0.5, 0.05);
+      const LoopSearch search = builder.search(keyframes, graph, 7);
+      ASSERT_FALSE(search.candidates.empty());
+      const std::size_t j = search.candidates.front();
+      SlamCounters counters;
+      const LoopMatch m = builder.match(keyframes, graph, j, 7, search, counters);
+      ASSERT_TRUE(m.match);
+      if (!(ridge_closures && suspect))
+      {
+        EXPECT_TRUE(p.ambiguous(m.ambiguity)) << "ambiguity " << m.ambiguity << ", on " << ridge_closures;
+        continue;
+      }
+      EXPECT_FALSE(p.ambiguous(m.ambiguity)) << "ambiguity " << m.ambiguity;
+      const Pose2 want = truth[j].inverse() * truth[7];
+      const Pose2 estimate = graph.node(j).inverse() * graph.node(7);
+      EXPECT_NEAR(m.edge.measurement.y, want.y, 0.02);
+      EXPECT_NEAR(linemap::normalizeAngle(m.edge.measurement.theta - want.theta), 0.0, 0.01);
+      EXPECT_NEAR(m.edge.measurement.x, estimate.x, 0.01);
+      EXPECT_LT(m.edge.translation_weights(0, 0), 1e-3);
+      EXPECT_NEAR(m.edge.translation_weights(1, 1), 1.0, 0.02);
+    }
+}

@@ -3,6 +3,7 @@
 #include <ceres/cubic_interpolation.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -361,6 +362,40 @@ TEST(ScanMatcher, BorderDirectionOfTheWindow)
   EXPECT_EQ(direction(1.0, 2.0).norm(), 0.0);
   line_map_merging::TranslationScores none;  // no grid: no border
   EXPECT_EQ(none.borderDirection(linemap::Vec2(5.0, 5.0)).norm(), 0.0);
+}
+
+// Translations scoring 1 along the diagonal x = y through the window's centre, 0.5 elsewhere: the ridge
+// runs along (1, 1) / sqrt 2 from -reach to +reach steps of the diagonal either side of the centre, and off
+// it the best score is 0.5; a cell 0.3 m off the line scoring 1 is a rival across it.
+TEST(ScanMatcher, RidgeOfTranslationsAlongADiagonal)
+{
+  line_map_merging::TranslationScores spread;
+  spread.centre = linemap::Vec2(1.0, 2.0);
+  spread.step = 0.1;
+  spread.reach = 5;
+  const int side = 2 * spread.reach + 1;
+  spread.best.assign(static_cast<std::size_t>(side * side), 0.5);
+  const auto cell = [&](int ox, int oy) -> double&
+  { return spread.best[static_cast<std::size_t>((oy + spread.reach) * side + ox + spread.reach)]; };
+  for (int i = -spread.reach; i <= spread.reach; ++i) cell(i, i) = 1.0;
+  const linemap::Vec2 at(1.1, 2.1);  // one step up the diagonal
+  const auto ridge = spread.ridgeThrough(at, 0.9);
+  ASSERT_TRUE(ridge);
+  const double h = std::sqrt(0.5), diagonal_step = 0.1 * std::sqrt(2.0);
+  EXPECT_NEAR(std::fabs(ridge->direction.dot(linemap::Vec2(h, h))), 1.0, 1e-9);
+  // From the centre's -5 steps to +5 steps, seen from +1: -6 and +4 diagonal steps (signs by direction).
+  const double sign = ridge->direction.x() > 0.0 ? 1.0 : -1.0;
+  EXPECT_NEAR(sign > 0.0 ? ridge->from : -ridge->to, -6.0 * diagonal_step, 1e-9);
+  EXPECT_NEAR(sign > 0.0 ? ridge->to : -ridge->from, 4.0 * diagonal_step, 1e-9);
+  EXPECT_DOUBLE_EQ(spread.bestAcross(at, ridge->direction, 0.3), 0.5);
+  // A rival (4, 1) steps from the centre: 3 steps of x off the diagonal, 0.3 / sqrt 2 = 0.21 m across it.
+  cell(4, 1) = 1.0;
+  EXPECT_DOUBLE_EQ(spread.bestAcross(at, ridge->direction, 0.3), 0.5);
+  EXPECT_DOUBLE_EQ(spread.bestAcross(at, ridge->direction, 0.2), 1.0);
+  // Nothing scoring the threshold but the best itself: no line.
+  std::fill(spread.best.begin(), spread.best.end(), 0.5);
+  cell(1, 1) = 1.0;
+  EXPECT_FALSE(spread.ridgeThrough(at, 0.9));
 }
 
 TEST(ScanMatcher, CurvatureShapesTheTranslation)

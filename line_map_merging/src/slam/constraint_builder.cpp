@@ -95,8 +95,12 @@ LoopMatch ConstraintBuilder::match(const std::vector<SlamKeyframe>& keyframes, c
   const auto at = std::find(search.candidates.begin(), search.candidates.end(), j);
   const std::size_t c = static_cast<std::size_t>(at - search.candidates.begin());
   const bool own = at != search.candidates.end() && c < search.radii.size();
+  // Slid matches count only across a suspect chain edge: elsewhere a corridor's chain holds the estimate
+  // along its axis no better than the slide, and laser only (no suspects) it may lie metres off there.
+  const bool slide =
+      params_.loop_ridge_closures && slipAllowance(graph, openSuspects(graph), j, k).first > 0.0;
   const auto found = matchLoop(keyframes, graph, j, k, guess, own ? search.radii[c] : search.radius,
-                               own ? search.angles[c] : search.angle);
+                               own ? search.angles[c] : search.angle, slide);
   if (!found) return m;
   m.match = found->match;
   m.ambiguity = found->ambiguity;
@@ -173,7 +177,7 @@ bool ConstraintBuilder::Found::onDeterminedBorder() const
 
 std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
     const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph, std::size_t candidate,
-    std::size_t current, const Pose2& guess, double radius, double angle) const
+    std::size_t current, const Pose2& guess, double radius, double angle, bool slide) const
 {
   std::vector<Vec2> points = submapPoints(keyframes, graph, candidate, current, guess, radius);
   if (points.size() < params_.min_points) return std::nullopt;
@@ -188,7 +192,7 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
   const Fields fields{std::move(points), std::move(coarse), std::nullopt};
   const SearchWindow wide{radius, angle, params_.loop_resolution, params_.loop_angular_step, 0.0, 0.0};
   TranslationScores first;
-  std::optional<Found> found = searchAround(fields, scan, guess, wide, nullptr, &first);
+  std::optional<Found> found = searchAround(fields, scan, guess, wide, nullptr, &first, slide);
   // A best on the border is no peak: the score may go on rising beyond the window. Where the match
   // determines the border's direction and no rival came near it, the same window is searched once more,
   // centred on that best: it holds a peak a little beyond the first window (a drift just past its reach),
@@ -199,7 +203,7 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
       found->onDeterminedBorder())
   {
     const Pose2 centre(found->coarse_best.x(), found->coarse_best.y(), guess.theta);
-    if (std::optional<Found> again = searchAround(fields, scan, centre, wide, &first, nullptr))
+    if (std::optional<Found> again = searchAround(fields, scan, centre, wide, &first, nullptr, false))
       found = std::move(again);
   }
   return found;
@@ -207,7 +211,7 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::matchLoop(
 
 std::optional<ConstraintBuilder::Found> ConstraintBuilder::searchAround(
     const Fields& fields, const std::vector<Vec2>& scan, const Pose2& centre, const SearchWindow& wide,
-    const TranslationScores* earlier, TranslationScores* spread_out) const
+    const TranslationScores* earlier, TranslationScores* spread_out, bool slide) const
 {
   TranslationScores spread;
   const auto candidates = correlativeSearch(fields.coarse, scan, centre, wide, 3, &spread);
@@ -222,6 +226,12 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::searchAround(
       rival = std::max(rival, earlier->bestAwayFrom(result.coarse_best, params_.loop_ambiguity_distance));
     result.ambiguity = rival / candidates.front().score;
   }
+  if (slide && params_.ambiguous(result.ambiguity))
+    if (std::optional<Found> slid = alongRidge(fields, scan, centre, candidates.front(), spread))
+    {
+      if (spread_out) *spread_out = std::move(spread);
+      return slid;
+    }
   if (spread_out) *spread_out = std::move(spread);
   // The gate refuses an ambiguous match whatever its refined score: the fine field is not worth building.
   if (params_.ambiguous(result.ambiguity))
@@ -249,6 +259,46 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::searchAround(
   if (!best) return std::nullopt;
   result.match = *best;
   result.shape = matchShape(result.match, params_);
+  return result;
+}
+
+std::optional<ConstraintBuilder::Found> ConstraintBuilder::alongRidge(const Fields& fields,
+                                                                      const std::vector<Vec2>& scan,
+                                                                      const Pose2& estimate,
+                                                                      const MatchResult& best,
+                                                                      const TranslationScores& spread) const
+{
+  const Vec2 at = best.pose.translation();
+  const auto ridge = spread.ridgeThrough(at, (1.0 - params_.loop_ambiguity_margin) * best.score);
+  if (!ridge) return std::nullopt;
+  const Vec2& along_ridge = ridge->direction;
+  Found result;
+  result.ambiguity = spread.bestAcross(at, along_ridge, params_.loop_ambiguity_distance) / best.score;
+  if (params_.ambiguous(result.ambiguity)) return std::nullopt;
+  // Where the slid matches reach past the estimate's place on the line, the match is made there: a pose slid
+  // onto a look-alike (the next door) fits its jambs to the wrong ones, and its heading with them.
+  const double along = (estimate.translation() - at).dot(along_ridge);
+  if (along < ridge->from - spread.step || along > ridge->to + spread.step) return std::nullopt;
+  const Vec2 on_ridge = at + along * along_ridge;
+  const Pose2 start(on_ridge.x(), on_ridge.y(), best.pose.theta);
+  if (!fields.fine) fields.fine.emplace(fields.points, params_.resolution, params_.sigma, 0.5);
+  const SearchWindow narrow{params_.loop_resolution,
+                            params_.loop_angular_step,
+                            params_.resolution,
+                            params_.loop_angular_step / 3.0,
+                            0.0,
+                            0.0};
+  const auto local = correlativeSearch(*fields.fine, scan, start, narrow, 1);
+  if (local.empty()) return std::nullopt;
+  result.match = refineMatch(*fields.fine, scan, local.front().pose, start, params_.refinement);
+  result.coarse_best = on_ridge;
+  result.border = spread.borderDirection(on_ridge);
+  // Nothing is known along the line: the edge keeps the estimate there (heldToEstimate).
+  result.shape = matchShape(result.match, params_);
+  const Vec2 across(-along_ridge.y(), along_ridge.x());
+  result.shape.weights = across.dot(result.shape.weights * across) * across * across.transpose() +
+                         params_.min_weight * along_ridge * along_ridge.transpose();
+  result.shape.degenerate = true;
   return result;
 }
 

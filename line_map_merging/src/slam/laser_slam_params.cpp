@@ -114,6 +114,7 @@ void readLoop(const linemap::ParamSet& p, LaserSlamParams& s)
     throw linemap::ParameterError(
         "parameter 'loop/ambiguity_ratio' is now 'loop/ambiguity_margin' (1 - ratio: the former 0.9 is 0.1)");
   s.loop_ambiguity_margin = p.getDouble("loop/ambiguity_margin", s.loop_ambiguity_margin);
+  s.loop_ridge_closures = p.getBool("loop/ridge_closures", s.loop_ridge_closures);
   if (!(s.loop_ambiguity_margin >= 0.0 && s.loop_ambiguity_margin <= 1.0))
     throw linemap::ParameterError("parameter 'loop/ambiguity_margin' must be in [0, 1]");
   s.loop_consistency_probability =

@@ -137,6 +137,45 @@ double TranslationScores::bestAwayFrom(const linemap::Vec2& at, double distance)
   return best_score;
 }
 
+std::optional<TranslationScores::Ridge> TranslationScores::ridgeThrough(const linemap::Vec2& at,
+                                                                        double threshold) const
+{
+  std::vector<linemap::Vec2> offsets;
+  const int side = 2 * reach + 1;
+  for (int oy = -reach; oy <= reach; ++oy)
+    for (int ox = -reach; ox <= reach; ++ox)
+      if (best[static_cast<std::size_t>((oy + reach) * side + ox + reach)] >= threshold)
+        offsets.push_back(centre + linemap::Vec2(ox * step, oy * step) - at);
+  if (offsets.size() < 2) return std::nullopt;
+  Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+  for (const auto& o : offsets) scatter += o * o.transpose();
+  Ridge ridge;
+  ridge.direction = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(scatter).eigenvectors().col(1);
+  ridge.from = ridge.to = 0.0;
+  for (const auto& o : offsets)
+  {
+    const double along = o.dot(ridge.direction);
+    ridge.from = std::min(ridge.from, along);
+    ridge.to = std::max(ridge.to, along);
+  }
+  return ridge;
+}
+
+double TranslationScores::bestAcross(const linemap::Vec2& at, const linemap::Vec2& direction,
+                                     double distance) const
+{
+  double best_score = 0.0;
+  const int side = 2 * reach + 1;
+  for (int oy = -reach; oy <= reach; ++oy)
+    for (int ox = -reach; ox <= reach; ++ox)
+    {
+      const linemap::Vec2 o = centre + linemap::Vec2(ox * step, oy * step) - at;
+      if (std::fabs(o.x() * direction.y() - o.y() * direction.x()) >= distance)
+        best_score = std::max(best_score, best[static_cast<std::size_t>((oy + reach) * side + ox + reach)]);
+    }
+  return best_score;
+}
+
 linemap::Vec2 TranslationScores::borderDirection(const linemap::Vec2& at) const
 {
   linemap::Vec2 out = linemap::Vec2::Zero();

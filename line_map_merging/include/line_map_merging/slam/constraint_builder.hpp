@@ -117,7 +117,7 @@ class ConstraintBuilder
   };
   std::optional<Found> matchLoop(const std::vector<SlamKeyframe>& keyframes, const PoseGraph& graph,
                                  std::size_t candidate, std::size_t current, const linemap::Pose2& guess,
-                                 double radius, double angle) const;
+                                 double radius, double angle, bool slide) const;
   /// A submap's points and their fields: the coarse one for the search, the fine one built when a match is
   /// first refined.
   struct Fields
@@ -127,10 +127,19 @@ class ConstraintBuilder
     mutable std::optional<LikelihoodGrid> fine;
   };
   /// The coarse search of `wide` around `centre`, its best few refined unless ambiguous; rivals also among
-  /// the translations of an `earlier` search, and the spread of this one's scores into `spread_out`.
+  /// the translations of an `earlier` search, and the spread of this one's scores into `spread_out`; with
+  /// `slide`, a match ambiguous only along a line is made where the line passes `centre` (alongRidge).
   std::optional<Found> searchAround(const Fields& fields, const std::vector<linemap::Vec2>& scan,
                                     const linemap::Pose2& centre, const SearchWindow& wide,
-                                    const TranslationScores* earlier, TranslationScores* spread_out) const;
+                                    const TranslationScores* earlier, TranslationScores* spread_out,
+                                    bool slide) const;
+
+  /// A match ambiguous along one line through its `best` and nowhere across it (loop/ridge_closures):
+  /// matched again where the line passes `estimate`, shaped to count only across the line (nothing when the
+  /// line's good scores do not reach that far, or rivals lie across it).
+  std::optional<Found> alongRidge(const Fields& fields, const std::vector<linemap::Vec2>& scan,
+                                  const linemap::Pose2& estimate, const MatchResult& best,
+                                  const TranslationScores& spread) const;
 
   LaserSlamParams params_;
   double path_at_closure_ = 0.0;  ///< [m] front-end path of the last accepted closure's keyframe

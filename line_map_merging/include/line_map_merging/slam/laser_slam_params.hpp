@@ -104,6 +104,10 @@ struct LaserSlamParams
   /// no room to loosen the test.
   double loop_ambiguity_distance = 0.3;  ///< [m]
   double loop_ambiguity_margin = 0.1;
+  /// Across a suspect chain edge no closure spans yet, a match ambiguous only along one line through its best
+  /// (a corridor's slid matches, no rival across it) is matched again where that line passes the estimate
+  /// and goes in for the direction across it and the heading; along the line the edge keeps the estimate.
+  bool loop_ridge_closures = true;
   /// Whether a match whose rival scores `ambiguity` (a fraction of the best) is refused as ambiguous.
   bool ambiguous(double ambiguity) const
   {

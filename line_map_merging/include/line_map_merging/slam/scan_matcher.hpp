@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "line_map_merging/slam/likelihood_grid.hpp"
@@ -42,6 +43,16 @@ struct TranslationScores
   /// corner's diagonal), zero inside or without a grid: a best found there is no peak along it, since the
   /// score may go on rising beyond the window.
   linemap::Vec2 borderDirection(const linemap::Vec2& at) const;
+  /// The line the translations scoring `threshold` or more spread along from `at` (the principal axis of
+  /// their offsets), and how far along it they reach either side: a corridor's slid matches.
+  struct Ridge
+  {
+    linemap::Vec2 direction = linemap::Vec2::UnitX();  ///< unit
+    double from = 0.0, to = 0.0;  ///< [m] the least and greatest offset along `direction`
+  };
+  std::optional<Ridge> ridgeThrough(const linemap::Vec2& at, double threshold) const;
+  /// The best score among translations at least `distance` off the line through `at` along `direction`.
+  double bestAcross(const linemap::Vec2& at, const linemap::Vec2& direction, double distance) const;
 };
 
 struct RefinementParams
