@@ -240,26 +240,33 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::searchAround(
     result.shape = matchShape(result.match, params_);
     return result;
   }
-  if (!fields.fine) fields.fine.emplace(fields.points, params_.resolution, params_.sigma, 0.5);
-  SearchWindow narrow{params_.loop_resolution,
-                      params_.loop_angular_step,
-                      params_.resolution,
-                      params_.loop_angular_step / 3.0,
-                      0.0,
-                      0.0};
   std::optional<MatchResult> best;
   for (const auto& c : candidates)
   {
-    const auto local = correlativeSearch(*fields.fine, scan, c.pose, narrow, 1);
-    if (local.empty()) continue;
-    const MatchResult refined =
-        refineMatch(*fields.fine, scan, local.front().pose, local.front().pose, params_.refinement);
-    if (!best || refined.score > best->score) best = refined;
+    const std::optional<MatchResult> refined = refinedAround(fields, scan, c.pose, std::nullopt);
+    if (refined && (!best || refined->score > best->score)) best = refined;
   }
   if (!best) return std::nullopt;
   result.match = *best;
   result.shape = matchShape(result.match, params_);
   return result;
+}
+
+std::optional<MatchResult> ConstraintBuilder::refinedAround(const Fields& fields,
+                                                            const std::vector<Vec2>& scan, const Pose2& start,
+                                                            const std::optional<Pose2>& prior) const
+{
+  if (!fields.fine) fields.fine.emplace(fields.points, params_.resolution, params_.sigma, 0.5);
+  const SearchWindow narrow{params_.loop_resolution,
+                            params_.loop_angular_step,
+                            params_.resolution,
+                            params_.loop_angular_step / 3.0,
+                            0.0,
+                            0.0};
+  const auto local = correlativeSearch(*fields.fine, scan, start, narrow, 1);
+  if (local.empty()) return std::nullopt;
+  return refineMatch(*fields.fine, scan, local.front().pose, prior.value_or(local.front().pose),
+                     params_.refinement);
 }
 
 std::optional<ConstraintBuilder::Found> ConstraintBuilder::alongRidge(const Fields& fields,
@@ -281,16 +288,9 @@ std::optional<ConstraintBuilder::Found> ConstraintBuilder::alongRidge(const Fiel
   if (along < ridge->from - spread.step || along > ridge->to + spread.step) return std::nullopt;
   const Vec2 on_ridge = at + along * along_ridge;
   const Pose2 start(on_ridge.x(), on_ridge.y(), best.pose.theta);
-  if (!fields.fine) fields.fine.emplace(fields.points, params_.resolution, params_.sigma, 0.5);
-  const SearchWindow narrow{params_.loop_resolution,
-                            params_.loop_angular_step,
-                            params_.resolution,
-                            params_.loop_angular_step / 3.0,
-                            0.0,
-                            0.0};
-  const auto local = correlativeSearch(*fields.fine, scan, start, narrow, 1);
-  if (local.empty()) return std::nullopt;
-  result.match = refineMatch(*fields.fine, scan, local.front().pose, start, params_.refinement);
+  const std::optional<MatchResult> refined = refinedAround(fields, scan, start, start);
+  if (!refined) return std::nullopt;
+  result.match = *refined;
   result.coarse_best = on_ridge;
   result.border = spread.borderDirection(on_ridge);
   // Nothing is known along the line: the edge keeps the estimate there (heldToEstimate).

@@ -134,6 +134,11 @@ class ConstraintBuilder
                                     const TranslationScores* earlier, TranslationScores* spread_out,
                                     bool slide) const;
 
+  /// The best pose of the fine search one coarse cell and angular step around `start` (the fine field built
+  /// when first needed), refined held towards `prior` (without one, towards that best).
+  std::optional<MatchResult> refinedAround(const Fields& fields, const std::vector<linemap::Vec2>& scan,
+                                           const linemap::Pose2& start,
+                                           const std::optional<linemap::Pose2>& prior) const;
   /// A match ambiguous along one line through its `best` and nowhere across it (loop/ridge_closures):
   /// matched again where the line passes `estimate`, shaped to count only across the line (nothing when the
   /// line's good scores do not reach that far, or rivals lie across it).
