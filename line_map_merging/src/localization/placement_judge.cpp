@@ -190,8 +190,12 @@ PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pos
   // of what the foremost place explains is none (where everything that fits is contradicted, nothing is).
   Verdict verdict;
   const double allowed_in_free = std::max(min_evidence, 0.1 * static_cast<double>(points.size()));
-  const Place* best = nullptr;
-  std::size_t best_in_free = 0;
+  struct Candidate
+  {
+    const Place* place;
+    std::size_t in_free;
+  };
+  std::vector<Candidate> uncontradicted;
   for (const Place& place : places)
   {
     if (place.score < 0.5 * places.front().score) break;
@@ -199,11 +203,29 @@ PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pos
     if (seenThroughLength(way, place.pose) > max_seen_through_ ||
         static_cast<double>(in_free) > allowed_in_free)
       continue;
-    best = &place;
-    best_in_free = in_free;
-    break;
+    uncontradicted.push_back({&place, in_free});
   }
-  if (!best) return verdict;
+  // Points where the map's scans saw free space contradict a place; points where they never looked contradict
+  // nothing. So a place may explain less of the way only because the way runs out of the map there: the best
+  // place yields to such a place, apart from it and explaining a rival's share of its points, when it puts
+  // clearly more of the way in free space than the registration error and people would.
+  const double clearly_more =
+      std::max(min_evidence, kContradictionShare * static_cast<double>(points.size()));
+  const auto yields = [&](const Candidate& c)
+  {
+    return std::any_of(uncontradicted.begin(), uncontradicted.end(),
+                       [&](const Candidate& other)
+                       {
+                         return apart(c.place->pose, other.place->pose) &&
+                                other.place->score >= rival_share * c.place->score &&
+                                static_cast<double>(c.in_free) >
+                                    2.0 * static_cast<double>(other.in_free) + clearly_more;
+                       });
+  };
+  const auto chosen = std::find_if_not(uncontradicted.begin(), uncontradicted.end(), yields);
+  if (chosen == uncontradicted.end()) return verdict;
+  const Place* best = chosen->place;
+  const std::size_t best_in_free = chosen->in_free;
   // A rival counts when it explains about as much (or, with unknown space, a share of as much; or it was a
   // rival before) and is not more contradicted than the best.
   const double needed = std::min(best->score - min_evidence, rival_share * best->score);

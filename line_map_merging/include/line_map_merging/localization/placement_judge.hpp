@@ -90,10 +90,16 @@ class PlacementJudge
   /// support nor contradict a place: a place at the map's edge explains less of the way than a look-alike
   /// inside it without being wrong. Then an uncontradicted rival explaining this share of the best's points
   /// leaves the place open too.
+  /// A place that puts more of the way's points in the map's free space than twice another place does plus
+  /// kContradictionShare of the points (and at least min_evidence) yields to that place when it explains
+  /// `rival_share` of as much (the way may run out of the map there) and is not contradicted itself.
   /// `also`: the places of an earlier ambiguous verdict. Each stays a rival until contradicted, however
   /// little it explains: the way may since have run out of the map there, which is no evidence against it.
   Verdict judge(const Way& way, const linemap::Pose2& placed, double min_evidence, double rival_share = 1.0,
                 const std::vector<linemap::Pose2>& also = {}) const;
+
+  /// The way's points in the map's free space beyond what registration error and passers-by leave.
+  static constexpr double kContradictionShare = 0.02;
 
   /// The space the map's own scans proved empty (its surfaces and the points they were seen from: a saved
   /// SLAM's keyframes), less a margin along every wall. Unknown space contradicts nothing; a place that puts
