@@ -66,7 +66,7 @@ struct LaserSlamParams
   double loop_min_path = 5.0;    ///< [m] path between a keyframe and a candidate
   /// The loop match uses only the scan points (at the estimate) inside some submap keyframe's view cone
   /// (submap_view.hpp): a place the submap never looked at cannot tell where the scan lies.
-  bool loop_in_view_only = false;
+  bool loop_in_view_only = true;
   /// With loop_in_view_only: a scan with a smaller share of its points in view is not matched (a sliver of
   /// overlap fits in many places, and fixes a pose less well).
   double loop_min_in_view = 0.5;
