@@ -105,6 +105,7 @@ TEST(ShippedConfig, SlamDefaultsAreTheConfigFiles)
   EXPECT_SAME(loop_ambiguity_margin);
   EXPECT_SAME(loop_ridge_closures);
   EXPECT_SAME(loop_in_view_only);
+  EXPECT_SAME(suspect_edge_follows_odometry);
   EXPECT_SAME(loop_min_in_view);
   EXPECT_SAME(loop_consistency_probability);
   EXPECT_SAME(loop_scale_by_disagreement);

@@ -86,9 +86,10 @@ TEST(SlamSlip, OfficeSlipsAreRepairedByLaterClosures)
 }
 
 // The square room: one lap of 2 x 2 m, every closure ambiguous in part (a square's walls), the few
-// accepted ones each 5 cm certain, so a repaired slip ends at 2-3.5x a clean error of millimetres. Without
-// the widening 0 of 20 within 4x (4.8-14x), without the widened window 13 of 20.
-TEST(SlamSlip, SquareRoomSlipsAreRepairedToAFewTimesTheCleanError)
+// accepted ones each 5 cm certain: closures alone repaired a slip to 2-3.5x a clean error of millimetres,
+// none of 20 within 2x. The slipped keyframe edge on the odometry's motion, which the two keyframes' scans
+// fit better than the slipped match (graph/suspect_edge_follows_odometry), leaves nothing to repair.
+TEST(SlamSlip, SquareRoomSlipsAreRepairedByTheScanPair)
 {
-  EXPECT_GE(repairedOf20(simulated("square_room.yaml"), 4.0, 0.01), 15u);
+  EXPECT_GE(repairedOf20(simulated("square_room.yaml"), 2.0, 0.01), 19u);
 }

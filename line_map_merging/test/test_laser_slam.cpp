@@ -104,6 +104,48 @@ TEST(LaserSlam, DriftingOdometryLoopCloses)
   for (std::size_t k = 1; k < t.size(); ++k) EXPECT_GT(t[k].first, t[k - 1].first);
 }
 
+// No closure to repair anything (loop search off), true odometry. A slip of the front end halfway (0.3 m and
+// 5 degrees: its frame jumps, its local map with it) leaves every later pose 0.3 m off, unless the keyframe
+// edge across it takes the odometry's motion, which the two keyframes' scans fit better than the slipped
+// match's (only the few scans between the slip and the next keyframe then stay off). A jump of the odometry
+// instead (its later poses 0.3 m and 5 degrees off) is a disagreement too, but there the scans fit the match:
+// the edge keeps it, and the trajectory stays on the truth.
+TEST(LaserSlam, TheScanPairTellsWhichOfMatchAndOdometrySlipped)
+{
+  const Pose2 slip(0.3, 0.0, 5.0 * linemap::kPi / 180.0);
+  for (const bool follow : {true, false})
+  {
+    LaserSlamParams p;
+    p.loop_candidates = 0;
+    p.suspect_edge_follows_odometry = follow;
+    Room run(p);
+    run.odom = run.truth;
+    const std::size_t half = run.truth.size() / 2;
+    for (std::size_t i = 0; i < run.truth.size(); ++i)
+    {
+      if (i == half) run.slam.injectFrontEndSlip(slip);
+      ASSERT_NE(run.slam.addScan(run.scan(i, true)), SlamOutcome::kRejected);
+    }
+    const auto& c = run.slam.counters();
+    EXPECT_EQ(c.suspect_edges, 1u);
+    EXPECT_EQ(c.suspect_edges_on_odometry, follow ? 1u : 0u);
+    const double mean = errors(run.slam.scanPoses(), run.truth).second;
+    if (follow)
+      EXPECT_LT(mean, 0.03);
+    else
+      EXPECT_GT(mean, 0.2);  // half the scans 0.3 m off and more, turned 5 degrees about the slip
+  }
+  Room jumped;
+  jumped.odom = jumped.truth;
+  for (std::size_t i = jumped.truth.size() / 2; i < jumped.truth.size(); ++i)
+    jumped.odom[i] = jumped.odom[i] * slip;
+  for (std::size_t i = 0; i < jumped.truth.size(); ++i)
+    ASSERT_NE(jumped.slam.addScan(jumped.scan(i, true)), SlamOutcome::kRejected);
+  EXPECT_EQ(jumped.slam.counters().suspect_edges, 1u);
+  EXPECT_EQ(jumped.slam.counters().suspect_edges_on_odometry, 0u);
+  expectOnTruth(jumped.slam.scanPoses(), jumped.truth);
+}
+
 // Every closure attempt that got as far as a match is recorded with its keyframes and outcome; the
 // records agree with the counters, and the first accepted closure joins two keyframes that the truth
 // puts at the laps' meeting point (the start, where the second lap first sees the first one again).

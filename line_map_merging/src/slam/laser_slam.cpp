@@ -10,6 +10,8 @@
 #include <stdexcept>
 
 #include "line_map_merging/slam/chain_edge.hpp"
+#include "line_map_merging/slam/likelihood_grid.hpp"
+#include "line_map_merging/slam/scan_matcher.hpp"
 #include "linemap/small_helpers.hpp"
 
 namespace line_map_merging
@@ -32,7 +34,8 @@ std::string closureSummary(const SlamCounters& c)
       << c.loops_inconsistent << " inconsistent, " << c.loops_rejected_graph << " graph, " << c.loops_pending
       << " uncorroborated; " << c.loops_by_consensus << " by consensus; most inconsistent in a row "
       << c.most_inconsistent_in_a_row << "; longest run held to the constant velocity " << std::fixed
-      << std::setprecision(1) << c.longest_held_time << " s)";
+      << std::setprecision(1) << c.longest_held_time << " s; " << c.suspect_edges
+      << " chain edges disagreeing with the odometry, " << c.suspect_edges_on_odometry << " of them on it)";
   return out.str();
 }
 
@@ -126,15 +129,19 @@ void LaserSlam::addKeyframe(LocalScanResult& scan, std::size_t scan_index)
   {
     const Pose2 relative = keyframes_.back().local.inverse() * kf.local;
     const std::size_t prev = keyframes_.size() - 1;
-    graph_.addNode(graph_.node(prev) * relative);
     PoseGraphEdge e;
     e.from = prev;
     e.to = prev + 1;
     e.measurement = relative;
     e.sigma_xy = chain_matched ? params_.edge_sigma_xy : params_.odometry_sigma_xy;
     e.sigma_theta = chain_matched ? params_.edge_sigma_theta : params_.odometry_sigma_theta;
-    if (chain_matched && scan.odometry_motion && params_.edge_odometry_disagreement)
-      widenBySlip(scan.odometry_motion->inverse() * relative, e);
+    if (chain_matched && scan.odometry_motion && params_.edge_odometry_disagreement &&
+        widenBySlip(scan.odometry_motion->inverse() * relative, e) && params_.suspect_edge_follows_odometry &&
+        odometryFitsBetter(keyframes_.back(), kf.points, relative, *scan.odometry_motion))
+    {
+      e.measurement = *scan.odometry_motion;
+      ++counters_.suspect_edges_on_odometry;
+    }
     if (chain_matched)
     {
       // What the keyframe's match determined: along a direction it left to the odometry, the edge is as
@@ -142,6 +149,7 @@ void LaserSlam::addKeyframe(LocalScanResult& scan, std::size_t scan_index)
       e.translation_weights = chainEdgeTranslationWeights(last_match_weights_, keyframes_.back().local.theta,
                                                           params_.edge_sigma_xy, params_.odometry_sigma_xy);
     }
+    graph_.addNode(graph_.node(prev) * e.measurement);
     graph_.addEdge(e);
   }
   keyframes_.push_back(std::move(kf));
@@ -180,7 +188,16 @@ void LaserSlam::tieToNearestSaved(std::size_t k, std::size_t saved, double sigma
   graph_.addEdge(e);
 }
 
-void LaserSlam::widenBySlip(const Pose2& disagreement, PoseGraphEdge& e)
+bool LaserSlam::odometryFitsBetter(const SlamKeyframe& previous, const std::vector<linemap::Vec2>& points,
+                                   const Pose2& matched, const Pose2& odometry) const
+{
+  // The two scans alone, in the previous keyframe's frame: the front end matched against a local map that
+  // a slip carries along with it, so only the scan pair still shows where the new scan lies.
+  const LikelihoodGrid previous_scan(previous.points, previous.joins, params_.resolution, params_.sigma, 0.5);
+  return matchScore(previous_scan, points, odometry) > matchScore(previous_scan, points, matched);
+}
+
+bool LaserSlam::widenBySlip(const Pose2& disagreement, PoseGraphEdge& e)
 {
   // The match against the odometry over the same step: two independent measurements of one motion. Their
   // usual disagreement is the odometry's noise (robust scale of the recent ones: the odometry's quality
@@ -205,7 +222,8 @@ void LaserSlam::widenBySlip(const Pose2& disagreement, PoseGraphEdge& e)
     shift_scale += 1.4826 * linemap::median(shifts);
     turn_scale += 1.4826 * linemap::median(turns);
   }
-  if (shift > kOutlier * shift_scale || turn > kOutlier * turn_scale)
+  const bool suspect = shift > kOutlier * shift_scale || turn > kOutlier * turn_scale;
+  if (suspect)
   {
     e.sigma_xy = std::hypot(e.sigma_xy, shift);
     e.sigma_theta = std::hypot(e.sigma_theta, turn);
@@ -213,10 +231,11 @@ void LaserSlam::widenBySlip(const Pose2& disagreement, PoseGraphEdge& e)
     constraints_.suspectEdge(e.to, shift, turn);
     // An outlier does not widen the noise it is judged by, once there is enough of it to judge by (until
     // then the median shrugs one off, and an odometry noisier than the edge's sigmas still gets its scale).
-    if (recent_disagreements_.size() >= kShortHistory) return;
+    if (recent_disagreements_.size() >= kShortHistory) return true;
   }
   recent_disagreements_.push_back({shift, turn});
   if (recent_disagreements_.size() > kHistory) recent_disagreements_.pop_front();
+  return suspect;
 }
 
 void LaserSlam::closeLoops()
@@ -352,6 +371,7 @@ std::vector<std::pair<std::string, std::string>> LaserSlam::diagnostics() const
           {"front-end matches at the search window's border", n(c.border_matches)},
           {"longest run held to the constant velocity [s]", fixed(c.longest_held_time)},
           {"chain edges widened (disagreeing with the odometry)", n(c.suspect_edges)},
+          {"of them on the odometry's motion (the scan pair fits it better)", n(c.suspect_edges_on_odometry)},
           {"share of the path no closure spans [%]",
            std::to_string(static_cast<int>(std::lround(100.0 * unclosedShare())))},
           {"optimizations", n(c.optimizations)},

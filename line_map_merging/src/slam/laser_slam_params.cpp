@@ -66,6 +66,8 @@ void readGraph(const linemap::ParamSet& p, LaserSlamParams& s)
   s.odometry_sigma_xy = positiveParam(p, "graph/odometry_sigma_xy", s.odometry_sigma_xy);
   s.odometry_sigma_theta = positiveParam(p, "graph/odometry_sigma_theta", s.odometry_sigma_theta);
   s.edge_odometry_disagreement = p.getBool("graph/edge_odometry_disagreement", s.edge_odometry_disagreement);
+  s.suspect_edge_follows_odometry =
+      p.getBool("graph/suspect_edge_follows_odometry", s.suspect_edge_follows_odometry);
   s.loop_sigma_xy = positiveParam(p, "graph/loop_sigma_xy", s.loop_sigma_xy);
   s.loop_sigma_theta = positiveParam(p, "graph/loop_sigma_theta", s.loop_sigma_theta);
   s.loop_loss_scale = positiveParam(p, "graph/loop_loss_scale", s.loop_loss_scale);

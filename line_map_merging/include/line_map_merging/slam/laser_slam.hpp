@@ -132,8 +132,12 @@ class LaserSlam
   /// no odometry to leave a direction to).
   Eigen::Matrix2d last_match_weights_ = Eigen::Matrix2d::Identity();
   /// The chain edge of a keyframe, its sigmas widened when its match disagrees with the odometry far more
-  /// than the run's matches usually do (a slip).
-  void widenBySlip(const linemap::Pose2& disagreement, PoseGraphEdge& e);
+  /// than the run's matches usually do (a slip): true then.
+  bool widenBySlip(const linemap::Pose2& disagreement, PoseGraphEdge& e);
+  /// Whether `points` (a new keyframe's scan) fit the `previous` keyframe's scan better at the odometry's
+  /// motion than at the front end's `matched` one, both relative to the previous keyframe.
+  bool odometryFitsBetter(const SlamKeyframe& previous, const std::vector<linemap::Vec2>& points,
+                          const linemap::Pose2& matched, const linemap::Pose2& odometry) const;
   /// The recent chain edges' disagreements with the odometry (shift, turn): the odometry's own noise as
   /// this run sees it.
   std::deque<std::pair<double, double>> recent_disagreements_;

@@ -61,6 +61,10 @@ struct LaserSlamParams
   /// two agree (the disagreement added in quadrature to its sigmas), and the loop search looks across it
   /// until a closure spans it (ConstraintBuilder::suspectEdge).
   bool edge_odometry_disagreement = true;
+  /// Such an edge takes the odometry's motion as its mean (its sigmas still widened by the disagreement)
+  /// when the new keyframe's scan fits the previous keyframe's better there than at the match's: a slip of
+  /// the front end carries its local map along, the scan pair does not move.
+  bool suspect_edge_follows_odometry = true;
   double loop_sigma_xy = 0.05, loop_sigma_theta = 0.01;
   double loop_loss_scale = 1.0;  ///< Cauchy scale, in standard deviations
   double loop_min_path = 5.0;    ///< [m] path between a keyframe and a candidate

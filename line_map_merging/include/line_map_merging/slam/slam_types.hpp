@@ -44,6 +44,7 @@ struct SlamCounters
   std::size_t inconsistent_in_a_row = 0, most_inconsistent_in_a_row = 0, border_matches = 0;
   /// Chain edges whose match disagreed with the odometry beyond its uncertainty (loosened).
   std::size_t suspect_edges = 0;
+  std::size_t suspect_edges_on_odometry = 0;  ///< of them, those whose mean is the odometry's motion
   /// [s] Without usable odometry: how long the current run of matches has lasted whose translation along
   /// some direction is more the constant-velocity prediction's than their own, and the longest such run.
   /// Along that direction the front end only assumes the robot keeps its speed: a long run is where it may
