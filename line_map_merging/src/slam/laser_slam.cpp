@@ -192,9 +192,12 @@ bool LaserSlam::odometryFitsBetter(const SlamKeyframe& previous, const std::vect
                                    const Pose2& matched, const Pose2& odometry) const
 {
   // The two scans alone, in the previous keyframe's frame: the front end matched against a local map that
-  // a slip carries along with it, so only the scan pair still shows where the new scan lies.
+  // a slip carries along with it, so only the scan pair still shows where the new scan lies. It tells only
+  // where the odometry's pose makes the pair fit: where the two scans share little (far apart, outdoors)
+  // neither pose fits them, and the match is kept.
   const LikelihoodGrid previous_scan(previous.points, previous.joins, params_.resolution, params_.sigma, 0.5);
-  return matchScore(previous_scan, points, odometry) > matchScore(previous_scan, points, matched);
+  const double on_odometry = matchScore(previous_scan, points, odometry);
+  return on_odometry >= kPairFits && on_odometry > matchScore(previous_scan, points, matched);
 }
 
 bool LaserSlam::widenBySlip(const Pose2& disagreement, PoseGraphEdge& e)

@@ -134,8 +134,10 @@ class LaserSlam
   /// The chain edge of a keyframe, its sigmas widened when its match disagrees with the odometry far more
   /// than the run's matches usually do (a slip): true then.
   bool widenBySlip(const linemap::Pose2& disagreement, PoseGraphEdge& e);
-  /// Whether `points` (a new keyframe's scan) fit the `previous` keyframe's scan better at the odometry's
-  /// motion than at the front end's `matched` one, both relative to the previous keyframe.
+  /// Whether `points` (a new keyframe's scan) fit the `previous` keyframe's scan at the odometry's motion
+  /// (a mean field value of at least kPairFits: the points about a sigma from the other scan's) and better
+  /// than at the front end's `matched` one, both relative to the previous keyframe.
+  static constexpr double kPairFits = 0.5;
   bool odometryFitsBetter(const SlamKeyframe& previous, const std::vector<linemap::Vec2>& points,
                           const linemap::Pose2& matched, const linemap::Pose2& odometry) const;
   /// The recent chain edges' disagreements with the odometry (shift, turn): the odometry's own noise as
