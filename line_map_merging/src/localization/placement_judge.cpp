@@ -179,22 +179,14 @@ std::vector<PlacementJudge::Place> PlacementJudge::weigh(const std::vector<linem
   return places;
 }
 
-PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pose2& placed,
-                                              double min_evidence, double rival_share,
-                                              const std::vector<linemap::Pose2>& also) const
+PlacementJudge::Candidate PlacementJudge::best(const Way& way, const std::vector<linemap::Vec2>& points,
+                                               const std::vector<Place>& places, double min_evidence,
+                                               double rival_share) const
 {
-  const std::vector<linemap::Vec2> points = way.points();
-  const std::vector<Place> places = weigh(points, placed, also);
   // The best place is the one explaining most points that neither sees through walls nor puts more than a
   // tenth of the points (registration error, people) in the map's free space; one explaining less than half
   // of what the foremost place explains is none (where everything that fits is contradicted, nothing is).
-  Verdict verdict;
   const double allowed_in_free = std::max(min_evidence, 0.1 * static_cast<double>(points.size()));
-  struct Candidate
-  {
-    const Place* place;
-    std::size_t in_free;
-  };
   std::vector<Candidate> uncontradicted;
   for (const Place& place : places)
   {
@@ -223,28 +215,39 @@ PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pos
                        });
   };
   const auto chosen = std::find_if_not(uncontradicted.begin(), uncontradicted.end(), yields);
-  if (chosen == uncontradicted.end()) return verdict;
-  const Place* best = chosen->place;
-  const std::size_t best_in_free = chosen->in_free;
+  return chosen == uncontradicted.end() ? Candidate{} : *chosen;
+}
+
+PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pose2& placed,
+                                              double min_evidence, double rival_share,
+                                              const std::vector<linemap::Pose2>& also) const
+{
+  const std::vector<linemap::Vec2> points = way.points();
+  const std::vector<Place> places = weigh(points, placed, also);
+  Verdict verdict;
+  const Candidate chosen = best(way, points, places, min_evidence, rival_share);
+  if (!chosen.place) return verdict;
   // A rival counts when it explains about as much (or, with unknown space, a share of as much; or it was a
   // rival before) and is not more contradicted than the best.
-  const double needed = std::min(best->score - min_evidence, rival_share * best->score);
+  const double needed = std::min(chosen.place->score - min_evidence, rival_share * chosen.place->score);
   for (const Place& place : places)
   {
-    if (&place == best || !apart(best->pose, place.pose) || (!place.kept && place.score <= needed) ||
+    if (&place == chosen.place || !apart(chosen.place->pose, place.pose) ||
+        (!place.kept && place.score <= needed) ||
         std::any_of(verdict.rivals.begin(), verdict.rivals.end(),
                     [&](const linemap::Pose2& r) { return !apart(r, place.pose); }))
       continue;
     if (seenThroughLength(way, place.pose) > max_seen_through_ ||
         static_cast<double>(pointsInFreeSpace(points, place.pose)) >
-            static_cast<double>(best_in_free) + min_evidence)
+            static_cast<double>(chosen.in_free) + min_evidence)
       continue;
     verdict.rivals.push_back(place.pose);
   }
-  verdict.place = best->pose;
+  verdict.place = chosen.place->pose;
   verdict.outcome = verdict.rivals.empty() ? Outcome::kPlaced : Outcome::kAmbiguous;
   return verdict;
 }
+
 double PlacementJudge::seenThroughLength(const Way& way, const linemap::Pose2& placed) const
 {
   std::vector<FreeSpaceWitness> witnesses;

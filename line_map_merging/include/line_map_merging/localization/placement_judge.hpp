@@ -126,6 +126,14 @@ class PlacementJudge
     linemap::Pose2 pose;
     bool kept;  ///< one of `also`: a rival until contradicted, however little of the way it explains
   };
+  struct Candidate
+  {
+    const Place* place = nullptr;
+    std::size_t in_free = 0;  ///< the way's points in the map's free space there
+  };
+  /// The best of `places` (judge()): not contradicted, and yielding to no other; `place` null when none.
+  Candidate best(const Way& way, const std::vector<linemap::Vec2>& points, const std::vector<Place>& places,
+                 double min_evidence, double rival_share) const;
   SegmentMatch match(const std::vector<linemap::Vec2>& points, const linemap::Pose2& from) const;
   /// `placed` refined, `also` and the global search's candidates, each refined and scored, best first.
   std::vector<Place> weigh(const std::vector<linemap::Vec2>& points, const linemap::Pose2& placed,
