@@ -204,17 +204,21 @@ class CaeRlsm : public Merger
   /// id survives and takes the others' leaves. Returns how many map segments were merged away.
   /// `changed` (optional) receives the ids of the surviving segments that a merge changed.
   std::size_t mergeMapSegments(IdQueue pending, IdQueue* changed = nullptr);
-  /// After a keyframe's originals are in (addKeyframe, regroup): the map merge and crossing resolution
-  /// of what they touched. `offset` is the step of kKeyframeOtm to count the steps at.
   /// The segments (laser frame) of the keyframe in `slot` as new leaves, placed at its pose.
   void insertOriginals(std::uint32_t slot, const std::vector<Segment2>& segments, AddResult& result,
                        IdQueue& touched);
+  /// After a keyframe's originals are in (addKeyframe, regroup): the map merge and crossing resolution
+  /// of what they touched. `offset` is the step of kKeyframeOtm to count the steps at.
   void finishKeyframe(const IdQueue& touched, std::size_t offset);
   /// Crossing resolution (crossing_resolution.cpp): resolves every crossing of the pending map segments,
   /// re-queueing what it changes, until none of them crosses another. Returns how many pairs it resolved.
   /// With `suspects` (resolveAllCrossings): a pending segment not among them is skipped, and every
-  /// segment near a resolved pair joins them.
-  std::size_t resolveCrossings(IdQueue pending, std::unordered_set<std::uint64_t>* suspects = nullptr);
+  /// segment near a resolved pair joins them. `cut` (optional) receives the ids of the resolved pairs.
+  std::size_t resolveCrossings(IdQueue pending, std::unordered_set<std::uint64_t>* suspects = nullptr,
+                               IdQueue* cut = nullptr);
+  /// With map_merge: the map merge of the segments crossing resolution changed (`cut`), and the crossing
+  /// resolution of what that merge changed, in turn for a few rounds (crossing_resolution.cpp).
+  void mergeCutSegments(IdQueue cut);
   /// One crossing pair at `x`, a < b. `trim_only`: cut, never move originals or merge.
   void resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool trim_only, IdQueue& pending);
   /// A bent wall's pair: their originals split at the bend (the vertex moved with the split until it

@@ -143,7 +143,9 @@ void CaeRlsm::finishKeyframe(const IdQueue& touched, std::size_t offset)
   {
     const StepTimes<kStepCount>::Scope timed(steps_, offset + (kKeyframeCrossings - kKeyframeOtm));
     changed.insert(touched.begin(), touched.end());
-    resolveCrossings(std::move(changed));
+    IdQueue cut;
+    resolveCrossings(std::move(changed), nullptr, &cut);
+    mergeCutSegments(std::move(cut));
   }
 }
 

@@ -12,6 +12,7 @@
 // - Larger angle, or opposite facing sides: two walls. Only the arm with the least support (length of
 //   the originals' projections on it) is cut at the crossing, leaving a T: an overshoot or a fusion
 //   across a gap is cut, a wall seen on both sides of the crossing stays whole.
+// A cut can leave a segment in another's fusion band: what the cuts changed is map-merged afterwards.
 #include <algorithm>
 #include <array>
 #include <tuple>
@@ -198,7 +199,8 @@ void CaeRlsm::splitAtBend(Node& na, Node& nb, const Vec2& x, bool a_before)
   keeps_after.segment = piece_after.segment;
 }
 
-std::size_t CaeRlsm::resolveCrossings(IdQueue pending, std::unordered_set<std::uint64_t>* suspects)
+std::size_t CaeRlsm::resolveCrossings(IdQueue pending, std::unordered_set<std::uint64_t>* suspects,
+                                      IdQueue* cut)
 {
   std::size_t resolved = 0;
   // Splitting and merging can lengthen segments; past this many pairs only cutting, which only
@@ -232,6 +234,11 @@ std::size_t CaeRlsm::resolveCrossings(IdQueue pending, std::unordered_set<std::u
       if (other == id || !segmentsCross(s, nodes_.at(other).segment, params_.crossing_overhang, &x)) continue;
       resolvePair(std::min(id, other), std::max(id, other), x, resolved >= budget, pending);
       ++resolved;
+      if (cut)
+      {
+        cut->insert(id);
+        cut->insert(other);
+      }
       if (suspects)
       {
         // Whatever the changed pair may cross now is a suspect again (the index is fresh after a pair).
@@ -249,6 +256,21 @@ std::size_t CaeRlsm::resolveCrossings(IdQueue pending, std::unordered_set<std::u
     }
   }
   return resolved;
+}
+
+void CaeRlsm::mergeCutSegments(IdQueue cut)
+{
+  // A cut moves an end along its segment, which can bring the segment into another's fusion band: two
+  // chords of one bent wall, each cut at its own crossing, may end up along one line. Merged, the result
+  // may cross again; a few rounds settle what is left.
+  constexpr int kRounds = 3;
+  for (int round = 0; round < kRounds && params_.map_merge && !cut.empty(); ++round)
+  {
+    IdQueue merged;
+    if (mergeMapSegments(std::move(cut), &merged) == 0) return;
+    cut.clear();
+    resolveCrossings(std::move(merged), nullptr, &cut);
+  }
 }
 
 }  // namespace line_map_merging

@@ -137,9 +137,11 @@ void CaeRlsm::resolveAllCrossings(tbb::task_arena& arena)
   for (const auto& entry : nodes_) ids.push_back(entry.first);
   std::sort(ids.begin(), ids.end(), std::greater<std::uint64_t>());
   IdQueue all(boost::container::ordered_unique_range, ids.begin(), ids.end());
+  IdQueue cut;
   if (!params_.spatial_index)
   {
-    resolveCrossings(std::move(all));
+    resolveCrossings(std::move(all), nullptr, &cut);
+    mergeCutSegments(std::move(cut));
     return;
   }
   // Most segments cross nothing: finding those that do is read-only and runs in parallel. The serial
@@ -165,7 +167,8 @@ void CaeRlsm::resolveAllCrossings(tbb::task_arena& arena)
   std::unordered_set<std::uint64_t> suspects;
   for (std::size_t i = 0; i < ids.size(); ++i)
     if (crosses[i]) suspects.insert(ids[i]);
-  resolveCrossings(std::move(all), &suspects);
+  resolveCrossings(std::move(all), &suspects, &cut);
+  mergeCutSegments(std::move(cut));
 }
 
 void CaeRlsm::rebuildIndex()
