@@ -135,8 +135,11 @@ void LaserSlam::addKeyframe(LocalScanResult& scan, std::size_t scan_index)
     e.measurement = relative;
     e.sigma_xy = chain_matched ? params_.edge_sigma_xy : params_.odometry_sigma_xy;
     e.sigma_theta = chain_matched ? params_.edge_sigma_theta : params_.odometry_sigma_theta;
-    if (chain_matched && scan.odometry_motion && params_.edge_odometry_disagreement &&
-        widenBySlip(scan.odometry_motion->inverse() * relative, e) && params_.suspect_edge_follows_odometry &&
+    // A match far from the odometry's motion over the same step is a suspected slip: its edge widens.
+    bool suspect = false;
+    if (chain_matched && scan.odometry_motion && params_.edge_odometry_disagreement)
+      suspect = widenBySlip(scan.odometry_motion->inverse() * relative, e);
+    if (suspect && params_.suspect_edge_follows_odometry &&
         odometryFitsBetter(keyframes_.back(), kf.points, relative, *scan.odometry_motion))
     {
       e.measurement = *scan.odometry_motion;

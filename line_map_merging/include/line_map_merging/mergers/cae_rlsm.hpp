@@ -189,21 +189,30 @@ class CaeRlsm : public Merger
   // OTM-ILSM (otm_ilsm.cpp).
   /// Returns the id of the map segment that now holds the leaf.
   std::uint64_t insertSegment(const Segment2& world, std::uint32_t leaf);
-  /// Map segments but `exclude` that meet the fusion conditions with `scan` as S, or with either as
-  /// M when `symmetric` (map segment against map segment; then also either lying within the other,
-  /// with absorb_contained); in id order.
+  /// Which map segments a segment is merged with.
+  enum class Meeting
+  {
+    kAsScan,     ///< the fusion conditions with the segment as S (OTM-ILSM)
+    kEitherWay,  ///< with either as M (map segment against map segment); with absorb_contained also
+                 ///< either lying within the other
+    kContained,  ///< either lying within the other (liesWithin) only
+  };
+  /// Map segments but `exclude` that `scan` meets by `rule`; in id order.
   void findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out,
-                      bool symmetric = false);
+                      Meeting rule = Meeting::kAsScan);
   /// Read-only, thread-safe: whether findCandidates would find any. Needs a fresh index (or the
   /// linear search); `hits` is the caller's scratch.
   bool hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vector<Entry>& hits,
-                    bool symmetric = false) const;
-  bool candidateMeets(const Segment2& map, const Segment2& scan, bool symmetric) const;
+                    Meeting rule = Meeting::kAsScan) const;
+  bool candidateMeets(const Segment2& map, const Segment2& scan, Meeting rule) const;
+  /// The rule of the map-level merges: either way with map_merge, else as OTM-ILSM.
+  Meeting mapMeeting() const { return params_.map_merge ? Meeting::kEitherWay : Meeting::kAsScan; }
   /// Map-level merge (map_merge.cpp): merges each pending map segment with the map segments it meets
-  /// the conditions with, either way round, re-queueing the result, until none is left; the smallest
-  /// id survives and takes the others' leaves. Returns how many map segments were merged away.
+  /// by `rule`, re-queueing the result, until none is left; the smallest id survives and takes the
+  /// others' leaves. Returns how many map segments were merged away.
   /// `changed` (optional) receives the ids of the surviving segments that a merge changed.
-  std::size_t mergeMapSegments(IdQueue pending, IdQueue* changed = nullptr);
+  std::size_t mergeMapSegments(IdQueue pending, IdQueue* changed = nullptr,
+                               Meeting rule = Meeting::kEitherWay);
   /// The segments (laser frame) of the keyframe in `slot` as new leaves, placed at its pose.
   void insertOriginals(std::uint32_t slot, const std::vector<Segment2>& segments, AddResult& result,
                        IdQueue& touched);
@@ -216,8 +225,9 @@ class CaeRlsm : public Merger
   /// segment near a resolved pair joins them. `cut` (optional) receives the ids of the resolved pairs.
   std::size_t resolveCrossings(IdQueue pending, std::unordered_set<std::uint64_t>* suspects = nullptr,
                                IdQueue* cut = nullptr);
-  /// With map_merge: the map merge of the segments crossing resolution changed (`cut`), and the crossing
-  /// resolution of what that merge changed, in turn for a few rounds (crossing_resolution.cpp).
+  /// With map_merge and absorb_contained: the segments crossing resolution changed (`cut`) merged with
+  /// those they lie within or that lie within them, and the crossing resolution of what that merge
+  /// changed, in turn for a few rounds (crossing_resolution.cpp).
   void mergeCutSegments(IdQueue cut);
   /// One crossing pair at `x`, a < b. `trim_only`: cut, never move originals or merge.
   void resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool trim_only, IdQueue& pending);

@@ -12,7 +12,7 @@
 // - Larger angle, or opposite facing sides: two walls. Only the arm with the least support (length of
 //   the originals' projections on it) is cut at the crossing, leaving a T: an overshoot or a fusion
 //   across a gap is cut, a wall seen on both sides of the crossing stays whole.
-// A cut can leave a segment in another's fusion band: what the cuts changed is map-merged afterwards.
+// A cut can leave a segment wholly within another's fusion band: it is merged into it afterwards.
 #include <algorithm>
 #include <array>
 #include <tuple>
@@ -136,7 +136,7 @@ void CaeRlsm::resolvePair(std::uint64_t a, std::uint64_t b, const Vec2& x, bool 
       nb.segment = cut(nb.segment, y, !a_before);
     }
     // Pieces short enough to meet the fusion conditions are one segment within the tolerance.
-    if (!trim_only && params_.map_merge && candidateMeets(na.segment, nb.segment, true))
+    if (!trim_only && params_.map_merge && candidateMeets(na.segment, nb.segment, Meeting::kEitherWay))
     {
       indexUpdate(a, na);
       indexUpdate(b, nb);
@@ -260,14 +260,17 @@ std::size_t CaeRlsm::resolveCrossings(IdQueue pending, std::unordered_set<std::u
 
 void CaeRlsm::mergeCutSegments(IdQueue cut)
 {
-  // A cut moves an end along its segment, which can bring the segment into another's fusion band: two
-  // chords of one bent wall, each cut at its own crossing, may end up along one line. Merged, the result
-  // may cross again; a few rounds settle what is left.
+  // A cut moves an end along its segment, which can leave the segment wholly within another's fusion
+  // band: two chords of one bent wall, each cut at its own crossing, may end up along one line, one on
+  // the other. Only such containment: pieces that merely meet the fusion conditions (overlapping chords
+  // of a curved wall, left to the next keyframes' crossing resolution) would fuse a curve into a chord.
+  // Merged, the result may cross again; a few rounds settle what is left.
   constexpr int kRounds = 3;
-  for (int round = 0; round < kRounds && params_.map_merge && !cut.empty(); ++round)
+  for (int round = 0; round < kRounds && params_.map_merge && params_.absorb_contained && !cut.empty();
+       ++round)
   {
     IdQueue merged;
-    if (mergeMapSegments(std::move(cut), &merged) == 0) return;
+    if (mergeMapSegments(std::move(cut), &merged, Meeting::kContained) == 0) return;
     cut.clear();
     resolveCrossings(std::move(merged), nullptr, &cut);
   }

@@ -12,7 +12,7 @@ namespace line_map_merging
 {
 namespace bgi = boost::geometry::index;
 
-std::size_t CaeRlsm::mergeMapSegments(IdQueue pending, IdQueue* changed)
+std::size_t CaeRlsm::mergeMapSegments(IdQueue pending, IdQueue* changed, Meeting rule)
 {
   std::size_t merged = 0;
   std::vector<std::uint64_t> candidates;
@@ -21,7 +21,7 @@ std::size_t CaeRlsm::mergeMapSegments(IdQueue pending, IdQueue* changed)
     const std::uint64_t id = popSmallest(pending);
     const auto it = nodes_.find(id);
     if (it == nodes_.end()) continue;  // merged away meanwhile
-    findCandidates(it->second.segment, id, candidates, true);
+    findCandidates(it->second.segment, id, candidates, rule);
     if (candidates.empty()) continue;
     candidates.push_back(id);
     std::sort(candidates.begin(), candidates.end());

@@ -195,7 +195,7 @@ std::set<std::uint64_t> CaeRlsm::segmentsWithPartners(tbb::task_arena& arena) co
               [&](std::size_t i)
               {
                 thread_local std::vector<Entry> hits;
-                has_partner[i] = hasCandidate(all[i].second->segment, all[i].first, hits, params_.map_merge);
+                has_partner[i] = hasCandidate(all[i].second->segment, all[i].first, hits, mapMeeting());
               });
   std::set<std::uint64_t> found;
   for (std::size_t i = 0; i < all.size(); ++i)
@@ -218,7 +218,7 @@ std::size_t CaeRlsm::mergeConsistentSegments(tbb::task_arena& arena)
     pending.erase(pending.begin());
     auto it = nodes_.find(id);
     if (it == nodes_.end()) continue;
-    findCandidates(it->second.segment, id, candidates, params_.map_merge);
+    findCandidates(it->second.segment, id, candidates, mapMeeting());
     if (candidates.empty()) continue;
     candidates.push_back(id);
     std::sort(candidates.begin(), candidates.end());

@@ -48,16 +48,24 @@ void CaeRlsm::indexRemove(std::uint64_t id, const Node& node)
   index_.remove(Entry(node.box, id));
 }
 
-bool CaeRlsm::candidateMeets(const Segment2& map, const Segment2& scan, bool symmetric) const
+bool CaeRlsm::candidateMeets(const Segment2& map, const Segment2& scan, Meeting rule) const
 {
-  if (!symmetric) return meetsFusionConditions(map, scan, params_.fusion);
-  return meetEachOther(map, scan, params_.fusion) ||
-         (params_.absorb_contained &&
-          (liesWithin(map, scan, params_.fusion) || liesWithin(scan, map, params_.fusion)));
+  const auto contained = [&]
+  { return liesWithin(map, scan, params_.fusion) || liesWithin(scan, map, params_.fusion); };
+  switch (rule)
+  {
+    case Meeting::kAsScan:
+      return meetsFusionConditions(map, scan, params_.fusion);
+    case Meeting::kEitherWay:
+      return meetEachOther(map, scan, params_.fusion) || (params_.absorb_contained && contained());
+    case Meeting::kContained:
+      return contained();
+  }
+  return false;
 }
 
 void CaeRlsm::findCandidates(const Segment2& scan, std::uint64_t exclude, std::vector<std::uint64_t>& out,
-                             bool symmetric)
+                             Meeting rule)
 {
   out.clear();
   if (params_.spatial_index)
@@ -69,32 +77,32 @@ void CaeRlsm::findCandidates(const Segment2& scan, std::uint64_t exclude, std::v
     hits_.clear();
     index_.query(bgi::intersects(query), std::back_inserter(hits_));
     for (const Entry& e : hits_)
-      if (e.second != exclude && candidateMeets(nodes_.at(e.second).segment, scan, symmetric))
+      if (e.second != exclude && candidateMeets(nodes_.at(e.second).segment, scan, rule))
         out.push_back(e.second);
   }
   else
   {
     for (const auto& [id, node] : nodes_)
-      if (id != exclude && candidateMeets(node.segment, scan, symmetric)) out.push_back(id);
+      if (id != exclude && candidateMeets(node.segment, scan, rule)) out.push_back(id);
   }
   // Fusing in id order makes the result independent of the search structure.
   std::sort(out.begin(), out.end());
 }
 
 bool CaeRlsm::hasCandidate(const Segment2& scan, std::uint64_t exclude, std::vector<Entry>& hits,
-                           bool symmetric) const
+                           Meeting rule) const
 {
   if (!params_.spatial_index)
   {
     for (const auto& [id, node] : nodes_)
-      if (id != exclude && candidateMeets(node.segment, scan, symmetric)) return true;
+      if (id != exclude && candidateMeets(node.segment, scan, rule)) return true;
     return false;
   }
   const Box query = boundingBox(scan);
   hits.clear();
   index_.query(bgi::intersects(query), std::back_inserter(hits));
   for (const Entry& e : hits)
-    if (e.second != exclude && candidateMeets(nodes_.at(e.second).segment, scan, symmetric)) return true;
+    if (e.second != exclude && candidateMeets(nodes_.at(e.second).segment, scan, rule)) return true;
   return false;
 }
 
