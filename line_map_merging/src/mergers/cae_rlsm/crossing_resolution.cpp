@@ -264,15 +264,18 @@ void CaeRlsm::mergeCutSegments(IdQueue cut)
   // band: two chords of one bent wall, each cut at its own crossing, may end up along one line, one on
   // the other. Only such containment: pieces that merely meet the fusion conditions (overlapping chords
   // of a curved wall, left to the next keyframes' crossing resolution) would fuse a curve into a chord.
-  // Merged, the result may cross again; a few rounds settle what is left.
+  // A segment that absorbed another grew as after a keyframe's merge: it is map-merged and resolved the
+  // same way. A few rounds settle what is left.
   constexpr int kRounds = 3;
   for (int round = 0; round < kRounds && params_.map_merge && params_.absorb_contained && !cut.empty();
        ++round)
   {
-    IdQueue merged;
-    if (mergeMapSegments(std::move(cut), &merged, Meeting::kContained) == 0) return;
+    IdQueue absorbed;
+    if (mergeMapSegments(std::move(cut), &absorbed, Meeting::kContained) == 0) return;
+    IdQueue changed = absorbed;
+    mergeMapSegments(std::move(absorbed), &changed, Meeting::kEitherWay);
     cut.clear();
-    resolveCrossings(std::move(merged), nullptr, &cut);
+    resolveCrossings(std::move(changed), nullptr, &cut);
   }
 }
 
