@@ -179,23 +179,31 @@ std::vector<PlacementJudge::Place> PlacementJudge::weigh(const std::vector<linem
   return places;
 }
 
-PlacementJudge::Candidate PlacementJudge::best(const Way& way, const std::vector<linemap::Vec2>& points,
-                                               const std::vector<Place>& places, double min_evidence,
-                                               double rival_share) const
+const PlacementJudge::Contradiction& PlacementJudge::contradictionOf(const Way& way,
+                                                                     const std::vector<linemap::Vec2>& points,
+                                                                     const Place& place) const
+{
+  if (!place.contradiction)
+    place.contradiction =
+        Contradiction{seenThroughLength(way, place.pose), pointsInFreeSpace(points, place.pose)};
+  return *place.contradiction;
+}
+
+const PlacementJudge::Place* PlacementJudge::best(const Way& way, const std::vector<linemap::Vec2>& points,
+                                                  const std::vector<Place>& places, double min_evidence,
+                                                  double rival_share) const
 {
   // The best place is the one explaining most points that neither sees through walls nor puts more than a
   // tenth of the points (registration error, people) in the map's free space; one explaining less than half
   // of what the foremost place explains is none (where everything that fits is contradicted, nothing is).
   const double allowed_in_free = std::max(min_evidence, 0.1 * static_cast<double>(points.size()));
-  std::vector<Candidate> uncontradicted;
+  std::vector<const Place*> uncontradicted;
   for (const Place& place : places)
   {
     if (place.score < 0.5 * places.front().score) break;
-    const std::size_t in_free = pointsInFreeSpace(points, place.pose);
-    if (seenThroughLength(way, place.pose) > max_seen_through_ ||
-        static_cast<double>(in_free) > allowed_in_free)
-      continue;
-    uncontradicted.push_back({&place, in_free});
+    const Contradiction& c = contradictionOf(way, points, place);
+    if (c.seen_through > max_seen_through_ || static_cast<double>(c.in_free) > allowed_in_free) continue;
+    uncontradicted.push_back(&place);
   }
   // Points where the map's scans saw free space contradict a place; points where they never looked contradict
   // nothing. So a place may explain less of the way only because the way runs out of the map there: the best
@@ -203,19 +211,18 @@ PlacementJudge::Candidate PlacementJudge::best(const Way& way, const std::vector
   // clearly more of the way in free space than the registration error and people would.
   const double clearly_more =
       std::max(min_evidence, kContradictionShare * static_cast<double>(points.size()));
-  const auto yields = [&](const Candidate& c)
+  const auto yields = [&](const Place* p)
   {
     return std::any_of(uncontradicted.begin(), uncontradicted.end(),
-                       [&](const Candidate& other)
+                       [&](const Place* other)
                        {
-                         return apart(c.place->pose, other.place->pose) &&
-                                other.place->score >= rival_share * c.place->score &&
-                                static_cast<double>(c.in_free) >
-                                    2.0 * static_cast<double>(other.in_free) + clearly_more;
+                         return apart(p->pose, other->pose) && other->score >= rival_share * p->score &&
+                                static_cast<double>(p->contradiction->in_free) >
+                                    2.0 * static_cast<double>(other->contradiction->in_free) + clearly_more;
                        });
   };
   const auto chosen = std::find_if_not(uncontradicted.begin(), uncontradicted.end(), yields);
-  return chosen == uncontradicted.end() ? Candidate{} : *chosen;
+  return chosen == uncontradicted.end() ? nullptr : *chosen;
 }
 
 PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pose2& placed,
@@ -225,25 +232,25 @@ PlacementJudge::Verdict PlacementJudge::judge(const Way& way, const linemap::Pos
   const std::vector<linemap::Vec2> points = way.points();
   const std::vector<Place> places = weigh(points, placed, also);
   Verdict verdict;
-  const Candidate chosen = best(way, points, places, min_evidence, rival_share);
-  if (!chosen.place) return verdict;
+  const Place* chosen = best(way, points, places, min_evidence, rival_share);
+  if (!chosen) return verdict;
+  const std::size_t chosen_in_free = chosen->contradiction->in_free;
   // A rival counts when it explains about as much (or, with unknown space, a share of as much; or it was a
   // rival before) and is not more contradicted than the best.
-  const double needed = std::min(chosen.place->score - min_evidence, rival_share * chosen.place->score);
+  const double needed = std::min(chosen->score - min_evidence, rival_share * chosen->score);
   for (const Place& place : places)
   {
-    if (&place == chosen.place || !apart(chosen.place->pose, place.pose) ||
-        (!place.kept && place.score <= needed) ||
+    if (&place == chosen || !apart(chosen->pose, place.pose) || (!place.kept && place.score <= needed) ||
         std::any_of(verdict.rivals.begin(), verdict.rivals.end(),
                     [&](const linemap::Pose2& r) { return !apart(r, place.pose); }))
       continue;
-    if (seenThroughLength(way, place.pose) > max_seen_through_ ||
-        static_cast<double>(pointsInFreeSpace(points, place.pose)) >
-            static_cast<double>(chosen.in_free) + min_evidence)
+    const Contradiction& c = contradictionOf(way, points, place);
+    if (c.seen_through > max_seen_through_ ||
+        static_cast<double>(c.in_free) > static_cast<double>(chosen_in_free) + min_evidence)
       continue;
     verdict.rivals.push_back(place.pose);
   }
-  verdict.place = chosen.place->pose;
+  verdict.place = chosen->pose;
   verdict.outcome = verdict.rivals.empty() ? Outcome::kPlaced : Outcome::kAmbiguous;
   return verdict;
 }

@@ -120,20 +120,26 @@ class PlacementJudge
   bool apart(const linemap::Pose2& a, const linemap::Pose2& b) const;
 
  private:
+  /// What speaks against a place.
+  struct Contradiction
+  {
+    double seen_through = 0.0;  ///< [m] seenThroughLength
+    std::size_t in_free = 0;    ///< pointsInFreeSpace
+  };
   struct Place
   {
     double score;  ///< points explained
     linemap::Pose2 pose;
     bool kept;  ///< one of `also`: a rival until contradicted, however little of the way it explains
+    /// Weighed once, when first asked (contradictionOf).
+    mutable std::optional<Contradiction> contradiction{};
   };
-  struct Candidate
-  {
-    const Place* place = nullptr;
-    std::size_t in_free = 0;  ///< the way's points in the map's free space there
-  };
-  /// The best of `places` (judge()): not contradicted, and yielding to no other; `place` null when none.
-  Candidate best(const Way& way, const std::vector<linemap::Vec2>& points, const std::vector<Place>& places,
-                 double min_evidence, double rival_share) const;
+  /// The place's contradiction, weighed on first use: best() and judge() ask for many places twice.
+  const Contradiction& contradictionOf(const Way& way, const std::vector<linemap::Vec2>& points,
+                                       const Place& place) const;
+  /// The best of `places` (judge()): not contradicted, and yielding to no other; null when none.
+  const Place* best(const Way& way, const std::vector<linemap::Vec2>& points,
+                    const std::vector<Place>& places, double min_evidence, double rival_share) const;
   SegmentMatch match(const std::vector<linemap::Vec2>& points, const linemap::Pose2& from) const;
   /// `placed` refined, `also` and the global search's candidates, each refined and scored, best first.
   std::vector<Place> weigh(const std::vector<linemap::Vec2>& points, const linemap::Pose2& placed,
